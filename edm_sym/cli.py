@@ -1,0 +1,255 @@
+"""Command line: ``edm`` and ``edm-export`` (CONTRACT.md section 2).
+
+Exit status: 0 done; 1 the work itself failed; 2 bad input or usage. Bad input
+prints one line naming the file and field, row or column, with what was
+expected and what was found; no traceback reaches the user (set EDM_DEBUG=1 to
+see one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+
+from edm_sym.errors import DataFormatError, EdmError, ResultFormatError, ToolMissingError
+
+
+class UsageError(EdmError):
+    """Bad command-line usage (exit 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2, as the contract asks
+        raise UsageError(f"{self.prog}: {message}")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, found {text}")
+    return v
+
+
+def _add_export_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("result", metavar="RESULT.json", help="result file to export")
+    p.add_argument("--target", required=True, choices=["c", "python", "latex", "all"])
+    p.add_argument("-o", "--out-dir", metavar="DIR",
+                   help="output folder (default: generated/<folder holding RESULT>/)")
+    p.add_argument("--prefix", default="edm_comp", help="file and symbol prefix (default edm_comp)")
+    p.add_argument("--real", default="double", choices=["float", "double"])
+    p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
+    p.add_argument("--data", metavar="DATA", help="abstraction log, for the report's figures")
+    p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
+    p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
+    p.add_argument("--ts", type=_positive_float, help="sample time of logs without a 't' column")
+    p.set_defaults(func=_cmd_export)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``edm`` argument parser with all its subcommands."""
+    parser = _Parser(prog="edm", description="Element Description Method compensators for "
+                     "reaction torque observers: abstract, simulate, export.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
+
+    p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
+    p.add_argument("data", metavar="DATA")
+    p.add_argument("--target", required=True, metavar="COL")
+    p.add_argument("--inputs", required=True, metavar="COL[,COL...]")
+    p.add_argument("--config", metavar="FILE.toml")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
+    p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json")
+    p.add_argument("--ts", type=_positive_float)
+    p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.set_defaults(func=_cmd_abstract)
+
+    p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
+    p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
+    p.add_argument("data", metavar="DATA")
+    p.add_argument("-o", "--output", metavar="OUT.csv",
+                   help="output CSV (default: <DATA stem>_sim.csv in the current folder)")
+    p.add_argument("--ts", type=_positive_float)
+    p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
+    p.add_argument("--preset", required=True, metavar="NAME")
+    p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"])
+    p.add_argument("-o", "--output", metavar="DATA.csv",
+                   help="output CSV (default: <preset>_<excitation>.csv)")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_cmd_plant)
+
+    p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
+    p.add_argument("data", metavar="DATA")
+    p.add_argument("--target", required=True, metavar="COL")
+    p.add_argument("--velocity", required=True, metavar="COL")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
+    p.add_argument("--method", default="scipy")
+    p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json")
+    p.add_argument("--ts", type=_positive_float)
+    p.set_defaults(func=_cmd_lugre)
+    return parser
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from edm_sym.result import load_result
+
+    result = load_result(args.result)
+    try:
+        from edm_sym.render import export
+    except ImportError:
+        raise ToolMissingError("edm export: code generation is not available in this build") from None
+    out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
+    written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
+                     data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
+    for path in written:
+        print(path)
+    return 0
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from edm_sym.data import load_data, write_csv
+
+    model_path = Path(args.model)
+    kind = _model_kind(model_path)
+    data = load_data(args.data, ts=args.ts)
+    cols: dict = {}
+    if "t" in data.columns:
+        cols["t"] = data.columns["t"]
+    if kind == "edm-lugre":
+        from edm_sym.lugre import load_lugre, simulate_lugre
+
+        model = load_lugre(model_path)
+        target, velocity = model.target_name, model.velocity_name
+        tau = simulate_lugre(model.params, data.column(velocity, role="velocity column"), data.ts)
+    else:
+        from edm_sym.result import load_result
+        from edm_sym.simulate import simulate
+
+        result = load_result(model_path)
+        _check_ts(model_path.name, result.sample_time, data)
+        target = result.target
+        sim = simulate(result, data)
+        for j, row in enumerate(sim.rows, start=1):
+            cols[f"row_{j}"] = row
+        tau = sim.total
+    cols["tau_cmp"] = tau
+    rmse = None
+    if target in data.columns:
+        cols["residual"] = data.columns[target] - tau
+        rmse = float((cols["residual"] ** 2).mean() ** 0.5)
+    out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
+    write_csv(out, cols)
+    print(f"wrote {out}")
+    print(f"rmse {rmse:.10g}" if rmse is not None else f"rmse nan (no column {target!r} in DATA)")
+    return 0
+
+
+def _check_ts(name: str, ts: float, data) -> None:  # noqa: ANN001
+    if abs(ts - data.ts) > 1e-6 * ts:
+        raise DataFormatError(f"{data.source}: sample time",
+                              f"expected {ts:g} s as in {name}, found {data.ts:g} s")
+
+
+def _model_kind(path: Path) -> str:
+    try:
+        doc = json.loads(path.read_text("utf-8"))
+    except OSError as exc:
+        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
+    kind = doc.get("format") if isinstance(doc, dict) else None
+    if kind not in ("edm-result", "edm-lugre"):
+        raise ResultFormatError(f"{path.name}: format",
+                                f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')
+    return kind
+
+
+def _cmd_plant(args: argparse.Namespace) -> int:
+    from edm_sym.data import write_csv
+    from edm_sym.plant import PRESETS, simulate_plant
+
+    if args.preset not in PRESETS:
+        raise UsageError(f"edm plant: --preset: expected one of {', '.join(sorted(PRESETS))}, "
+                         f"found {args.preset!r}")
+    log = simulate_plant(args.preset, args.excitation, seed=args.seed)
+    out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
+    write_csv(out, log.columns)
+    print(f"wrote {out}")
+    return 0
+
+
+def _cmd_lugre(args: argparse.Namespace) -> int:
+    from edm_sym.data import load_data
+    from edm_sym.lugre import identify_lugre, save_lugre
+
+    data = load_data(args.data, ts=args.ts, require=[args.target, args.velocity])
+    res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
+                         method=args.method, seed=args.seed, time_limit=args.time_limit)
+    save_lugre(args.output, res, target=args.target, velocity=args.velocity,
+               data_sha256=data.sha256, seed=args.seed)
+    print(f"wrote {args.output}")
+    print(f"rmse {res.rmse:.10g}")
+    return 0
+
+
+def _cmd_abstract(args: argparse.Namespace) -> int:
+    try:
+        from edm_sym.abstraction import run_cli
+    except ImportError:
+        raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
+    return run_cli(args)
+
+
+def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
+    try:
+        args = parser.parse_args(argv)
+        return int(args.func(args) or 0)
+    except (EdmError, ValueError) as exc:
+        if isinstance(exc, ToolMissingError):
+            print(f"{parser.prog}: {exc}", file=sys.stderr)
+            return 1
+        if os.environ.get("EDM_DEBUG"):
+            traceback.print_exc()
+        # ValueError here comes from validation inside the library: bad input.
+        line = " ".join(str(exc).split())
+        print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{parser.prog}: interrupted", file=sys.stderr)
+        return 1
+    except Exception as exc:  # the work itself failed: one line, exit 1
+        if os.environ.get("EDM_DEBUG"):
+            traceback.print_exc()
+        print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())}",
+              file=sys.stderr)
+        return 1
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``edm``."""
+    return _run(argv, build_parser())
+
+
+def export_main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``edm-export`` (the same as ``edm export``)."""
+    parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.")
+    _add_export_args(parser)
+    return _run(argv, parser)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,252 @@
+"""Data logs: CSV, .npz and MATLAB .mat (CONTRACT.md section 3).
+
+A log is a set of equally long numeric columns with a uniform sample time.
+Every defect (missing file or column, empty file, non-numeric cell, NaN or
+Inf, non-uniform time) is refused with a :class:`~edm_sym.errors.DataFormatError`
+that names the file and the row or column.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from edm_sym.errors import DataFormatError
+from edm_sym.fileio import write_atomic
+
+#: Relative tolerance on sample-time deviations (CSV text rounds time stamps).
+TIME_RTOL = 1e-3
+
+
+@dataclass(frozen=True)
+class DataLog:
+    """A uniformly sampled log.
+
+    Parameters
+    ----------
+    columns : mapping of str to numpy.ndarray
+        Equally long float columns, in file order.
+    ts : float
+        Sample time [s].
+    source : str
+        The file name (for messages).
+    sha256 : str
+        Digest of the file's bytes (provenance).
+    scalars : mapping of str to float
+        Scalar values stored beside the columns (.mat and .npz files).
+    """
+
+    columns: Mapping[str, np.ndarray]
+    ts: float
+    source: str = "<memory>"
+    sha256: str | None = None
+    scalars: Mapping[str, float] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(next(iter(self.columns.values())))
+
+    @property
+    def record_length(self) -> float:
+        """T_sum = N Ts [s]."""
+        return len(self) * self.ts
+
+    def column(self, name: str, *, role: str = "column") -> np.ndarray:
+        """A column by name, refusing a missing one with the available names."""
+        try:
+            return self.columns[name]
+        except KeyError:
+            have = ", ".join(self.columns)
+            raise DataFormatError(
+                f"{self.source}: column {name!r}",
+                f"expected a {role} named {name!r}, found only: {have}",
+            ) from None
+
+    def stack(self, names: Iterable[str]) -> np.ndarray:
+        """The named columns as a (len(names), N) array."""
+        return np.vstack([self.column(n, role="input column") for n in names])
+
+
+def load_data(
+    path: str | Path, *, ts: float | None = None, require: Iterable[str] = ()
+) -> DataLog:
+    """Read a log from CSV, .npz or .mat.
+
+    Parameters
+    ----------
+    path : path-like
+        The file. The suffix picks the reader (``.npz``, ``.mat``, else CSV).
+    ts : float, optional
+        Sample time [s] when the log has no ``t`` column; with a ``t`` column
+        it must agree with it.
+    require : iterable of str
+        Column names that must be present.
+
+    Returns
+    -------
+    DataLog
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file and the row or column at fault.
+    """
+    path = Path(path)
+    name = path.name
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise DataFormatError(str(path), f"cannot be read ({exc.strerror})") from None
+    if not raw.strip():
+        raise DataFormatError(name, "expected a header row and data, found an empty file")
+    suffix = path.suffix.lower()
+    scalars: dict[str, float] = {}
+    if suffix == ".npz":
+        columns, scalars = _read_arrays(name, _load_npz(name, raw))
+    elif suffix == ".mat":
+        columns, scalars = _read_arrays(name, _load_mat(name, raw))
+    else:
+        columns = _read_csv(name, raw)
+    # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
+    log_ts = _sample_time(name, columns, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
+    log = DataLog(columns, log_ts, name, hashlib.sha256(raw).hexdigest(), scalars)
+    for col in require:
+        log.column(col)
+    return log
+
+
+def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise DataFormatError(name, "expected UTF-8 text, found binary data") from None
+    reader = csv.reader(io.StringIO(text))
+    header = next(reader, None)
+    if not header or not any(h.strip() for h in header):
+        raise DataFormatError(f"{name}: row 1", "expected a header row of column names, found none")
+    header = [h.strip() for h in header]
+    for k, h in enumerate(header):
+        if not h:
+            raise DataFormatError(f"{name}: row 1, column {k + 1}", "expected a column name, found nothing")
+        if header.index(h) != k:
+            raise DataFormatError(f"{name}: row 1, column {h!r}", "expected unique names, found it twice")
+    values: list[list[float]] = []
+    for lineno, cells in enumerate(reader, start=2):
+        if not cells or all(not c.strip() for c in cells):
+            continue
+        if len(cells) != len(header):
+            raise DataFormatError(f"{name}: row {lineno}",
+                                  f"expected {len(header)} values, found {len(cells)}")
+        row = []
+        for col, cell in zip(header, cells):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
+                                      f"expected a number, found {cell.strip()[:30]!r}") from None
+            if not math.isfinite(v):
+                raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
+                                      f"expected a finite number, found {cell.strip()}")
+            row.append(v)
+        values.append(row)
+    if not values:
+        raise DataFormatError(name, "expected data rows below the header, found none")
+    arr = np.array(values, dtype=float)
+    return {h: np.ascontiguousarray(arr[:, k]) for k, h in enumerate(header)}
+
+
+def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    try:
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+            return {k: np.asarray(z[k]) for k in z.files}
+    except Exception as exc:  # numpy raises several types for a bad archive
+        raise DataFormatError(name, f"expected an .npz archive, found unreadable data ({exc})") from None
+
+
+def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    from scipy import io as sio
+
+    try:
+        doc = sio.loadmat(io.BytesIO(raw))
+    except Exception as exc:  # scipy raises several types for a bad file
+        raise DataFormatError(name, f"expected a MATLAB .mat file, found unreadable data ({exc})") from None
+    return {k: v for k, v in doc.items() if not k.startswith("__") and isinstance(v, np.ndarray)}
+
+
+def _read_arrays(
+    name: str, arrays: Mapping[str, np.ndarray]
+) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    columns: dict[str, np.ndarray] = {}
+    scalars: dict[str, float] = {}
+    for key, arr in arrays.items():
+        if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
+            continue
+        if arr.size == 1:
+            scalars[key] = float(arr.reshape(()))
+        elif arr.ndim == 1 or (arr.ndim == 2 and 1 in arr.shape):
+            columns[key] = np.ascontiguousarray(arr.reshape(-1), dtype=float)
+    if not columns:
+        raise DataFormatError(name, "expected one or more 1-D numeric arrays, found none")
+    n = max(len(c) for c in columns.values())
+    for key, col in columns.items():
+        if len(col) != n:
+            raise DataFormatError(f"{name}: column {key!r}",
+                                  f"expected {n} samples like the longest column, found {len(col)}")
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise DataFormatError(f"{name}: row {bad[0] + 1}, column {key!r}",
+                                  f"expected a finite number, found {col[bad[0]]}")
+    return columns, scalars
+
+
+def _sample_time(
+    name: str, columns: Mapping[str, np.ndarray], ts: float | None, *, row_offset: int
+) -> float:
+    if ts is not None and not (math.isfinite(ts) and ts > 0):
+        raise DataFormatError(f"{name}: --ts", f"expected a positive sample time, found {ts}")
+    t = columns.get("t")
+    if t is None:
+        if ts is None:
+            raise DataFormatError(f"{name}: column 't'",
+                                  "expected a time column 't' or the option --ts SECONDS, found neither")
+        return float(ts)
+    if len(t) < 2:
+        raise DataFormatError(f"{name}: column 't'", f"expected at least 2 samples, found {len(t)}")
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if not step > 0:
+        raise DataFormatError(f"{name}: column 't'", f"expected increasing time, found step {step}")
+    bad = np.flatnonzero(np.abs(dt - step) > TIME_RTOL * step)
+    if bad.size:
+        k = int(bad[0])
+        raise DataFormatError(
+            f"{name}: row {k + 1 + row_offset}, column 't'",
+            f"expected uniform sampling (step {step:g} s), found a step of {dt[k]:g} s",
+        )
+    if ts is not None and abs(ts - step) > TIME_RTOL * step:
+        raise DataFormatError(f"{name}: --ts", f"expected the step of column 't' ({step:g} s), found {ts:g}")
+    return step
+
+
+def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:
+    """Write columns as CSV atomically, with round-trip float precision.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.
+    columns : mapping of str to array
+        Equally long columns, written in mapping order.
+    """
+    names = list(columns)
+    arr = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    np.savetxt(buf, arr, delimiter=",", fmt="%.17g")
+    return write_atomic(path, buf.getvalue())

@@ -1,0 +1,133 @@
+"""The small math interface that static elements are written against.
+
+A static element's function ``f(m, x, a)`` only calls the methods below, so
+one definition runs on numpy arrays (:data:`NUMPY`, the simulator), on Python
+floats (:data:`SCALAR`, the plain per-sample loop) and on sympy symbols (the
+symbolic layer supplies its own implementation with the same names). The
+domain guards live here, so every backend applies the same ones.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+#: |tan| is limited to this value, so the tangent's poles give a finite output.
+TAN_LIMIT = 1.0e6
+#: |x| is limited to this value before a power, so no power overflows.
+POW_INPUT_LIMIT = 1.0e6
+
+
+class NumpyOps:
+    """Vectorised implementation over numpy arrays."""
+
+    pi = math.pi
+
+    @staticmethod
+    def sin(x: Any) -> Any:
+        return np.sin(x)
+
+    @staticmethod
+    def atan(x: Any) -> Any:
+        return np.arctan(x)
+
+    @staticmethod
+    def tanh(x: Any) -> Any:
+        return np.tanh(x)
+
+    @staticmethod
+    def sign(x: Any) -> Any:
+        return np.sign(x)
+
+    @staticmethod
+    def sat(x: Any, lo: float, hi: float) -> Any:
+        """Saturation: ``x`` limited to [lo, hi]."""
+        return np.clip(x, lo, hi)
+
+    @staticmethod
+    def lower_limit(x: Any, lo: float) -> Any:
+        """One-sided limiter: ``max(x, lo)``."""
+        return np.maximum(x, lo)
+
+    @staticmethod
+    def dead_zone(x: Any, a: float) -> Any:
+        """0 inside [-a, a], ``x -+ a`` outside (continuous)."""
+        return np.where(x > a, x - a, np.where(x < -a, x + a, 0.0))
+
+    @staticmethod
+    def sym_log(x: Any, a: float) -> Any:
+        """Guarded logarithm: ``sign(x) ln(1 + |x| / a)``, odd and finite everywhere."""
+        return np.sign(x) * np.log1p(np.abs(x) / a)
+
+    @staticmethod
+    def sym_pow(x: Any, a: float) -> Any:
+        """Signed power: ``sign(x) min(|x|, POW_INPUT_LIMIT) ** a``."""
+        return np.sign(x) * np.minimum(np.abs(x), POW_INPUT_LIMIT) ** a
+
+    @staticmethod
+    def tan(x: Any) -> Any:
+        """Guarded tangent: ``tan(x)`` limited to +-TAN_LIMIT."""
+        return np.clip(np.tan(x), -TAN_LIMIT, TAN_LIMIT)
+
+    @staticmethod
+    def asin(x: Any) -> Any:
+        """Guarded arcsine: the input is first limited to [-1, 1]."""
+        return np.arcsin(np.clip(x, -1.0, 1.0))
+
+    @staticmethod
+    def acos(x: Any) -> Any:
+        """Guarded arccosine: the input is first limited to [-1, 1]."""
+        return np.arccos(np.clip(x, -1.0, 1.0))
+
+
+def _sign(x: float) -> float:
+    return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
+
+
+def _clip(x: float, lo: float, hi: float) -> float:
+    return lo if x < lo else (hi if x > hi else x)
+
+
+class ScalarOps:
+    """Per-sample implementation over Python floats (the plain loop)."""
+
+    pi = math.pi
+    sin = staticmethod(math.sin)
+    atan = staticmethod(math.atan)
+    tanh = staticmethod(math.tanh)
+    sign = staticmethod(_sign)
+    sat = staticmethod(_clip)
+
+    @staticmethod
+    def lower_limit(x: float, lo: float) -> float:
+        return x if x > lo else lo
+
+    @staticmethod
+    def dead_zone(x: float, a: float) -> float:
+        return x - a if x > a else (x + a if x < -a else 0.0)
+
+    @staticmethod
+    def sym_log(x: float, a: float) -> float:
+        return _sign(x) * math.log1p(abs(x) / a)
+
+    @staticmethod
+    def sym_pow(x: float, a: float) -> float:
+        return _sign(x) * min(abs(x), POW_INPUT_LIMIT) ** a
+
+    @staticmethod
+    def tan(x: float) -> float:
+        return _clip(math.tan(x), -TAN_LIMIT, TAN_LIMIT)
+
+    @staticmethod
+    def asin(x: float) -> float:
+        return math.asin(_clip(x, -1.0, 1.0))
+
+    @staticmethod
+    def acos(x: float) -> float:
+        return math.acos(_clip(x, -1.0, 1.0))
+
+
+NUMPY = NumpyOps()
+SCALAR = ScalarOps()

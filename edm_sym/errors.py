@@ -1,0 +1,62 @@
+"""Errors and warnings raised by edm_sym.
+
+Every error that reaches a user names where the problem is, what was expected
+and what was found, so the command line can print it as one line and exit 2.
+"""
+
+from __future__ import annotations
+
+
+class EdmError(Exception):
+    """Base class of the errors edm_sym raises on bad input."""
+
+
+class ResultFormatError(EdmError, ValueError):
+    """A result (or model) file is not a valid edm_sym file.
+
+    Parameters
+    ----------
+    where : str
+        The file, and the field inside it, e.g. ``"result.json: rows[3].elements[2].code"``.
+    problem : str
+        What is wrong: expected and found, and a hint when there is one.
+    """
+
+    def __init__(self, where: str, problem: str):
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")
+
+
+class DataFormatError(EdmError, ValueError):
+    """A data log cannot be used: missing column, NaN, non-uniform time, ...
+
+    Parameters
+    ----------
+    where : str
+        The file, and the row or column inside it.
+    problem : str
+        What is wrong: expected and found.
+    """
+
+    def __init__(self, where: str, problem: str):
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")
+
+
+class ConfigError(EdmError, ValueError):
+    """A configuration (TOML) file or an option value is invalid."""
+
+    def __init__(self, where: str, problem: str):
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")
+
+
+class ToolMissingError(EdmError, RuntimeError):
+    """An optional external tool (latexmk, arm-none-eabi-gcc, ...) is not installed."""
+
+
+class NumericsWarning(UserWarning):
+    """Doubtful numerics: an unstable filter, a parameter at its range limit, ..."""

@@ -1,0 +1,325 @@
+"""result.json: the abstraction result (CONTRACT.md section 3).
+
+Loading validates against the JSON Schema shipped in the package, then checks
+what a schema cannot (known element codes, names matching codes, shapes
+matching counts, ranges usable), and refuses a bad file with a
+:class:`~edm_sym.errors.ResultFormatError` naming the file and field.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+
+from edm_sym.elements import REGISTRY, ParamRange
+from edm_sym.errors import ResultFormatError
+from edm_sym.fileio import write_atomic
+from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
+
+FORMAT = "edm-result"
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One hierarchical step: its best matrix and fitness history (paper, Fig. 17)."""
+
+    step: int
+    matrix: ElementMatrix
+    fitness: float
+    history: tuple[float, ...]
+    generations: int = 0
+    evaluations: int = 0
+    weighting: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class EdmResult:
+    """A loaded (or freshly found) abstraction result.
+
+    Parameters
+    ----------
+    compensator : Compensator
+        The matrix, sample time and parameter ranges.
+    target : str
+        The name of the target column (the estimated external torque).
+    steps : tuple of StepRecord
+        The hierarchical steps, in order (empty for a hand-written model).
+    provenance : mapping
+        ``seed``, ``package_version``, ``data_sha256`` (and optional extras).
+    fitness : float or None
+        The final fitness (eq. 8) on the abstraction data.
+    sha256 : str or None
+        The sha256 of the file it was loaded from.
+    """
+
+    compensator: Compensator
+    target: str
+    steps: tuple[StepRecord, ...] = ()
+    provenance: Mapping[str, Any] = field(default_factory=dict)
+    fitness: float | None = None
+    sha256: str | None = None
+    source: str | None = None
+
+    @property
+    def matrix(self) -> ElementMatrix:
+        """The final element matrix."""
+        return self.compensator.matrix
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Input names, in order."""
+        return self.compensator.matrix.inputs
+
+    @property
+    def sample_time(self) -> float:
+        """Ts [s]."""
+        return self.compensator.sample_time
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON document (a plain dict) of this result."""
+        comp = self.compensator
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "sample_time": comp.sample_time,
+            "record_length": comp.record_length,
+            "inputs": list(comp.matrix.inputs),
+            "target": self.target,
+            "fitness": self.fitness,
+            "matrix": matrix_to_json(comp.matrix),
+            # Every element's range is kept, so a matrix grown later decodes the same.
+            "parameter_ranges": {k: v.to_json() for k, v in sorted(comp.ranges.items())},
+            "steps": [_step_to_json(s) for s in self.steps],
+            "provenance": dict(self.provenance),
+        }
+
+
+def matrix_to_json(matrix: ElementMatrix) -> dict[str, Any]:
+    """JSON form of an element matrix."""
+    return {
+        "n_elements": matrix.n_elements,
+        "n_rows": matrix.n_rows,
+        "rows": [
+            {
+                "input": matrix.inputs[r.input],
+                "input_code": r.input,
+                "elements": [
+                    {"name": g.element.name, "code": g.code, "p": g.p} for g in r.genes
+                ],
+            }
+            for r in matrix.rows
+        ],
+    }
+
+
+def _step_to_json(s: StepRecord) -> dict[str, Any]:
+    return {
+        "step": s.step,
+        "n_elements": s.matrix.n_elements,
+        "n_rows": s.matrix.n_rows,
+        "generations": s.generations,
+        "evaluations": s.evaluations,
+        "weighting": dict(s.weighting),
+        "history": list(s.history),
+        "fitness": s.fitness,
+        "matrix": matrix_to_json(s.matrix),
+    }
+
+
+def dumps(result: EdmResult) -> str:
+    """Serialise deterministically: sorted keys, fixed indentation, final newline."""
+    return json.dumps(result.to_json(), sort_keys=True, indent=2, allow_nan=False) + "\n"
+
+
+def save_result(result: EdmResult, path: str | Path) -> Path:
+    """Write ``result`` to ``path`` atomically (temporary file, then rename)."""
+    return write_atomic(path, dumps(result))
+
+
+@lru_cache(maxsize=1)
+def schema() -> dict[str, Any]:
+    """The JSON Schema of result.json that ships inside the package."""
+    text = resources.files("edm_sym").joinpath("schema/result.schema.json").read_text("utf-8")
+    return json.loads(text)
+
+
+def format_path(parts: Sequence[Any]) -> str:
+    """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``."""
+    out = ""
+    for part in parts:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "(top level)"
+
+
+def _expected(err: jsonschema.ValidationError) -> str:
+    v, val = err.validator, err.validator_value
+    texts = {
+        "type": lambda: f"a value of type {' or '.join(val) if isinstance(val, list) else val}",
+        "const": lambda: json.dumps(val),
+        "enum": lambda: "one of " + ", ".join(json.dumps(x) for x in val),
+        "minimum": lambda: f"a number >= {val}",
+        "maximum": lambda: f"a number <= {val}",
+        "exclusiveMinimum": lambda: f"a number > {val}",
+        "minItems": lambda: f"at least {val} item(s)",
+        "uniqueItems": lambda: "no repeated items",
+        "pattern": lambda: f"text matching {val}",
+        "minLength": lambda: "a non-empty string",
+    }
+    return texts.get(v, lambda: f"to satisfy {v!s} {json.dumps(val)}")()
+
+
+def _schema_error(name: str, doc: Any) -> ResultFormatError | None:
+    validator = jsonschema.Draft202012Validator(schema())
+    err = jsonschema.exceptions.best_match(validator.iter_errors(doc))
+    if err is None:
+        return None
+    path = list(err.absolute_path)
+    if err.validator == "required":
+        missing = [k for k in err.validator_value if k not in err.instance]
+        where = format_path([*path, missing[0]] if missing else path)
+        return ResultFormatError(f"{name}: {where}", "expected this field, found it missing")
+    if err.validator == "anyOf":
+        return ResultFormatError(
+            f"{name}: {format_path(path)}",
+            f"expected null or a sha256 hex digest, found {json.dumps(err.instance)[:60]}",
+        )
+    found = json.dumps(err.instance)
+    found = found if len(found) <= 60 else found[:57] + "..."
+    return ResultFormatError(f"{name}: {format_path(path)}", f"expected {_expected(err)}, found {found}")
+
+
+def _matrix_from_json(name: str, where: str, doc: Mapping[str, Any],
+                      inputs: Sequence[str]) -> ElementMatrix:
+    rows = doc["rows"]
+    if doc["n_rows"] != len(rows):
+        raise ResultFormatError(f"{name}: {where}.n_rows",
+                                f"expected the number of rows ({len(rows)}), found {doc['n_rows']}")
+    out = []
+    for j, r in enumerate(rows):
+        rw = f"{where}.rows[{j}]"
+        if len(r["elements"]) != doc["n_elements"]:
+            raise ResultFormatError(
+                f"{name}: {rw}.elements",
+                f"expected n_elements = {doc['n_elements']} elements, found {len(r['elements'])}",
+            )
+        code = r["input_code"]
+        if code >= len(inputs):
+            raise ResultFormatError(f"{name}: {rw}.input_code",
+                                    f"expected 0-{len(inputs) - 1} (inputs), found {code}")
+        if r["input"] != inputs[code]:
+            raise ResultFormatError(f"{name}: {rw}.input",
+                                    f"expected {inputs[code]!r} (inputs[{code}]), found {r['input']!r}")
+        genes = []
+        for i, e in enumerate(r["elements"]):
+            ew = f"{rw}.elements[{i}]"
+            if e["code"] not in REGISTRY:
+                raise ResultFormatError(
+                    f"{name}: {ew}.code",
+                    f"{e['code']} is not a known element code (known: {min(REGISTRY)}-{max(REGISTRY)})",
+                )
+            if REGISTRY[e["code"]].name != e["name"]:
+                raise ResultFormatError(
+                    f"{name}: {ew}.name",
+                    f"expected {REGISTRY[e['code']].name!r} (element code {e['code']}), found {e['name']!r}",
+                )
+            genes.append(Gene(e["code"], float(e["p"])))
+        out.append(Row(code, tuple(genes)))
+    return ElementMatrix(tuple(inputs), tuple(out))
+
+
+def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
+    """Validate a parsed JSON document and build an :class:`EdmResult`.
+
+    Raises
+    ------
+    ResultFormatError
+        Naming ``name`` and the field, with what was expected and found.
+    """
+    if not isinstance(doc, dict):
+        raise ResultFormatError(f"{name}: (top level)",
+                                f"expected a JSON object, found {type(doc).__name__}")
+    for key, want in (("format", FORMAT), ("version", VERSION)):
+        if key in doc and doc[key] != want:
+            raise ResultFormatError(f"{name}: {key}",
+                                    f"expected {json.dumps(want)}, found {json.dumps(doc[key])}")
+    err = _schema_error(name, doc)
+    if err is not None:
+        raise err
+    inputs = doc["inputs"]
+    ranges = {}
+    for ename, rdoc in doc["parameter_ranges"].items():
+        where = f"{name}: parameter_ranges.{ename}"
+        try:
+            ranges[ename] = ParamRange(float(rdoc["low"]), float(rdoc["high"]), rdoc["scaling"])
+        except ValueError as exc:
+            raise ResultFormatError(where, str(exc)) from None
+    matrix = _matrix_from_json(name, "matrix", doc["matrix"], inputs)
+    for j, row in enumerate(matrix.rows):
+        for i, g in enumerate(row.genes):
+            el = g.element
+            if el.param is not None and el.name not in ranges:
+                raise ResultFormatError(
+                    f"{name}: parameter_ranges.{el.name}",
+                    f"expected a range for element {el.name!r} (used at rows[{j}].elements[{i}]), "
+                    "found none",
+                )
+    steps = []
+    for k, s in enumerate(doc["steps"]):
+        m = _matrix_from_json(name, f"steps[{k}].matrix", s["matrix"], inputs)
+        steps.append(StepRecord(
+            step=s["step"], matrix=m, fitness=float(s["fitness"]),
+            history=tuple(float(h) for h in s["history"]),
+            generations=s.get("generations", len(s["history"])),
+            evaluations=s.get("evaluations", 0), weighting=s.get("weighting", {}),
+        ))
+    fitness = doc.get("fitness")
+    if fitness is not None and not math.isfinite(fitness):
+        raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
+    comp = Compensator(matrix, float(doc["sample_time"]), ranges, float(doc["record_length"]))
+    return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness)
+
+
+def load_result(path: str | Path) -> EdmResult:
+    """Load and validate a result.json.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+
+    Returns
+    -------
+    EdmResult
+        With ``sha256`` set to the file's digest.
+
+    Raises
+    ------
+    ResultFormatError
+        When the file is missing, not JSON, or not a valid edm-result.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
+    try:
+        doc = json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
+    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
+        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
+    res = parse_result(doc, path.name)
+    return EdmResult(res.compensator, res.target, res.steps, res.provenance, res.fitness,
+                     hashlib.sha256(raw).hexdigest(), str(path))
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not allowed in result files")
