@@ -1,0 +1,188 @@
+"""The one frozen symbolic model between decoding and every output.
+
+:func:`build_model` turns a compensator into rows of :class:`Stage` objects,
+one per element, each carrying exactly what every exporter needs: the named
+parameter symbol and its value, the static expression, the continuous transfer
+function and the discrete coefficients the simulator uses, the delay length or
+the relay threshold. Printers and templates read this model; nobody re-decodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import sympy as sp
+
+from edm_sym.elements import (
+    DelayElement,
+    Element,
+    LinearElement,
+    ParamRange,
+    RelayElement,
+    StaticElement,
+)
+from edm_sym.matrix import Compensator
+from edm_sym.symbolic.functions import SYMPY_OPS
+
+#: The Laplace variable.
+s = sp.Symbol("s")
+#: Placeholder for a stage's input in its own expression.
+X = sp.Symbol("x", real=True)
+
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """A named parameter a_k (numbered as the paper's Table II: k = j n + i + 1)."""
+
+    symbol: sp.Symbol
+    value: float
+    p: float
+    range: ParamRange
+    unit: str
+    meaning: str
+    element: str
+    row: int
+    col: int
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One element of a row, decoded.
+
+    Attributes
+    ----------
+    col : int
+        Column index (0-based, left to right).
+    element : type[Element]
+        The element class.
+    kind : str
+        ``"static"``, ``"linear"``, ``"delay"`` or ``"relay"``.
+    param : ParamInfo or None
+    expr : sympy.Expr or None
+        Static stages: the output in terms of :data:`X` and the parameter symbol.
+    tf : tuple of (num, den) or None
+        Linear stages: continuous coefficient lists in s with the parameter symbol.
+    b, a : tuple of float
+        Linear stages: the discrete coefficients (z^-1 powers, ``a[0] == 1``)
+        that the simulator uses, and ``method`` their discretisation.
+    delay : int
+        Delay stages: the delay in samples.
+    threshold : float or None
+        Relay stages: the switching threshold.
+    """
+
+    col: int
+    element: type[Element]
+    kind: str
+    param: ParamInfo | None
+    expr: sp.Expr | None = None
+    tf: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None
+    b: tuple[float, ...] = ()
+    a: tuple[float, ...] = ()
+    method: str | None = None
+    delay: int = 0
+    threshold: float | None = None
+
+    @property
+    def value(self) -> float | None:
+        """The numeric parameter value (None when parameter-free)."""
+        return None if self.param is None else self.param.value
+
+    def numeric_expr(self) -> sp.Expr | None:
+        """The static expression with the parameter's value substituted."""
+        if self.expr is None:
+            return None
+        if self.param is None:
+            return self.expr
+        return self.expr.subs(self.param.symbol, sp.Float(self.param.value, 17))
+
+
+@dataclass(frozen=True)
+class RowModel:
+    """One row of the model: its input and its stages (more is added by decoding)."""
+
+    index: int
+    input: str
+    input_symbol: sp.Symbol
+    stages: tuple[Stage, ...]
+    extra: dict[str, Any] = field(default_factory=dict, compare=False)
+
+
+@dataclass(frozen=True)
+class SymbolicModel:
+    """The decoded compensator.
+
+    Attributes
+    ----------
+    compensator : Compensator
+    inputs : tuple of str
+    input_symbols : tuple of sympy.Symbol
+    sample_time : float
+    rows : tuple of RowModel
+    params : tuple of ParamInfo
+        Every named parameter, in a_k order.
+    source_sha256 : str or None
+        The sha256 of the result file decoded.
+    """
+
+    compensator: Compensator
+    inputs: tuple[str, ...]
+    input_symbols: tuple[sp.Symbol, ...]
+    sample_time: float
+    rows: tuple[RowModel, ...]
+    params: tuple[ParamInfo, ...]
+    source_sha256: str | None = None
+    target: str | None = None
+
+
+def _stage(comp: Compensator, j: int, i: int) -> Stage:
+    gene = comp.matrix.rows[j].genes[i]
+    el = gene.element
+    n = comp.matrix.n_elements
+    info = None
+    if el.param is not None:
+        k = j * n + i + 1  # the paper's address alpha = j n + i + 1 (eq. 1)
+        info = ParamInfo(
+            symbol=sp.Symbol(f"a_{k}", real=True), value=float(comp.value(gene)), p=gene.p,
+            range=comp.ranges[el.name], unit=el.param.unit, meaning=el.param.meaning,
+            element=el.name, row=j, col=i,
+        )
+    a_sym = info.symbol if info else None
+    ts = comp.sample_time
+    if issubclass(el, StaticElement):
+        return Stage(i, el, "static", info, expr=sp.sympify(el.f(SYMPY_OPS, X, a_sym)))
+    if issubclass(el, LinearElement):
+        num, den = el.tf(a_sym)
+        b, a = el.coefficients(info.value if info else None, ts)
+        return Stage(i, el, "linear", info,
+                     tf=(tuple(sp.sympify(c) for c in num), tuple(sp.sympify(c) for c in den)),
+                     b=tuple(float(v) for v in b), a=tuple(float(v) for v in a), method=el.method)
+    if issubclass(el, DelayElement):
+        return Stage(i, el, "delay", info, delay=el.samples(info.value if info else None, ts))
+    if issubclass(el, RelayElement):
+        return Stage(i, el, "relay", info, threshold=info.value if info else 0.0)
+    raise TypeError(f"element {el.name!r} has no known kind")
+
+
+def build_model(comp: Compensator, *, sha256: str | None = None,
+                target: str | None = None) -> SymbolicModel:
+    """Decode a compensator into its stages (no simplification).
+
+    Parameters
+    ----------
+    comp : Compensator
+    sha256 : str, optional
+        Digest of the result file, carried for the exports' headers.
+    target : str, optional
+        Name of the target column.
+    """
+    syms = tuple(sp.Symbol(name, real=True) for name in comp.matrix.inputs)
+    rows = []
+    params = []
+    for j, row in enumerate(comp.matrix.rows):
+        stages = tuple(_stage(comp, j, i) for i in range(len(row.genes)))
+        params += [st.param for st in stages if st.param is not None]
+        rows.append(RowModel(j, comp.matrix.inputs[row.input], syms[row.input], stages))
+    return SymbolicModel(comp, comp.matrix.inputs, syms, comp.sample_time, tuple(rows),
+                         tuple(params), sha256, target)
