@@ -124,32 +124,31 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.data import load_data, write_csv
 
     model_path = Path(args.model)
-    kind = _model_kind(model_path)
-    data = load_data(args.data, ts=args.ts)
-    cols: dict = {}
-    if "t" in data.columns:
-        cols["t"] = data.columns["t"]
-    if kind == "edm-lugre":
+    # The model is validated completely before the data is read.
+    if _model_kind(model_path) == "edm-lugre":
         from edm_sym.lugre import load_lugre, simulate_lugre
 
-        model = load_lugre(model_path)
-        target, velocity = model.target_name, model.velocity_name
-        tau = simulate_lugre(model.params, data.column(velocity, role="velocity column"), data.ts)
+        lugre = load_lugre(model_path)
+        target, velocity = lugre.target_name, lugre.velocity_name
+        data = load_data(args.data, ts=args.ts, require=[velocity])
+        _check_ts(model_path.name, lugre.sample_time, data)
+        cols = {"t": data.columns["t"]} if "t" in data.columns else {}
+        cols["tau_cmp"] = simulate_lugre(lugre.params, data.columns[velocity], data.ts)
     else:
         from edm_sym.result import load_result
         from edm_sym.simulate import simulate
 
         result = load_result(model_path)
-        _check_ts(model_path.name, result.sample_time, data)
         target = result.target
+        data = load_data(args.data, ts=args.ts, require=result.inputs)
+        _check_ts(model_path.name, result.sample_time, data)
         sim = simulate(result, data)
-        for j, row in enumerate(sim.rows, start=1):
-            cols[f"row_{j}"] = row
-        tau = sim.total
-    cols["tau_cmp"] = tau
+        cols = {"t": data.columns["t"]} if "t" in data.columns else {}
+        cols.update({f"row_{j}": row for j, row in enumerate(sim.rows, start=1)})
+        cols["tau_cmp"] = sim.total
     rmse = None
     if target in data.columns:
-        cols["residual"] = data.columns[target] - tau
+        cols["residual"] = data.columns[target] - cols["tau_cmp"]
         rmse = float((cols["residual"] ** 2).mean() ** 0.5)
     out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
     write_csv(out, cols)
@@ -171,7 +170,10 @@ def _model_kind(path: Path) -> str:
         raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
-    kind = doc.get("format") if isinstance(doc, dict) else None
+    if not isinstance(doc, dict):
+        raise ResultFormatError(f"{path.name}: (top level)",
+                                f"expected a JSON object, found {type(doc).__name__}")
+    kind = doc.get("format")
     if kind not in ("edm-result", "edm-lugre"):
         raise ResultFormatError(f"{path.name}: format",
                                 f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')

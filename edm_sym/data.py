@@ -144,7 +144,7 @@ def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
             raise DataFormatError(f"{name}: row {lineno}",
                                   f"expected {len(header)} values, found {len(cells)}")
         row = []
-        for col, cell in zip(header, cells):
+        for col, cell in zip(header, cells, strict=True):
             try:
                 v = float(cell)
             except ValueError:

@@ -38,7 +38,7 @@ class Offset(StaticElement):
     category = "basic"
     formula = "y = x + a"
     param = Param("constant added to the input", "unit of the input",
-                  lambda ts, t_sum: ParamRange(-5.0, 5.0, "linear"), "-5 .. 5")
+                  lambda ts, t_sum: ParamRange(-5.0, 5.0, "linear"), "-5 .. 5 (linear)")
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:

@@ -1,0 +1,218 @@
+"""result.json and data files: round trips, and bad files refused cleanly.
+
+Every bad file gives exit 2, one line on stderr naming the file and the field
+(or row/column), no traceback, and no output file.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import TS
+
+from edm_sym.cli import main
+from edm_sym.data import load_data, write_csv
+from edm_sym.errors import DataFormatError, ResultFormatError
+from edm_sym.result import EdmResult, StepRecord, dumps, load_result, save_result
+
+
+@pytest.fixture
+def result_doc(coulomb_viscous, tmp_path: Path) -> dict:
+    res = EdmResult(coulomb_viscous, "tau_ext",
+                    (StepRecord(1, coulomb_viscous.matrix, 0.5, (0.9, 0.7, 0.5), 3, 60,
+                                {"kind": "constant", "value": 1.0}),),
+                    {"seed": 3, "package_version": "0.1.0", "data_sha256": "0" * 64}, 0.5)
+    return json.loads(dumps(res))
+
+
+@pytest.fixture
+def data_csv(tmp_path: Path) -> Path:
+    n = 400
+    t = np.arange(n) * TS
+    omega = 5 * np.sin(2 * np.pi * t)
+    cols = {"t": t, "theta_w": np.mod(np.cumsum(omega) * TS, 2 * np.pi), "omega": omega,
+            "tau_ext": 0.93 * np.sign(omega) + 0.007 * omega}
+    return write_csv(tmp_path / "log.csv", cols)
+
+
+def test_round_trip_is_byte_identical(result_doc: dict, tmp_path: Path) -> None:
+    p = tmp_path / "r.json"
+    p.write_text(json.dumps(result_doc, sort_keys=True, indent=2) + "\n")
+    res = load_result(p)
+    q = save_result(res, tmp_path / "again.json")
+    assert q.read_bytes() == p.read_bytes()
+    assert res.sha256 and len(res.sha256) == 64
+    assert res.steps[0].history == (0.9, 0.7, 0.5)
+    text = p.read_text()
+    assert list(json.loads(text)) == sorted(json.loads(text))
+
+
+def test_simulate_cli_writes_contract_columns(result_doc, data_csv, tmp_path, capsys) -> None:
+    p = tmp_path / "r.json"
+    p.write_text(json.dumps(result_doc))
+    out = tmp_path / "sim.csv"
+    assert main(["simulate", str(p), str(data_csv), "-o", str(out)]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-1].startswith("rmse ")
+    sim = load_data(out)
+    assert list(sim.columns) == ["t", "row_1", "row_2", "tau_cmp", "residual"]
+    np.testing.assert_allclose(sim.columns["row_1"] + sim.columns["row_2"], sim.columns["tau_cmp"])
+    rmse = float(lines[-1].split()[1])
+    assert rmse == pytest.approx(np.sqrt(np.mean(sim.columns["residual"] ** 2)), rel=1e-9)
+    assert rmse < 1e-6  # the log was made by this very model (up to the p rounding)
+
+
+def _set(doc: dict, path: list, value) -> dict:
+    node = doc
+    for k in path[:-1]:
+        node = node[k]
+    if value is _DELETE:
+        del node[path[-1]]
+    else:
+        node[path[-1]] = value
+    return doc
+
+
+_DELETE = object()
+
+# (description, mutation, text expected in the message)
+CORRUPTIONS = [
+    ("wrong format", lambda d: _set(d, ["format"], "edm-other"), "format"),
+    ("wrong version", lambda d: _set(d, ["version"], 2), "version"),
+    ("unknown element code", lambda d: _set(d, ["matrix", "rows", 1, "elements", 0, "code"], 41),
+     "matrix.rows[1].elements[0].code: 41 is not a known element code"),
+    ("p above 1", lambda d: _set(d, ["matrix", "rows", 0, "elements", 1, "p"], 1.5),
+     "matrix.rows[0].elements[1].p"),
+    ("p negative", lambda d: _set(d, ["matrix", "rows", 0, "elements", 2, "p"], -0.1),
+     "matrix.rows[0].elements[2].p"),
+    ("missing sample time", lambda d: _set(d, ["sample_time"], _DELETE), "sample_time"),
+    ("missing matrix", lambda d: _set(d, ["matrix"], _DELETE), "matrix"),
+    ("missing provenance seed", lambda d: _set(d, ["provenance", "seed"], _DELETE),
+     "provenance.seed"),
+    ("row count disagrees", lambda d: _set(d, ["matrix", "n_rows"], 3), "matrix.n_rows"),
+    ("ragged row", lambda d: _set(d, ["matrix", "rows", 1, "elements"],
+                                  d["matrix"]["rows"][1]["elements"][:2]),
+     "matrix.rows[1].elements"),
+    ("input code out of range", lambda d: _set(d, ["matrix", "rows", 0, "input_code"], 5),
+     "matrix.rows[0].input_code"),
+    ("input name disagrees", lambda d: _set(d, ["matrix", "rows", 0, "input"], "theta_w"),
+     "matrix.rows[0].input"),
+    ("element name disagrees", lambda d: _set(d, ["matrix", "rows", 0, "elements", 0, "name"], "tanh"),
+     "matrix.rows[0].elements[0].name"),
+    ("negative sample time", lambda d: _set(d, ["sample_time"], -1e-3), "sample_time"),
+    ("code not an integer", lambda d: _set(d, ["matrix", "rows", 0, "elements", 0, "code"], "19"),
+     "matrix.rows[0].elements[0].code"),
+    ("bad range", lambda d: _set(d, ["parameter_ranges", "gain"],
+                                 {"low": 3.0, "high": 1.0, "scaling": "linear"}),
+     "parameter_ranges.gain"),
+    ("log range from zero", lambda d: _set(d, ["parameter_ranges", "power_gain"],
+                                           {"low": 0.0, "high": 1.0, "scaling": "log"}),
+     "parameter_ranges.power_gain"),
+    ("missing range", lambda d: _set(d, ["parameter_ranges", "gain"], _DELETE),
+     "parameter_ranges.gain"),
+    ("bad data sha", lambda d: _set(d, ["provenance", "data_sha256"], "xyz"),
+     "provenance.data_sha256"),
+    ("inputs not names", lambda d: _set(d, ["inputs"], ["theta w", "omega"]), "inputs[0]"),
+    ("history not numbers", lambda d: _set(d, ["steps", 0, "history"], [0.1, "a"]),
+     "steps[0].history[1]"),
+    ("top level a list", lambda d: [d], "top level"),
+]
+
+
+@pytest.mark.parametrize("desc,mutate,where", CORRUPTIONS, ids=[c[0] for c in CORRUPTIONS])
+def test_corrupted_result_is_refused(desc, mutate, where, result_doc, data_csv, tmp_path,
+                                     capsys) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(mutate(result_doc)))
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(bad), str(data_csv), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "bad.json" in err and where in err, err
+    assert "Traceback" not in err
+    assert not out.exists()
+    assert set(tmp_path.iterdir()) == {bad, data_csv}  # no temporary file left either
+
+
+@pytest.mark.parametrize("text,where", [
+    ("{not json", "expected JSON"),
+    ("", "expected JSON"),
+    ('{"format": "edm-result", "version": 1, "sample_time": NaN}', "expected JSON"),
+])
+def test_unparsable_result_is_refused(text, where, tmp_path) -> None:
+    p = tmp_path / "r.json"
+    p.write_text(text)
+    with pytest.raises(ResultFormatError, match=where):
+        load_result(p)
+
+
+# -- data files -------------------------------------------------------------------
+BAD_DATA = [
+    ("empty.csv", "", "empty file"),
+    ("header_only.csv", "t,omega\n", "found none"),
+    ("nan.csv", "t,omega\n0,1\n0.001,nan\n0.002,1\n", "row 3, column 'omega'"),
+    ("inf.csv", "t,omega\n0,1\n0.001,1\n0.002,-inf\n", "row 4, column 'omega'"),
+    ("text.csv", "t,omega\n0,1\n0.001,abc\n", "row 3, column 'omega'"),
+    ("nonuniform.csv", "t,omega\n0,1\n0.001,1\n0.0025,1\n0.0035,1\n", "row 4, column 't'"),
+    ("ragged.csv", "t,omega\n0,1\n0.001\n", "row 3"),
+    ("missing_column.csv", "t,theta_w\n0,1\n0.001,1\n", "column 'omega'"),
+    ("no_time.csv", "omega\n1\n2\n", "column 't'"),
+]
+
+
+@pytest.mark.parametrize("name,text,where", BAD_DATA, ids=[b[0] for b in BAD_DATA])
+def test_bad_data_is_refused(name, text, where, result_doc, tmp_path, capsys) -> None:
+    res = tmp_path / "r.json"
+    res.write_text(json.dumps(result_doc))
+    data = tmp_path / name
+    data.write_text(text)
+    out = tmp_path / "out.csv"
+    assert main(["simulate", str(res), str(data), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and name in err and where in err, err
+    assert not out.exists()
+
+
+def test_npz_and_mat_are_read(tmp_path: Path) -> None:
+    from scipy import io as sio
+
+    t = np.arange(100) * TS
+    np.savez(tmp_path / "log.npz", t=t, omega=np.sin(t))
+    log = load_data(tmp_path / "log.npz")
+    assert log.ts == pytest.approx(TS) and list(log.columns) == ["t", "omega"]
+    sio.savemat(tmp_path / "log.mat", {"t": t[:, None], "qm": np.cos(t)[:, None], "gtau": 35.1})
+    log = load_data(tmp_path / "log.mat")
+    assert set(log.columns) == {"t", "qm"} and log.scalars["gtau"] == pytest.approx(35.1)
+    np.savez(tmp_path / "bad.npz", t=t, omega=np.r_[np.sin(t[:-1]), np.nan])
+    with pytest.raises(DataFormatError, match="row 100, column 'omega'"):
+        load_data(tmp_path / "bad.npz")
+    (tmp_path / "junk.mat").write_bytes(b"not a mat file at all")
+    with pytest.raises(DataFormatError, match="junk.mat"):
+        load_data(tmp_path / "junk.mat")
+
+
+def test_ts_option_for_logs_without_time(tmp_path: Path) -> None:
+    p = tmp_path / "x.csv"
+    p.write_text("omega\n1\n2\n3\n")
+    assert load_data(p, ts=0.002).ts == 0.002
+
+
+def test_no_traceback_from_a_real_process(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "edm-result", "version": 7}')
+    proc = subprocess.run([sys.executable, "-m", "edm_sym", "simulate", str(bad), "x.csv"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == 'edm: bad.json: version: expected 1, found 7'
+    assert proc.stdout == ""
+
+
+def test_usage_error_is_one_line_exit_2(capsys) -> None:
+    assert main(["plant", "--excitation", "abstraction"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--preset" in err
