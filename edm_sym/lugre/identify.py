@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import linalg, optimize
 
+from edm_sym.errors import ConfigError, DataFormatError
 from edm_sym.lugre.model import (
     LuGreParams,
     _as_velocity,
@@ -188,12 +189,15 @@ def search_space(problem: LuGreProblem) -> dict[str, tuple[float, float, str]]:
         ``log10`` of the value) or ``"linear"``.
     """
     t_max, v_max = problem.torque_scale, problem.velocity_scale
+    sigma0_low, sigma0_high = 1e2, 1e8
+    # |z0| up to the largest steady deflection the box allows.
+    z_max = 2.0 * t_max / sigma0_low
     return {
         "v_s": (1e-4 * v_max, v_max, "log"),
         "tau_c": (1e-6 * t_max, 2.0 * t_max, "log"),
         "tau_s": (1e-6 * t_max, 2.0 * t_max, "log"),
-        "z0": (-2.0 * t_max / 1e2, 2.0 * t_max / 1e2, "linear"),
-        "sigma0": (1e2, 1e8, "log"),
+        "z0": (-z_max, z_max, "linear"),
+        "sigma0": (sigma0_low, sigma0_high, "log"),
         "sigma1": (1e-6, 1e2, "log"),
         "sigma2": (0.0, t_max / v_max, "linear"),
     }
@@ -305,6 +309,7 @@ def _identify_scipy(problem: LuGreProblem, *, seed: int) -> MethodOutcome:
             popsize=10,
             maxiter=150,
             tol=1e-4,
+            atol=1e-6 * problem.torque_scale,
             mutation=(0.5, 1.0),
             recombination=0.7,
             polish=False,
@@ -335,10 +340,10 @@ def _identify_scipy(problem: LuGreProblem, *, seed: int) -> MethodOutcome:
 def _as_series(name: str, values: ArrayLike, n: int) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     if arr.shape != (n,):
-        raise ValueError(f"{name}: expected a 1-D array of {n} samples, found shape {arr.shape}")
+        raise DataFormatError(name, f"expected a 1-D array of {n} samples, found shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise ValueError(f"{name}[{bad}]: expected a finite number, found {arr[bad]!r}")
+        raise DataFormatError(f"{name}[{bad}]", f"expected a finite number, found {arr[bad]!r}")
     return arr
 
 
@@ -380,25 +385,33 @@ def identify_lugre(
 
     Raises
     ------
-    ValueError
-        If the method is unknown or an input is malformed.
+    edm_sym.errors.ConfigError
+        (a ValueError) If the method is unknown or an option is invalid.
+    edm_sym.errors.DataFormatError
+        (a ValueError) If a data series is malformed (length, NaN, all-zero
+        velocity, negative weights).
     """
     if method not in METHODS:
-        raise ValueError(f"method: unknown method {method!r} (known: {', '.join(sorted(METHODS))})")
+        raise ConfigError("method", f"unknown method {method!r} (known: {', '.join(sorted(METHODS))})")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed: expected an integer, found {seed!r}")
-    if time_limit is not None and not (math.isfinite(float(time_limit)) and time_limit >= 0):
-        raise ValueError(f"time_limit: expected a non-negative number of seconds, found {time_limit!r}")
+        raise ConfigError("seed", f"expected an integer, found {seed!r}")
+    if time_limit is not None and not (
+        isinstance(time_limit, (int, float, np.integer, np.floating))
+        and not isinstance(time_limit, bool)
+        and math.isfinite(float(time_limit))
+        and time_limit >= 0
+    ):
+        raise ConfigError("time_limit", f"expected a non-negative number of seconds, found {time_limit!r}")
     v = _as_velocity(velocity)
     ts_f = _check_ts(ts)
     if len(v) < 2:
-        raise ValueError(f"velocity: expected at least 2 samples, found {len(v)}")
+        raise DataFormatError("velocity", f"expected at least 2 samples, found {len(v)}")
     if not np.any(v != 0.0):
-        raise ValueError("velocity: all samples are zero; the friction model cannot be identified")
+        raise DataFormatError("velocity", "all samples are zero; the friction model cannot be identified")
     y = _as_series("target", target, len(v))
     w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
     if np.any(w < 0.0) or not np.any(w > 0.0):
-        raise ValueError("weights: expected non-negative values, not all zero")
+        raise DataFormatError("weights", "expected non-negative values, not all zero")
     deadline = None if time_limit is None else time.monotonic() + float(time_limit)
     problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline)
     outcome = METHODS[method](problem, seed=int(seed))

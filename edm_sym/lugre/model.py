@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from edm_sym.errors import DataFormatError
+
 __all__ = [
     "PARAMETER_NAMES",
     "LuGreParams",
@@ -173,17 +175,17 @@ class LuGreParams:
 def _as_velocity(velocity: ArrayLike) -> np.ndarray:
     v = np.asarray(velocity, dtype=float)
     if v.ndim != 1:
-        raise ValueError(f"velocity: expected a 1-D array, found shape {v.shape}")
+        raise DataFormatError("velocity", f"expected a 1-D array, found shape {v.shape}")
     if not np.all(np.isfinite(v)):
         bad = int(np.flatnonzero(~np.isfinite(v))[0])
-        raise ValueError(f"velocity[{bad}]: expected a finite number, found {v[bad]!r}")
+        raise DataFormatError(f"velocity[{bad}]", f"expected a finite number, found {v[bad]!r}")
     return v
 
 
 def _check_ts(ts: float) -> float:
     ts_f = float(ts)
     if not (math.isfinite(ts_f) and ts_f > 0.0):
-        raise ValueError(f"ts: expected a positive finite sample time, found {ts!r}")
+        raise DataFormatError("ts", f"expected a positive finite sample time, found {ts!r}")
     return ts_f
 
 
@@ -229,9 +231,7 @@ def bristle_coefficients(
     return z_ss, decay, rate
 
 
-def bristle_trajectory(
-    z_ss: np.ndarray, decay: np.ndarray, z_start: float
-) -> np.ndarray:
+def bristle_trajectory(z_ss: np.ndarray, decay: np.ndarray, z_start: float) -> np.ndarray:
     """Deviation ``z[k] - z_ss[k]`` after each sample's exact update.
 
     Parameters
@@ -251,7 +251,7 @@ def bristle_trajectory(
     # faster than one over numpy scalars (~2 ms per 20 000 samples).
     out = [0.0] * len(z_ss)
     z = float(z_start)
-    for k, (s, d) in enumerate(zip(z_ss.tolist(), decay.tolist())):
+    for k, (s, d) in enumerate(zip(z_ss.tolist(), decay.tolist(), strict=True)):
         e = (z - s) * d
         z = s + e
         out[k] = e
@@ -281,8 +281,9 @@ def simulate_lugre(params: LuGreParams, velocity: ArrayLike, ts: float) -> np.nd
 
     Raises
     ------
-    ValueError
-        If ``velocity`` is not a finite 1-D array or ``ts`` is not positive.
+    edm_sym.errors.DataFormatError
+        (a ValueError) If ``velocity`` is not a finite 1-D array or ``ts`` is
+        not positive.
     """
     v = _as_velocity(velocity)
     ts_f = _check_ts(ts)

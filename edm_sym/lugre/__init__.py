@@ -1,0 +1,44 @@
+"""The LuGre friction model: the conventional baseline compensator.
+
+The paper's eqs. 10-14: simulation with an exact per-sample bristle update,
+the steady-state curve, identification on a free-motion log with the fitness
+of eq. 8, and the LUGRE.json file. See ``docs/lugre.md``.
+"""
+
+from edm_sym.lugre.fileformat import load_lugre, lugre_schema, parse_lugre, save_lugre
+from edm_sym.lugre.identify import (
+    METHODS,
+    LuGreProblem,
+    MethodOutcome,
+    identify_lugre,
+    register_method,
+    search_space,
+)
+from edm_sym.lugre.model import (
+    PARAMETER_NAMES,
+    LuGreParams,
+    simulate_lugre,
+    steady_state,
+    weighted_rmse,
+)
+from edm_sym.lugre.result import LuGreProvenance, LuGreResult
+
+__all__ = [
+    "METHODS",
+    "PARAMETER_NAMES",
+    "LuGreParams",
+    "LuGreProblem",
+    "LuGreProvenance",
+    "LuGreResult",
+    "MethodOutcome",
+    "identify_lugre",
+    "load_lugre",
+    "lugre_schema",
+    "parse_lugre",
+    "register_method",
+    "save_lugre",
+    "search_space",
+    "simulate_lugre",
+    "steady_state",
+    "weighted_rmse",
+]
