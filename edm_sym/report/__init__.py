@@ -1,0 +1,1 @@
+"""The LaTeX model report: figures (matplotlib) and the report context."""
