@@ -91,6 +91,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=_cmd_plant)
 
+    p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
+    p.add_argument("data", metavar="DATA")
+    p.add_argument("--position", required=True, metavar="COL")
+    p.add_argument("--force", required=True, metavar="COL")
+    p.add_argument("--force-gain", default="1", metavar="NUM|NAME",
+                   help="number, or name of a scalar stored in DATA (e.g. gtau)")
+    p.add_argument("--nominal-inertia", required=True, type=float, metavar="M_N")
+    p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ")
+    p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv")
+    p.add_argument("--ts", type=_positive_float)
+    p.set_defaults(func=_cmd_observe)
+
     p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
     p.add_argument("data", metavar="DATA")
     p.add_argument("--target", required=True, metavar="COL")
@@ -191,6 +203,21 @@ def _cmd_plant(args: argparse.Namespace) -> int:
     out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
     write_csv(out, log.columns)
     print(f"wrote {out}")
+    return 0
+
+
+def _cmd_observe(args: argparse.Namespace) -> int:
+    from edm_sym.data import load_data, write_csv
+    from edm_sym.observer import ObserverOptions, observer_view
+
+    try:
+        gain: float | str = float(args.force_gain)
+    except ValueError:
+        gain = args.force_gain
+    opts = ObserverOptions(args.position, args.force, args.nominal_inertia, gain, args.cutoff)
+    view = observer_view(load_data(args.data, ts=args.ts), opts)
+    write_csv(args.output, view.columns)
+    print(f"wrote {args.output}")
     return 0
 
 
