@@ -275,6 +275,31 @@ def test_identification_recovers_friction(truth):
     print(f"identified in {elapsed:.1f} s, {result.evaluations} evaluations: {result.params}")
 
 
+EMPS = Path("/work/shared/data/emps/DATA_EMPS.mat")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS benchmark data not available")
+def test_identification_on_real_emps_axis_matches_published_friction():
+    # Real data: Janot et al.'s EMPS axis. The published least-squares model
+    # has Fc = 20.3935 N, Fv = 203.5034 N s/m; above the stiction region the
+    # LuGre steady state must agree with Fc sgn(v) + Fv v within 3 %.
+    from scipy.io import loadmat
+
+    data = loadmat(EMPS)
+    t, q = data["t"].ravel(), data["qm"].ravel()
+    ts = float(t[1] - t[0])
+    force = float(data["gtau"].item()) * data["vir"].ravel()
+    b, a = signal.butter(4, 100.0 / (0.5 / ts))
+    qd = np.gradient(signal.filtfilt(b, a, q), ts)
+    target = force - 95.1089 * np.gradient(qd, ts)
+    result = identify_lugre(target, qd, ts, seed=0)
+    v = np.linspace(0.01, np.max(np.abs(qd)), 200)
+    v = np.r_[-v, v]
+    published = 20.3935 * np.sign(v) + 203.5034 * v
+    assert np.max(np.abs(steady_state(result.params, v) - published)) <= 0.03 * np.max(np.abs(published))
+
+
 def test_same_seed_gives_same_parameters():
     v, _, noisy = synthetic(COMPLIANT, duration=3.0)
     first = identify_lugre(noisy, v, TS, seed=7)

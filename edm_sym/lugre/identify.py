@@ -250,7 +250,7 @@ class _VarPro:
         gram = m @ m.T + 1e-12 * np.eye(len(active))
         chol = linalg.cholesky(gram)  # upper: gram = chol.T @ chol
         q = linalg.solve_triangular(chol, m @ self.yw, trans="T")
-        # tau_c (column 0, always active) has a small positive lower bound.
+        # tau_c (column 0) keeps a small positive lower bound, so sigma0 = tau_c / l > 0.
         low = np.zeros(len(active))
         if active[0] == 0:
             low[0] = self.tau_c_min * norms[0]
