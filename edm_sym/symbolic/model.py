@@ -100,13 +100,50 @@ class Stage:
 
 @dataclass(frozen=True)
 class RowModel:
-    """One row of the model: its input and its stages (more is added by decoding)."""
+    """One row of the model: its input and its stages (more is added by decoding).
+
+    :func:`build_model` fills the first five fields; :func:`edm_sym.symbolic.decode`
+    fills the rest (they keep their defaults otherwise).
+
+    Attributes
+    ----------
+    index : int
+        Row number, 0-based.
+    input, input_symbol : str, sympy.Symbol
+        The row's selected input.
+    stages : tuple of Stage
+        Left to right.
+    role : str or None
+        The input's physical role (``"velocity"``, ``"acceleration"``,
+        ``"angle"``, ``"angle_wrapped"``) or None.
+    expr_raw, expr_raw_numeric : sympy.Expr or None
+        The stages composed as they are, with the ``a_k`` symbols / with numbers;
+        dynamic stages are the operators ``LTI``, ``Delay``, ``Relay``
+        (:mod:`edm_sym.symbolic.operators`).
+    expr, expr_numeric : sympy.Expr or None
+        The same after the bounded simplification passes.
+    terms : tuple of PhysicalTerm
+        The physical terms of ``expr_numeric`` (:mod:`edm_sym.symbolic.classify`).
+    linear_parts : tuple of LinearPart
+        Each filter or delay stage as python-control transfer functions
+        (continuous, and discrete with the simulator's coefficients).
+    system : control.NonlinearIOSystem or None
+        The whole row as a discrete python-control system (dt = Ts).
+    """
 
     index: int
     input: str
     input_symbol: sp.Symbol
     stages: tuple[Stage, ...]
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
+    role: str | None = None
+    expr_raw: sp.Expr | None = None
+    expr_raw_numeric: sp.Expr | None = None
+    expr: sp.Expr | None = None
+    expr_numeric: sp.Expr | None = None
+    terms: tuple[Any, ...] = ()
+    linear_parts: tuple[Any, ...] = field(default=(), compare=False)
+    system: Any = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)
@@ -134,6 +171,28 @@ class SymbolicModel:
     params: tuple[ParamInfo, ...]
     source_sha256: str | None = None
     target: str | None = None
+    roles: dict[str, str | None] = field(default_factory=dict, compare=False)
+
+    def total(self, *, numeric: bool = True, simplified: bool = True) -> sp.Expr:
+        """The compensation torque: the sum of the row expressions (after decoding).
+
+        Parameters
+        ----------
+        numeric : bool, default True
+            Numbers instead of the ``a_k`` symbols.
+        simplified : bool, default True
+            The simplified rows instead of the raw ones.
+
+        Returns
+        -------
+        sympy.Expr
+        """
+        name = ("expr" if simplified else "expr_raw") + ("_numeric" if numeric else "")
+        parts = [getattr(r, name) for r in self.rows]
+        if any(p is None for p in parts):
+            raise ValueError("total: the rows have no expressions yet; use "
+                             "edm_sym.symbolic.decode, not build_model")
+        return sp.Add(*parts)
 
 
 def _stage(comp: Compensator, j: int, i: int) -> Stage:

@@ -1,0 +1,444 @@
+"""Physical terms of a row: what its simplified numeric expression means, in SI units.
+
+A row's simplified expression (with numbers) is split into its additive terms.
+Each term is ``c f(w)`` with one *leaf* ``w``: the input itself, or the input
+through transfer functions and delays. A transfer function ``s^k H(s)`` moves
+the leaf's role k steps along angle -> velocity -> acceleration (an integral
+moves it back) with the low-frequency gain ``H(0)``; the poles of ``H`` are
+reported as filter corners. Then, by the leaf's role:
+
+========================  ===========================================  ============
+pattern                   term                                         parameters
+========================  ===========================================  ============
+``c``                     offset                                       level [N m]
+``c v``                   viscous friction                             N m s/rad
+``c sign(v)``             Coulomb friction                             level [N m]
+``c tanh(k v)`` and       Coulomb friction when the transition         level, transition
+``atan``, ``Sat``,        velocity (1/k, or the saturation's knee) is  velocity [rad/s]
+``Relay``                 at most ``coulomb_velocity``                 (hysteresis)
+``c a`` or ``c s v``      acceleration-dependent (inertia)             kg m^2, corner
+``F(sin(k q + phi))``     position-dependent (spatial) friction        amplitude, period,
+                                                                       cycles/rev, phase
+odd hump in v             Stribeck-like                                peak, velocities
+========================  ===========================================  ============
+
+A term that fits none of these is ``"unclassified"`` with the reason.
+``LTI(f(v), G)`` with a finite ``G(0)`` is classified as ``G(0) f(v)``, the
+filter noted; an odd velocity function that fits ``Fc sign(v) + D v`` over the
+velocity range to 0.1 % gives those two terms (noted as fitted).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from edm_sym.symbolic.functions import NUMPY_FUNCTIONS, Sat
+from edm_sym.symbolic.operators import LTI, Delay, Relay, s
+
+#: The kinds of physical term.
+KINDS = ("coulomb", "viscous", "acceleration", "spatial", "stribeck", "offset", "unclassified")
+
+_CHAIN = ("angle", "velocity", "acceleration")
+
+
+@dataclass(frozen=True)
+class PhysicalTerm:
+    """One physical term of a row.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    parameters : dict of str to (float, str)
+        Name -> (value, SI unit).
+    description : str
+        One readable line; for ``"unclassified"`` the reason.
+    expr : sympy.Expr or None
+        The term of the row expression this describes.
+    """
+
+    kind: str
+    parameters: Mapping[str, tuple[float, str]] = field(default_factory=dict)
+    description: str = ""
+    expr: sp.Expr | None = field(default=None, compare=False)
+
+
+@dataclass(frozen=True)
+class ClassifyOptions:
+    """Thresholds of the classification.
+
+    Parameters
+    ----------
+    coulomb_velocity : float, default 0.1
+        [rad/s] A saturating function of velocity counts as Coulomb friction
+        when it reaches its level within this velocity (``tanh(k v)``: 1/k).
+    velocity_range : float, default 10.0
+        [rad/s] The velocities over which shapes are judged (Stribeck-like
+        humps, Coulomb + viscous fits).
+    """
+
+    coulomb_velocity: float = 0.1
+    velocity_range: float = 10.0
+
+    def __post_init__(self) -> None:
+        for name in ("coulomb_velocity", "velocity_range"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name}: expected a positive number, found {v!r}")
+
+
+@dataclass(frozen=True)
+class _Leaf:
+    role: str | None
+    gain: float
+    notes: tuple[str, ...] = ()
+    corners: tuple[float, ...] = ()
+    delay: float = 0.0
+
+
+def _tf_split(G: sp.Expr) -> tuple[int, float, tuple[float, ...]]:  # noqa: N803
+    """``G = s^k H`` -> (k, H(0), |poles of H|)."""
+    num, den = sp.fraction(sp.together(G))
+    n = np.array([float(c) for c in sp.Poly(num, s).all_coeffs()])
+    d = np.array([float(c) for c in sp.Poly(den, s).all_coeffs()])
+    kn = len(n) - len(np.trim_zeros(n, "b"))
+    kd = len(d) - len(np.trim_zeros(d, "b"))
+    n, d = np.trim_zeros(n, "b"), np.trim_zeros(d, "b")
+    corners = tuple(sorted(float(abs(p)) for p in np.roots(d)))
+    return kn - kd, float(n[-1] / d[-1]), corners
+
+
+def _leaf(e: sp.Expr, u: sp.Symbol, role: str | None) -> _Leaf | None:
+    """The leaf description when ``e`` is the input through LTIs and delays only."""
+    if e == u:
+        return _Leaf(role, 1.0)
+    if isinstance(e, Delay) and e.args[1].is_Number:
+        inner = _leaf(e.args[0], u, role)
+        if inner is None:
+            return None
+        return _Leaf(inner.role, inner.gain, inner.notes, inner.corners,
+                     inner.delay + float(e.args[1]))
+    if isinstance(e, LTI):
+        inner = _leaf(e.args[0], u, role)
+        if inner is None:
+            return None
+        k, h0, corners = _tf_split(e.args[1])
+        notes = list(inner.notes)
+        new_role = inner.role
+        if inner.role == "angle_wrapped" and k > 0:
+            notes.append("differentiates the wrapped angle, which jumps at each wrap")
+            new_role = "angle"
+        if new_role in _CHAIN and k:
+            i = _CHAIN.index(new_role) + k
+            new_role = _CHAIN[i] if 0 <= i < len(_CHAIN) else None
+        elif k:
+            new_role = None
+        return _Leaf(new_role, inner.gain * h0, tuple(notes), inner.corners + corners,
+                     inner.delay)
+    return None
+
+
+def _leaves(e: sp.Expr, u: sp.Symbol, role: str | None, out: dict) -> None:
+    lf = _leaf(e, u, role)
+    if lf is not None:
+        out[e] = lf
+        return
+    for a in e.args:
+        if a.has(u):
+            _leaves(a, u, role, out)
+
+
+def _extras(leaf: _Leaf) -> tuple[dict[str, tuple[float, str]], str]:
+    params: dict[str, tuple[float, str]] = {}
+    notes = list(leaf.notes)
+    if leaf.corners:
+        if len(leaf.corners) == 1:
+            params["corner"] = (leaf.corners[0], "rad/s")
+        else:
+            for i, c in enumerate(leaf.corners, 1):
+                params[f"corner_{i}"] = (c, "rad/s")
+        notes.append("through a filter with corner(s) "
+                     + ", ".join(f"{c:.4g}" for c in leaf.corners) + " rad/s")
+    if leaf.delay:
+        params["delay"] = (leaf.delay, "s")
+        notes.append(f"delayed by {leaf.delay:.4g} s")
+    return params, ("; " + "; ".join(notes)) if notes else ""
+
+
+_LINEAR = {
+    "velocity": ("viscous", "coefficient", "N m s/rad", "viscous friction"),
+    "acceleration": ("acceleration", "inertia", "kg m^2", "acceleration-dependent term"),
+}
+
+
+def classify_expression(
+    expr: sp.Expr, u: sp.Symbol, role: str | None, *, options: ClassifyOptions | None = None
+) -> tuple[PhysicalTerm, ...]:
+    """Split a numeric row expression into physical terms.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+        The row's simplified expression with numbers.
+    u : sympy.Symbol
+        The row's input symbol.
+    role : str or None
+        The input's role (see :mod:`edm_sym.symbolic.roles`).
+    options : ClassifyOptions, optional
+
+    Returns
+    -------
+    tuple of PhysicalTerm
+    """
+    opts = options or ClassifyOptions()
+    out: list[PhysicalTerm] = []
+    for term in sp.Add.make_args(expr):
+        out += _classify_term(term, u, role, opts)
+    return tuple(out)
+
+
+def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
+                   opts: ClassifyOptions) -> list[PhysicalTerm]:
+    if term == 0:
+        return []
+    if not term.has(u):
+        return [_offset(term)]
+    if role is None:
+        return [_unclassified(term, f"input {u.name!r} has no physical role "
+                              f"(pass roles={{{u.name!r}: 'velocity'}} or another role)")]
+    c, core = term.as_coeff_Mul()
+    c = float(c)
+    # A nonlinear function filtered afterwards: classify its low-frequency part.
+    if isinstance(core, LTI) and _leaf(core, u, role) is None:
+        k, h0, corners = _tf_split(core.args[1])
+        if k == 0:
+            note = ("; through a filter with corner(s) "
+                    + ", ".join(f"{x:.4g}" for x in corners) + " rad/s") if corners else ""
+            return [_annotate(t, note, corners, term)
+                    for t in _classify_term(c * h0 * core.args[0], u, role, opts)]
+        return [_unclassified(term, "a nonlinear function of the input, then differentiated "
+                              "or integrated")]
+    if isinstance(core, Delay) and _leaf(core, u, role) is None and core.args[1].is_Number:
+        T = float(core.args[1])
+        return [_annotate(t, f"; delayed by {T:.4g} s", (), term, delay=T)
+                for t in _classify_term(c * core.args[0], u, role, opts)]
+    found: dict[sp.Expr, _Leaf] = {}
+    _leaves(core, u, role, found)
+    if len(found) != 1:
+        return [_unclassified(term, f"the input enters through {len(found)} different paths")]
+    (leaf_expr, leaf), = found.items()
+    if leaf.role is None:
+        return [_unclassified(term, "a derivative or integral of the input beyond "
+                              "angle, velocity and acceleration")]
+    w = sp.Dummy("w", real=True)
+    f = core.xreplace({leaf_expr: w})
+    extra, note = _extras(leaf)
+    return _match(term, c, f, w, leaf, extra, note, opts)
+
+
+def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
+           extra: dict, note: str, opts: ClassifyOptions) -> list[PhysicalTerm]:
+    g, role = leaf.gain, leaf.role
+    if f == w:
+        if role in _LINEAR:
+            kind, pname, unit, what = _LINEAR[role]
+            v = c * g
+            return [PhysicalTerm(kind, {pname: (v, unit), **extra},
+                                 f"{what}: {v:.6g} {unit}{note}", term)]
+        return [_unclassified(term, f"linear in the angle: a stiffness of {c * g:.6g} N m/rad, "
+                              "not a friction term" + note, {"stiffness": (c * g, "N m/rad")})]
+    if role == "velocity":
+        hit = _coulomb(term, c, f, w, g, extra, note, opts)
+        if hit is not None:
+            return hit
+    if role in ("angle", "angle_wrapped"):
+        hit = _spatial(term, c, f, w, g, role, extra, note)
+        if hit is not None:
+            return hit
+    if role == "velocity" and not f.has(LTI, Delay, Relay):
+        return _velocity_shape(term, c, f, w, g, extra, note, opts)
+    return [_unclassified(term, f"no physical pattern for {term} ({role} input)" + note)]
+
+
+def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: dict,
+             note: str, opts: ClassifyOptions) -> list[PhysicalTerm] | None:
+    sg = math.copysign(1.0, g)
+    if f == sp.sign(w):
+        level = c * sg
+        return [PhysicalTerm("coulomb", {"level": (level, "N m"), **extra},
+                             f"Coulomb friction: {level:.6g} N m sgn(velocity){note}", term)]
+    if isinstance(f, Relay) and f.args[0] == w and f.args[1].is_Number:
+        level, band = c * sg, float(f.args[1]) / abs(g)
+        return [PhysicalTerm("coulomb", {"level": (level, "N m"),
+                                         "hysteresis": (band, "rad/s"), **extra},
+                             f"Coulomb friction with hysteresis: {level:.6g} N m, switching "
+                             f"at +-{band:.4g} rad/s{note}", term)]
+    shape = None
+    if isinstance(f, (sp.tanh, sp.atan)):
+        k = _linear_coeff(f.args[0], w)
+        if k is not None:
+            top = 1.0 if isinstance(f, sp.tanh) else math.pi / 2
+            shape = (f.func.__name__, c * top * math.copysign(1.0, k * g), 1.0 / abs(k * g))
+    elif isinstance(f, Sat) and f.args[1].is_Number and f.args[2].is_Number and (
+            f.args[1] + f.args[2]) == 0:
+        k = _linear_coeff(f.args[0], w)
+        if k is not None:
+            hi = float(f.args[2])
+            shape = ("Sat", c * hi * math.copysign(1.0, k * g), hi / abs(k * g))
+    if shape is None:
+        return None
+    name, level, vt = shape
+    if vt <= opts.coulomb_velocity:
+        return [PhysicalTerm("coulomb", {"level": (level, "N m"),
+                                         "transition_velocity": (vt, "rad/s"), **extra},
+                             f"Coulomb friction ({name}-smoothed): {level:.6g} N m, "
+                             f"transition {vt:.4g} rad/s{note}", term)]
+    return [_unclassified(term, f"a saturating function of velocity ({name}, level "
+                          f"{level:.4g} N m) whose transition velocity {vt:.4g} rad/s is above "
+                          f"the Coulomb threshold {opts.coulomb_velocity:g} rad/s" + note,
+                          {"level": (level, "N m"), "transition_velocity": (vt, "rad/s")})]
+
+
+def _linear_coeff(arg: sp.Expr, w: sp.Dummy) -> float | None:
+    """k when ``arg == k w`` with a number k."""
+    k = arg / w
+    if k.is_Number and k != 0:
+        return float(k)
+    return None
+
+
+def _sine_of(f: sp.Expr, w: sp.Dummy) -> tuple[sp.Expr, float, float] | None:
+    """``f = F(sin(k w + phi))`` -> (sine subexpression, k, phi)."""
+    sines = [a for a in sp.preorder_traversal(f) if isinstance(a, (sp.sin, sp.cos))
+             and a.has(w)]
+    if not sines or len(set(sines)) != 1:
+        return None
+    sn = sines[0]
+    arg = sn.args[0]
+    phi, kw = arg.as_independent(w, as_Add=True)
+    k = _linear_coeff(kw, w)
+    if k is None or not phi.is_Number:
+        return None
+    phi = float(phi) + (math.pi / 2 if isinstance(sn, sp.cos) else 0.0)
+    if f.xreplace({sn: sp.Dummy()}).has(w):
+        return None
+    return sn, k, phi
+
+
+def _wrap(phi: float) -> float:
+    return math.remainder(phi, 2 * math.pi)
+
+
+def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: str,
+             extra: dict, note: str) -> list[PhysicalTerm] | None:
+    found = _sine_of(f, w)
+    if found is None:
+        return None
+    sn, k, phi = found
+    k = k * g
+    amp = c
+    if isinstance(sn, sp.sin) and f == sn or isinstance(sn, sp.cos) and f == sn:
+        if k < 0:
+            k, phi, amp = -k, -phi, -amp
+        if amp < 0:
+            amp, phi = -amp, phi + math.pi
+        shape = "sinusoidal"
+    else:
+        # A function of one sinusoid: periodic with the same period; measure it.
+        z = sp.Dummy("z")
+        F = sp.lambdify(z, c * f.xreplace({sn: z}), modules=[NUMPY_FUNCTIONS, "numpy"])
+        vals = np.asarray(F(np.sin(np.linspace(0, 2 * np.pi, 721))), dtype=float)
+        amp = float(np.ptp(vals * np.ones(721)) / 2)
+        k = abs(k)
+        shape = f"periodic, non-sinusoidal ({f})"
+    phi = _wrap(phi)
+    params = {"amplitude": (amp, "N m"), "period": (2 * math.pi / k, "rad"),
+              "cycles_per_revolution": (k, "1"), "phase": (phi, "rad"), **extra}
+    wrap_note = ""
+    if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
+        wrap_note = "; not a whole number of cycles per revolution: it jumps at each wrap"
+    return [PhysicalTerm("spatial", params,
+                         f"position-dependent friction, {shape}: amplitude {amp:.6g} N m, "
+                         f"{k:.6g} cycles/rev (period {2 * math.pi / k:.6g} rad), phase "
+                         f"{phi:.4g} rad{wrap_note}{note}", term)]
+
+
+def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
+                    extra: dict, note: str, opts: ClassifyOptions) -> list[PhysicalTerm]:
+    vmax = opts.velocity_range
+    v = np.linspace(vmax / 2000, vmax, 2000)
+    F = sp.lambdify(w, c * f, modules=[NUMPY_FUNCTIONS, "numpy"])
+    with np.errstate(all="ignore"):
+        pos = np.asarray(F(g * v), dtype=float) * np.ones_like(v)
+        neg = np.asarray(F(-g * v), dtype=float) * np.ones_like(v)
+    scale = float(np.max(np.abs(pos))) if np.all(np.isfinite(pos)) else 0.0
+    odd = scale > 0 and np.all(np.isfinite(neg)) and np.max(np.abs(pos + neg)) <= 1e-9 * scale
+    if not odd:
+        return [_unclassified(term, f"a function of velocity that is not odd ({term})" + note)]
+    a = np.abs(pos)
+    i = int(np.argmax(a))
+    same_sign = np.all(np.sign(pos[pos != 0]) == np.sign(pos[i]))
+    if same_sign and 0 < i < v.size - 1 and a[-1] < 0.9 * a[i]:
+        half = a[-1] + 0.5 * (a[i] - a[-1])
+        after = np.nonzero(a[i:] <= half)[0]
+        vs = float(v[i + after[0]]) if after.size else vmax
+        params = {"peak": (float(pos[i]), "N m"), "peak_velocity": (float(v[i]), "rad/s"),
+                  "level_at_range": (float(pos[-1]), "N m"),
+                  "stribeck_velocity": (vs, "rad/s"), **extra}
+        return [PhysicalTerm("stribeck", params,
+                             f"Stribeck-like hump: peak {pos[i]:.4g} N m at {v[i]:.4g} rad/s, "
+                             f"falling to {pos[-1]:.4g} N m at {vmax:g} rad/s{note}", term)]
+    # Coulomb + viscous fit by least squares over the range.
+    A = np.column_stack([np.ones_like(v), v])
+    (fc, d), *_ = np.linalg.lstsq(A, pos, rcond=None)
+    if np.max(np.abs(A @ np.array([fc, d]) - pos)) <= 1e-3 * scale:
+        out = []
+        if abs(fc) > 1e-6 * scale:
+            out.append(PhysicalTerm("coulomb", {"level": (float(fc), "N m"), **extra},
+                                    f"Coulomb friction (fitted to {f}): {fc:.6g} N m{note}",
+                                    term))
+        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
+                                f"viscous friction (fitted to {f}): {d:.6g} N m s/rad{note}",
+                                term))
+        return out
+    return [_unclassified(term, f"an odd function of velocity ({term}) that is neither "
+                          "Coulomb, viscous nor Stribeck-like over the velocity range" + note)]
+
+
+def _offset(term: sp.Expr) -> PhysicalTerm:
+    note = ""
+    value = term
+    dyn = [a for a in sp.preorder_traversal(term) if isinstance(a, (LTI, Delay))]
+    for d in dyn:
+        if isinstance(d, LTI):
+            k, h0, _ = _tf_split(d.args[1])
+            if k != 0:
+                return _unclassified(term, "a constant through a derivative or integral")
+            value = value.xreplace({d: h0 * d.args[0]})
+            note = " (final value after the filter's step response)"
+        else:
+            value = value.xreplace({d: d.args[0]})
+            note = " (after the delay)"
+    level = float(value)
+    return PhysicalTerm("offset", {"level": (level, "N m")},
+                        f"constant offset {level:.6g} N m{note}", term)
+
+
+def _unclassified(term: sp.Expr, reason: str,
+                  params: dict[str, tuple[float, str]] | None = None) -> PhysicalTerm:
+    return PhysicalTerm("unclassified", params or {}, reason, term)
+
+
+def _annotate(t: PhysicalTerm, note: str, corners: tuple[float, ...], term: sp.Expr,
+              delay: float = 0.0) -> PhysicalTerm:
+    params = dict(t.parameters)
+    for i, c in enumerate(corners, 1):
+        params["corner" if len(corners) == 1 else f"corner_{i}"] = (c, "rad/s")
+    if delay:
+        params["delay"] = (delay, "s")
+    return PhysicalTerm(t.kind, params, t.description + note, term)
