@@ -1,0 +1,43 @@
+"""Hierarchical abstraction: the genetic algorithm of Algorithm 1, fast.
+
+::
+
+    from edm_sym.abstraction import abstract, load_config
+    result = abstract(data, target="tau_ext", inputs=["theta_w", "omega", "alpha"],
+                      config=load_config("steps.toml"), seed=1)
+
+See ``docs/abstraction.md`` for the algorithm, the config format and the
+speed design.
+"""
+
+from __future__ import annotations
+
+from edm_sym.abstraction.cli import run_cli
+from edm_sym.abstraction.evaluator import Evaluator, RowCache
+from edm_sym.abstraction.run import GenerationInfo, abstract
+from edm_sym.abstraction.schedule import (
+    AbstractionConfig,
+    GaSettings,
+    InitialRow,
+    StepConfig,
+    default_config,
+    load_config,
+    parse_config,
+)
+from edm_sym.abstraction.weighting import Weighting
+
+__all__ = [
+    "AbstractionConfig",
+    "Evaluator",
+    "GaSettings",
+    "GenerationInfo",
+    "InitialRow",
+    "RowCache",
+    "StepConfig",
+    "Weighting",
+    "abstract",
+    "default_config",
+    "load_config",
+    "parse_config",
+    "run_cli",
+]
