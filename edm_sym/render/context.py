@@ -1,0 +1,437 @@
+"""Template contexts: everything a template shows, computed and validated here.
+
+The plan of a compensator (:func:`plan`) is language-neutral: per row, its
+stages with their state (names and sizes: filter states, ring buffers sized by
+the decoded delay, relay outputs) and readable labels. :func:`c_context` and
+:func:`python_context` turn the plan into the strings the templates place,
+asking the printers for every piece of C or Python; the templates only loop.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from edm_sym.discrete import METHODS
+from edm_sym.errors import NumericsWarning
+from edm_sym.printing import REALS, EdmC99Printer, EdmPythonPrinter, c_comment_text
+from edm_sym.printing.c import is_c_identifier
+from edm_sym.symbolic.model import SymbolicModel
+
+#: The format and version of the result files the exports name.
+RESULT_FORMAT = "edm-result"
+
+#: A filter whose frequency response moves by more than this fraction of its
+#: peak when its coefficients are rounded to float gets a NumericsWarning in a
+#: single-precision export (the contract asks 1e-4 of the RMS; this leaves margin).
+FLOAT_RESPONSE_LIMIT = 2e-5
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where the exported model comes from, for the files' headers.
+
+    Attributes
+    ----------
+    name : str
+        The result file's name (no folder, so output does not depend on it).
+    sha256 : str
+        The sha256 of the result file.
+    version : int
+        The result format version.
+    target : str
+        The name of the target column the compensator reproduces.
+    """
+
+    name: str
+    sha256: str
+    version: int
+    target: str
+
+
+@dataclass(frozen=True)
+class StatePart:
+    """One state variable of a stage: ``size`` reals, or an index when ``size`` is None."""
+
+    name: str
+    size: int | None
+    comment: str
+
+
+@dataclass(frozen=True)
+class StagePlan:
+    """A stage with its label and state."""
+
+    row: int
+    col: int
+    name: str
+    kind: str
+    label: str
+    stage: Any
+    state: tuple[StatePart, ...]
+
+
+@dataclass(frozen=True)
+class RowPlan:
+    """A row: its input (name, index, C macro) and its stages left to right."""
+
+    index: int
+    input: str
+    input_index: int
+    input_macro: str
+    stages: tuple[StagePlan, ...]
+
+    @property
+    def summary(self) -> str:
+        """``"row 1: omega -> sign -> gain (a_2 = 0.95)"``."""
+        return f"row {self.index + 1}: " + " -> ".join([self.input, *(s.label for s in self.stages)])
+
+
+def validate_prefix(prefix: str) -> str:
+    """Return ``prefix`` when it is a C identifier (not a keyword), else raise ValueError."""
+    if not isinstance(prefix, str) or not is_c_identifier(prefix):
+        raise ValueError(f"--prefix: expected a C identifier, found {prefix!r}")
+    return prefix
+
+
+def validate_real(real: str) -> str:
+    """Return ``real`` when it is ``"float"`` or ``"double"``, else raise ValueError."""
+    if real not in REALS:
+        raise ValueError(f"--real: expected one of {', '.join(REALS)}, found {real!r}")
+    return real
+
+
+def input_macros(prefix: str, inputs: tuple[str, ...]) -> tuple[str, ...]:
+    """``PREFIX_INPUT_<NAME>`` per input: upper-cased, other characters made ``_``."""
+    out = []
+    for name in inputs:
+        macro = f"{prefix.upper()}_INPUT_{re.sub(r'[^A-Za-z0-9_]', '_', name).upper()}"
+        if macro in out:
+            other = inputs[out.index(macro)]
+            raise ValueError(f"inputs: {other!r} and {name!r} both become the C macro {macro}; "
+                             "rename one of them")
+        out.append(macro)
+    return tuple(out)
+
+
+def source_of(result: Any) -> Source:
+    """The :class:`Source` of an :class:`~edm_sym.result.EdmResult`.
+
+    A result not loaded from a file is named by the sha256 of its canonical
+    serialisation, which is the file :func:`edm_sym.result.save_result` writes.
+    """
+    from edm_sym.result import VERSION, dumps
+
+    sha = result.sha256 or hashlib.sha256(dumps(result).encode("utf-8")).hexdigest()
+    name = Path(result.source).name if getattr(result, "source", None) else "result.json"
+    return Source(name, sha, VERSION, result.target)
+
+
+def _fmt(v: float) -> str:
+    return format(v, ".6g")
+
+
+def plan(model: SymbolicModel, prefix: str) -> tuple[RowPlan, ...]:
+    """The language-neutral plan of ``model``'s rows, validated.
+
+    Raises
+    ------
+    ValueError
+        On a non-finite coefficient, threshold or sample time, an empty delay,
+        a filter without state, or two inputs with the same C macro.
+    """
+    validate_prefix(prefix)
+    ts = model.sample_time
+    if not (isinstance(ts, float) and math.isfinite(ts) and ts > 0):
+        raise ValueError(f"sample_time: expected a positive finite number, found {ts!r}")
+    if not model.rows:
+        raise ValueError("matrix: expected at least one row, found 0")
+    macros = input_macros(prefix, model.inputs)
+    rows = []
+    for row in model.rows:
+        stages = []
+        for st in row.stages:
+            where = f"rows[{row.index}].elements[{st.col}] ({st.element.name})"
+            name = f"r{row.index + 1}_e{st.col + 1}"
+            label = st.element.name
+            if st.param is not None:
+                label += f" ({st.param.symbol} = {_fmt(st.param.value)})"
+            if st.kind == "static":
+                state: tuple[StatePart, ...] = ()
+                if st.expr is None:
+                    raise ValueError(f"{where}: expected a static expression, found none")
+            elif st.kind == "linear":
+                if len(st.b) != len(st.a) or len(st.a) < 2 or st.a[0] != 1.0:
+                    raise ValueError(f"{where}: expected b, a of one length >= 2 with a[0] = 1, "
+                                     f"found b = {st.b}, a = {st.a}")
+                if not all(math.isfinite(c) for c in (*st.b, *st.a)):
+                    raise ValueError(f"{where}: expected finite coefficients, found b = {st.b}, "
+                                     f"a = {st.a}")
+                state = (StatePart(f"{name}_z", len(st.a) - 1,
+                                   f"row {row.index + 1} element {st.col + 1} {label}: "
+                                   "direct form II transposed state"),)
+            elif st.kind == "delay":
+                if not (isinstance(st.delay, int) and st.delay >= 1):
+                    raise ValueError(f"{where}: expected a delay of >= 1 sample, found {st.delay!r}")
+                state = (StatePart(f"{name}_buf", st.delay,
+                                   f"row {row.index + 1} element {st.col + 1} {label}: "
+                                   f"ring buffer, {st.delay} samples"),)
+                if st.delay > 1:
+                    state += (StatePart(f"{name}_pos", None, "its oldest sample"),)
+            elif st.kind == "relay":
+                if st.threshold is None or not math.isfinite(st.threshold):
+                    raise ValueError(f"{where}: expected a finite threshold, found {st.threshold!r}")
+                state = (StatePart(f"{name}_out", 1,
+                                   f"row {row.index + 1} element {st.col + 1} {label}: "
+                                   "relay output"),)
+            else:
+                raise ValueError(f"{where}: unknown stage kind {st.kind!r}")
+            stages.append(StagePlan(row.index, st.col, name, st.kind, label, st, state))
+        idx = model.inputs.index(row.input)
+        rows.append(RowPlan(row.index, row.input, idx, macros[idx], tuple(stages)))
+    return tuple(rows)
+
+
+def float_response_error(b: tuple[float, ...], a: tuple[float, ...]) -> float:
+    """How far a filter's frequency response moves when its coefficients become floats.
+
+    Returns the largest change of ``H(e^{jw})`` over a logarithmic grid of
+    frequencies up to Nyquist, relative to the largest ``|H|`` there.
+    """
+    w = np.logspace(-5.0, 0.0, 400) * np.pi
+    zi = np.exp(-1j * w)
+
+    def response(bb: np.ndarray, aa: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return np.polyval(bb[::-1], zi) / np.polyval(aa[::-1], zi)
+
+    b64, a64 = np.asarray(b, dtype=float), np.asarray(a, dtype=float)
+    h = response(b64, a64)
+    hq = response(b64.astype(np.float32).astype(float), a64.astype(np.float32).astype(float))
+    ok = np.isfinite(h) & np.isfinite(hq)
+    if not ok.any():
+        return 0.0
+    peak = float(np.max(np.abs(h[ok])))
+    return float(np.max(np.abs(hq[ok] - h[ok])) / peak) if peak > 0 else 0.0
+
+
+def warn_single_precision(rows: tuple[RowPlan, ...]) -> list[str]:
+    """Warn (NumericsWarning) about filters too sensitive for single precision.
+
+    Returns the warning messages (empty when every filter is well conditioned).
+    """
+    messages = []
+    for row in rows:
+        for sp in row.stages:
+            if sp.kind != "linear":
+                continue
+            err = float_response_error(sp.stage.b, sp.stage.a)
+            if err > FLOAT_RESPONSE_LIMIT:
+                messages.append(
+                    f"rows[{row.index}].elements[{sp.col}] ({sp.label}): rounding its coefficients "
+                    f"to float moves its frequency response by {err:.1e} of its peak, so the "
+                    "float C may miss the simulator by more than 1e-4 of the RMS; prefer "
+                    "--real double")
+    for msg in messages:
+        warnings.warn(msg, NumericsWarning, stacklevel=3)
+    return messages
+
+
+def _dynamic_notes(rows: tuple[RowPlan, ...], ts: float) -> list[str]:
+    """One line per dynamic stage: where it is and how it is realised in discrete time."""
+    out = []
+    for row in rows:
+        for sp in row.stages:
+            where = f"row {row.index + 1}, element {sp.col + 1}, {sp.label}"
+            st = sp.stage
+            if sp.kind == "linear":
+                out.append(f"{where}: {METHODS[st.method]} (order {len(st.a) - 1})")
+            elif sp.kind == "delay":
+                out.append(f"{where}: z^-{st.delay}, a ring buffer of {st.delay} sample(s)")
+            elif sp.kind == "relay":
+                out.append(f"{where}: relay, +1 once x >= {_fmt(st.threshold)}, "
+                           f"-1 once x <= {_fmt(-st.threshold)}, starts at 0")
+    return out
+
+
+def _common(model: SymbolicModel, source: Source, rows: tuple[RowPlan, ...]) -> dict[str, Any]:
+    return {
+        "source": source,
+        "format": RESULT_FORMAT,
+        "n_elements": model.compensator.matrix.n_elements,
+        "num_rows": len(rows),
+        "num_inputs": len(model.inputs),
+        "summary": [r.summary for r in rows],
+        "dynamics": _dynamic_notes(rows, model.sample_time) or ["none (every element is static)"],
+        "sample_time_text": repr(model.sample_time),
+    }
+
+
+def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
+              real: str = "double") -> dict[str, Any]:
+    """The context of the C header and source templates.
+
+    Parameters
+    ----------
+    model : SymbolicModel
+    source : Source
+    prefix : str
+        C identifier prefixing every exported name.
+    real : {"float", "double"}
+    """
+    validate_real(real)
+    rows = plan(model, prefix)
+    if real == "float":
+        warn_single_precision(rows)
+    pr = EdmC99Printer({"real": real, "prefix": prefix})
+    macro = prefix.upper()
+    members: list[str] = []
+    init: list[str] = []
+    loops = False
+    out_rows = []
+    for row in rows:
+        stages = []
+        for sp in row.stages:
+            st = sp.stage
+            lv = {p.name: f"s->{p.name}" for p in sp.state}
+            for p in sp.state:
+                if p.size is None:
+                    members.append(pr.declare_index(p.name, p.comment))
+                    init += pr.zero_index(lv[p.name])
+                else:
+                    members.append(pr.declare_real_array(p.name, p.size, p.comment))
+                    init += pr.zero_real_array(lv[p.name], p.size)
+                    loops |= p.size > 1
+            if sp.kind == "static":
+                lines = pr.assign("x", st.numeric_expr())
+            elif sp.kind == "linear":
+                lines = pr.linear_lines(st.b, st.a, lv[f"{sp.name}_z"])
+            elif sp.kind == "delay":
+                lines = pr.delay_lines(st.delay, lv[f"{sp.name}_buf"], lv.get(f"{sp.name}_pos"))
+            else:
+                lines = pr.relay_lines(st.threshold, f"{lv[f'{sp.name}_out']}[0]")
+            stages.append({"comment": c_comment_text(f"element {sp.col + 1}: {sp.label}"),
+                           "lines": lines})
+        out_rows.append({"index": row.index, "input_macro": row.input_macro,
+                         "comment": c_comment_text(row.summary), "stages": stages})
+    has_state = bool(members)
+    if not has_state:  # C99 has no empty structs
+        members.append(f"uint8_t unused;  /* {c_comment_text('no state: every element is static')} */")
+        init.append("s->unused = 0u;")
+    ctx = _common(model, source, rows)
+    ctx.update({
+        "prefix": prefix,
+        "macro": macro,
+        "real": real,
+        "real_t": pr.real_t,
+        "state_t": f"{prefix}_state_t",
+        "header_file": f"{prefix}.h",
+        "source_file": f"{prefix}.c",
+        "guard": f"{macro}_H",
+        "sample_time": pr.literal(model.sample_time),
+        "inputs": [{"macro": m, "index": i, "name": c_comment_text(n)} for i, (n, m)
+                   in enumerate(zip(model.inputs, input_macros(prefix, model.inputs), strict=True))],
+        "summary": [c_comment_text(s) for s in ctx["summary"]],
+        "dynamics": [c_comment_text(s) for s in ctx["dynamics"]],
+        "source_name": c_comment_text(source.name),
+        "target": c_comment_text(source.target),
+        "members": members,
+        "init_locals": ["size_t i;"] if loops else [],
+        "init_lines": init,
+        "step_unused": [] if has_state else ["(void)s;"],
+        "rows": out_rows,
+        "tail_rows": out_rows[1:],
+    })
+    # Helpers last: printing the rows above is what records which ones are used.
+    ctx["helpers"] = pr.helper_definitions()
+    return check_context(ctx, C_KEYS)
+
+
+def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp"
+                   ) -> dict[str, Any]:
+    """The context of the Python module template."""
+    rows = plan(model, prefix)
+    pr = EdmPythonPrinter()
+    reset: list[str] = []
+    out_rows = []
+    for row in rows:
+        stages = []
+        for sp in row.stages:
+            st = sp.stage
+            attr = {p.name: f"self._{p.name}" for p in sp.state}
+            reset += [pr.zero_state(attr[p.name], p.size) for p in sp.state]
+            if sp.kind == "static":
+                lines = pr.assign("x", st.numeric_expr())
+            elif sp.kind == "linear":
+                lines = pr.linear_lines(st.b, st.a, attr[f"{sp.name}_z"])
+            elif sp.kind == "delay":
+                lines = pr.delay_lines(st.delay, attr[f"{sp.name}_buf"], attr.get(f"{sp.name}_pos"))
+            else:
+                lines = pr.relay_lines(st.threshold, f"{attr[f'{sp.name}_out']}[0]")
+            stages.append({"comment": f"element {sp.col + 1}: {sp.label}", "lines": lines})
+        out_rows.append({"index": row.index, "number": row.index + 1,
+                         "input_index": row.input_index, "comment": row.summary,
+                         "stages": stages})
+    helpers = pr.helper_definitions()
+    code = helpers + [ln for r in out_rows for s in r["stages"] for ln in s["lines"]]
+    ctx = _common(model, source, rows)
+    ctx.update({
+        "prefix": prefix,
+        "module_file": f"{prefix}.py",
+        "imports": ["math"] if pr.uses_math(code) else [],
+        "inputs_literal": pr.tuple_of([pr.string(n) for n in model.inputs]),
+        "rows_tuple": pr.tuple_of([f"r{r['number']}" for r in out_rows]),
+        "target_literal": pr.string(source.target),
+        "sha256_literal": pr.string(source.sha256),
+        "sample_time": pr.literal(model.sample_time),
+        "constants": pr.helper_constants(helpers),
+        "helpers": helpers,
+        "reset_lines": reset or ["pass"],
+        "rows": out_rows,
+        "tail_rows": out_rows[1:],
+    })
+    _check_docstring_text(ctx)
+    return check_context(ctx, PY_KEYS)
+
+
+def _check_docstring_text(ctx: Mapping[str, Any]) -> None:
+    """Names shown in the module docstring and comments must not end or escape it."""
+    for text in (*ctx["summary"], *ctx["dynamics"], ctx["source"].name, ctx["source"].target):
+        if '"""' in text or "\\" in text or "\n" in text:
+            raise ValueError(f"names: expected no triple quote, backslash or newline, found {text!r}")
+
+
+C_KEYS = ("prefix", "macro", "real", "real_t", "state_t", "header_file", "source_file", "guard",
+          "sample_time", "inputs", "members", "init_lines", "rows", "helpers", "source",
+          "summary", "dynamics")
+PY_KEYS = ("prefix", "module_file", "imports", "inputs_literal", "sample_time", "helpers",
+           "reset_lines", "rows", "source", "summary", "dynamics")
+
+
+def check_context(ctx: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:
+    """Check that ``ctx`` has every key a template reads, each non-empty text or list.
+
+    Raises
+    ------
+    ValueError
+        Naming the missing or empty key (a defect of this module, not of the input).
+    """
+    for k in keys:
+        if k not in ctx:
+            raise ValueError(f"context: expected the key {k!r}, found it missing")
+        v = ctx[k]
+        if v is None or (isinstance(v, str) and not v.strip()):
+            raise ValueError(f"context: {k!r} is empty")
+    for r in ctx["rows"]:
+        for st in r["stages"]:
+            if any("\n" in line for line in st["lines"]):
+                raise ValueError(f"context: a code line of row {r['index'] + 1} holds a newline")
+    return ctx
