@@ -14,9 +14,10 @@ pattern                   term                                         parameter
 ``c v``                   viscous friction                             N m s/rad
 ``c sign(v)``             Coulomb friction                             level [N m]
 ``c tanh(k v)`` and       Coulomb friction when the transition         level, transition
-``atan``, ``Sat``,        velocity (1/k, or the saturation's knee) is  velocity [rad/s]
-``Relay``                 at most ``coulomb_velocity``                 (hysteresis)
+``atan``, ``Sat``,        velocity (level / slope at 0) is at most     velocity [rad/s]
+``Relay``                 ``coulomb_velocity``                         (hysteresis)
 ``c a`` or ``c s v``      acceleration-dependent (inertia)             kg m^2, corner
+``c tanh(k a)``, ...      saturating acceleration-dependent term       kg m^2, N m
 ``F(sin(k q + phi))``     position-dependent (spatial) friction        amplitude, period,
                                                                        cycles/rev, phase
 odd hump in v             Stribeck-like                                peak, velocities
@@ -76,7 +77,8 @@ class ClassifyOptions:
     ----------
     coulomb_velocity : float, default 0.1
         [rad/s] A saturating function of velocity counts as Coulomb friction
-        when it reaches its level within this velocity (``tanh(k v)``: 1/k).
+        when its level divided by its slope at the origin is at most this
+        velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)).
     velocity_range : float, default 10.0
         [rad/s] The velocities over which shapes are judged (Stribeck-like
         humps, Coulomb + viscous fits).
@@ -204,7 +206,7 @@ def classify_expression(
 
 def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
                    opts: ClassifyOptions) -> list[PhysicalTerm]:
-    if term == 0:
+    if term.is_zero:
         return []
     if not term.has(u):
         return [_offset(term)]
@@ -256,6 +258,10 @@ def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
         hit = _coulomb(term, c, f, w, g, extra, note, opts)
         if hit is not None:
             return hit
+    if role == "acceleration":
+        hit = _saturating_acceleration(term, c, f, w, g, extra, note)
+        if hit is not None:
+            return hit
     if role in ("angle", "angle_wrapped"):
         hit = _spatial(term, c, f, w, g, role, extra, note)
         if hit is not None:
@@ -278,21 +284,11 @@ def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: 
                                          "hysteresis": (band, "rad/s"), **extra},
                              f"Coulomb friction with hysteresis: {level:.6g} N m, switching "
                              f"at +-{band:.4g} rad/s{note}", term)]
-    shape = None
-    if isinstance(f, (sp.tanh, sp.atan)):
-        k = _linear_coeff(f.args[0], w)
-        if k is not None:
-            top = 1.0 if isinstance(f, sp.tanh) else math.pi / 2
-            shape = (f.func.__name__, c * top * math.copysign(1.0, k * g), 1.0 / abs(k * g))
-    elif isinstance(f, Sat) and f.args[1].is_Number and f.args[2].is_Number and (
-            f.args[1] + f.args[2]) == 0:
-        k = _linear_coeff(f.args[0], w)
-        if k is not None:
-            hi = float(f.args[2])
-            shape = ("Sat", c * hi * math.copysign(1.0, k * g), hi / abs(k * g))
-    if shape is None:
+    sat = _saturation(f, w)
+    if sat is None:
         return None
-    name, level, vt = shape
+    name, top, k = sat
+    level, vt = c * top * math.copysign(1.0, k * g), top / abs(k * g)
     if vt <= opts.coulomb_velocity:
         return [PhysicalTerm("coulomb", {"level": (level, "N m"),
                                          "transition_velocity": (vt, "rad/s"), **extra},
@@ -304,26 +300,58 @@ def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: 
                           {"level": (level, "N m"), "transition_velocity": (vt, "rad/s")})]
 
 
+def _saturation(f: sp.Expr, w: sp.Dummy) -> tuple[str, float, float] | None:
+    """``f = F(k w)`` with F = tanh, atan or a symmetric Sat -> (name, F's level, k).
+
+    The level is the limit of F (1, pi/2, the saturation bound); ``F`` has slope
+    1 at the origin, so ``level / k`` is where the function's tangent meets its level.
+    """
+    if isinstance(f, (sp.tanh, sp.atan)):
+        k = _linear_coeff(f.args[0], w)
+        if k is not None:
+            return f.func.__name__, (1.0 if isinstance(f, sp.tanh) else math.pi / 2), k
+    elif isinstance(f, Sat) and f.args[1].is_Number and f.args[2].is_Number and (
+            f.args[1] + f.args[2]).is_zero and f.args[2] > 0:
+        k = _linear_coeff(f.args[0], w)
+        if k is not None:
+            return "Sat", float(f.args[2]), k
+    return None
+
+
+def _saturating_acceleration(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
+                             extra: dict, note: str) -> list[PhysicalTerm] | None:
+    sat = _saturation(f, w)
+    if sat is None:
+        return None
+    name, top, k = sat
+    inertia, level = c * k * g, c * top * math.copysign(1.0, k * g)
+    return [PhysicalTerm("acceleration", {"inertia": (inertia, "kg m^2"),
+                                          "saturation_level": (level, "N m"), **extra},
+                         f"saturating acceleration-dependent term ({name}): {inertia:.6g} "
+                         f"kg m^2 for small accelerations, limited to {level:.6g} N m{note}",
+                         term)]
+
+
 def _linear_coeff(arg: sp.Expr, w: sp.Dummy) -> float | None:
     """k when ``arg == k w`` with a number k."""
     k = arg / w
-    if k.is_Number and k != 0:
+    if k.is_Number and not k.is_zero:
         return float(k)
     return None
 
 
 def _sine_of(f: sp.Expr, w: sp.Dummy) -> tuple[sp.Expr, float, float] | None:
     """``f = F(sin(k w + phi))`` -> (sine subexpression, k, phi)."""
-    sines = [a for a in sp.preorder_traversal(f) if isinstance(a, (sp.sin, sp.cos))
-             and a.has(w)]
-    if not sines or len(set(sines)) != 1:
+    inner = set()
+    for a in sp.preorder_traversal(f):
+        if isinstance(a, (sp.sin, sp.cos)) and a.has(w):
+            phi, kw = a.args[0].as_independent(w, as_Add=True)
+            k = _linear_coeff(kw, w)
+            if k is not None and phi.is_Number:
+                inner.add((a, k, phi))
+    if len(inner) != 1:
         return None
-    sn = sines[0]
-    arg = sn.args[0]
-    phi, kw = arg.as_independent(w, as_Add=True)
-    k = _linear_coeff(kw, w)
-    if k is None or not phi.is_Number:
-        return None
+    (sn, k, phi), = inner
     phi = float(phi) + (math.pi / 2 if isinstance(sn, sp.cos) else 0.0)
     if f.xreplace({sn: sp.Dummy()}).has(w):
         return None
@@ -348,14 +376,19 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
         if amp < 0:
             amp, phi = -amp, phi + math.pi
         shape = "sinusoidal"
-    else:
+    elif not f.has(LTI, Delay, Relay):
         # A function of one sinusoid: periodic with the same period; measure it.
         z = sp.Dummy("z")
         F = sp.lambdify(z, c * f.xreplace({sn: z}), modules=[NUMPY_FUNCTIONS, "numpy"])
-        vals = np.asarray(F(np.sin(np.linspace(0, 2 * np.pi, 721))), dtype=float)
+        with np.errstate(all="ignore"):
+            vals = np.asarray(F(np.sin(np.linspace(0, 2 * np.pi, 721))), dtype=float)
         amp = float(np.ptp(vals * np.ones(721)) / 2)
+        if not math.isfinite(amp):
+            return None
         k = abs(k)
         shape = f"periodic, non-sinusoidal ({f})"
+    else:
+        return None
     phi = _wrap(phi)
     params = {"amplitude": (amp, "N m"), "period": (2 * math.pi / k, "rad"),
               "cycles_per_revolution": (k, "1"), "phase": (phi, "rad"), **extra}

@@ -74,7 +74,8 @@ def z_polynomials(b: Sequence[float], a: Sequence[float]) -> tuple[list[float], 
             [float(v) for v in a] + [0.0] * (n - len(a)))
 
 
-def discrete_tf(b: Sequence[float], a: Sequence[float], ts: float) -> ct.TransferFunction:
+def discrete_tf(b: Sequence[float], a: Sequence[float], ts: float,
+                name: str | None = None) -> ct.TransferFunction:
     """``H(z)`` from coefficients in ascending powers of z^-1 (see :func:`z_polynomials`).
 
     Parameters
@@ -82,22 +83,26 @@ def discrete_tf(b: Sequence[float], a: Sequence[float], ts: float) -> ct.Transfe
     b, a : sequence of float
     ts : float
         The sample time [s].
+    name : str, optional
+        The system's name.
 
     Returns
     -------
     control.TransferFunction
     """
     num, den = z_polynomials(b, a)
-    return ct.tf(num, den, dt=ts)
+    return ct.tf(num, den, dt=ts, name=name)
 
 
-def to_tf(G: sp.Expr) -> ct.TransferFunction:  # noqa: N803
+def to_tf(G: sp.Expr, name: str | None = None) -> ct.TransferFunction:  # noqa: N803
     """A continuous python-control transfer function from a numeric sympy ``G(s)``.
 
     Parameters
     ----------
     G : sympy.Expr
         Rational in :data:`s`, every other symbol substituted.
+    name : str, optional
+        The system's name.
 
     Returns
     -------
@@ -109,7 +114,7 @@ def to_tf(G: sp.Expr) -> ct.TransferFunction:  # noqa: N803
         d = [float(c) for c in sp.Poly(den, s).all_coeffs()]
     except TypeError as exc:
         raise ValueError(f"G(s) = {G}: expected numbers only besides s ({exc})") from None
-    return ct.tf(n, d)
+    return ct.tf(n, d, name=name)
 
 
 def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
@@ -127,18 +132,20 @@ def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
     """
     parts = []
     for st in row.stages:
+        name = f"row_{row.index + 1}_{st.element.name}_{st.col}"
         if st.kind == "linear":
             num, den = st.tf
             if st.param is not None:
                 sub = {st.param.symbol: sp.Float(st.param.value, 17)}
                 num = [sp.sympify(c).xreplace(sub) for c in num]
                 den = [sp.sympify(c).xreplace(sub) for c in den]
-            parts.append(LinearPart(st.col, st.element.name, to_tf(rational(num, den)),
-                                    discrete_tf(st.b, st.a, ts), st.method or ""))
+            parts.append(LinearPart(st.col, st.element.name, to_tf(rational(num, den), name),
+                                    discrete_tf(st.b, st.a, ts, f"{name}_d"), st.method or ""))
         elif st.kind == "delay":
             n = st.delay
             parts.append(LinearPart(st.col, st.element.name, None,
-                                    ct.tf([1.0], [1.0] + [0.0] * n, dt=ts), "delay"))
+                                    ct.tf([1.0], [1.0] + [0.0] * n, dt=ts, name=f"{name}_d"),
+                                    "delay"))
     return tuple(parts)
 
 

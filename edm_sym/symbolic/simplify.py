@@ -242,7 +242,7 @@ def _ternary_factor(e: sp.Expr, ctx: _Context) -> tuple[sp.Expr, sp.Expr] | None
 
 def _odd(e: sp.Function) -> bool:
     if isinstance(e, Sat):
-        return (e.args[1] + e.args[2]) == 0
+        return bool((e.args[1] + e.args[2]).is_zero)
     return isinstance(e, (sp.tanh, sp.atan, sp.sin, sp.sign, GTan, GAsin, sp.asin, SymLog,
                           SymPow, DeadZone, sp.tan))
 
@@ -263,7 +263,7 @@ def _rule_sign(e: sp.Expr, ctx: _Context) -> sp.Expr:
     if isinstance(arg, _SIGN_KEEPING) and all(ctx.constant(r) for r in arg.args[1:]):
         if not isinstance(arg, SymLog) or arg.args[1].is_positive:
             return sp.sign(arg.args[0])
-    if isinstance(arg, Sat) and (arg.args[1] + arg.args[2]) == 0 and arg.args[2].is_positive:
+    if isinstance(arg, Sat) and (arg.args[1] + arg.args[2]).is_zero and arg.args[2].is_positive:
         return sp.sign(arg.args[0])
     if isinstance(arg, Relay):
         return arg
@@ -303,7 +303,7 @@ def _rule_guarded_arc(plain: Callable[[sp.Expr], sp.Expr]) -> Callable:
 
 def _rule_sympow(e: sp.Expr, ctx: _Context) -> sp.Expr:
     y, a = e.args
-    if a == 1:
+    if a.is_Number and float(a) == 1.0:
         return Sat(y, -sp.Float(POW_INPUT_LIMIT), sp.Float(POW_INPUT_LIMIT))
     b = bounds(y)
     if isinstance(y, SymPow) and b is not None and a.is_Number and y.args[1].is_Number:
@@ -392,7 +392,7 @@ def _delay_outwards(e: sp.Function, ctx: _Context) -> sp.Expr:
     rest = e.args[1:]
     if not all(ctx.constant(r) for r in rest):
         return e
-    if isinstance(e, Relay) or e.func(sp.S.Zero, *rest) == 0:
+    if isinstance(e, Relay) or e.func(sp.S.Zero, *rest).is_zero:
         d = e.args[0]
         return Delay(e.func(d.args[0], *rest), d.args[1])
     return e
