@@ -304,3 +304,17 @@ def test_nasty_matrix_decodes() -> None:
         np.testing.assert_allclose(lam(row.expr_raw_numeric, row.input_symbol)(x),
                                    simulate_row(model.compensator, mrow, x), rtol=1e-9,
                                    atol=1e-9)
+
+
+def test_decode_of_a_result_through_the_package_api(coulomb_viscous: Compensator,
+                                                      tmp_path) -> None:
+    from edm_sym.result import EdmResult, load_result, save_result
+
+    prov = {"seed": 3, "package_version": "0.1.0", "data_sha256": "0" * 64}
+    path = save_result(EdmResult(coulomb_viscous, "tau_ext", (), prov), tmp_path / "result.json")
+    result = load_result(path)
+    model = edm_sym.decode(result, roles={"omega": None})
+    assert model.target == "tau_ext" and model.source_sha256 == result.sha256
+    assert model.roles["omega"] is None
+    assert model.rows[0].expr == a(2) * sp.sign(OMEGA)
+    assert all(t.kind == "unclassified" for r in model.rows for t in r.terms)

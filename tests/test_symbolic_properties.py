@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 import sympy as sp
 from conftest import TS, smooth_signal
 from hypothesis import HealthCheck, given, settings
@@ -71,9 +72,8 @@ def assert_equal_where_conditioned(got: np.ndarray, ref: np.ndarray, ok: np.ndar
     np.testing.assert_allclose(got[ok], ref[ok], rtol=1e-9, atol=1e-9)
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(matrices(sorted(REGISTRY)))
-def test_any_matrix_decodes(matrix: ElementMatrix) -> None:
+def check_decodes(matrix: ElementMatrix) -> None:
+    """Decode ``matrix`` and check every row's forms against the simulator."""
     comp = Compensator(matrix, TS, {}, 20.0)
     model = decode(comp)
     assert len(model.rows) == matrix.n_rows
@@ -91,7 +91,20 @@ def test_any_matrix_decodes(matrix: ElementMatrix) -> None:
                                        well_conditioned(comp, mrow, x, ref))
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(matrices(sorted(REGISTRY)))
+def test_any_matrix_decodes(matrix: ElementMatrix) -> None:
+    check_decodes(matrix)
+
+
+@pytest.mark.slow
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(matrices(sorted(REGISTRY)))
+def test_any_matrix_decodes_many(matrix: ElementMatrix) -> None:
+    check_decodes(matrix)
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(matrices(STATIC))
 def test_static_row_expressions_equal_the_simulator(matrix: ElementMatrix) -> None:
     comp = Compensator(matrix, TS, {}, 20.0)

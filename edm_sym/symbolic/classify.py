@@ -40,6 +40,7 @@ import sympy as sp
 
 from edm_sym.symbolic.functions import NUMPY_FUNCTIONS, Sat
 from edm_sym.symbolic.operators import LTI, Delay, Relay, s
+from edm_sym.symbolic.simplify import fold_constants
 
 #: The kinds of physical term.
 KINDS = ("coulomb", "viscous", "acceleration", "spatial", "stribeck", "offset", "unclassified")
@@ -103,11 +104,16 @@ class _Leaf:
     delay: float = 0.0
 
 
-def _tf_split(G: sp.Expr) -> tuple[int, float, tuple[float, ...]]:  # noqa: N803
-    """``G = s^k H`` -> (k, H(0), |poles of H|)."""
+def _tf_split(G: sp.Expr) -> tuple[int, float, tuple[float, ...]] | None:  # noqa: N803
+    """``G = s^k H`` -> (k, H(0), |poles of H|); None when G is not numeric."""
     num, den = sp.fraction(sp.together(G))
-    n = np.array([float(c) for c in sp.Poly(num, s).all_coeffs()])
-    d = np.array([float(c) for c in sp.Poly(den, s).all_coeffs()])
+    try:
+        n = np.array([float(c) for c in sp.Poly(num, s).all_coeffs()])
+        d = np.array([float(c) for c in sp.Poly(den, s).all_coeffs()])
+    except (TypeError, sp.PolynomialError):
+        return None
+    if not (np.all(np.isfinite(n)) and np.all(np.isfinite(d)) and n.any() and d.any()):
+        return None
     kn = len(n) - len(np.trim_zeros(n, "b"))
     kd = len(d) - len(np.trim_zeros(d, "b"))
     n, d = np.trim_zeros(n, "b"), np.trim_zeros(d, "b")
@@ -127,9 +133,10 @@ def _leaf(e: sp.Expr, u: sp.Symbol, role: str | None) -> _Leaf | None:
                      inner.delay + float(e.args[1]))
     if isinstance(e, LTI):
         inner = _leaf(e.args[0], u, role)
-        if inner is None:
+        split = _tf_split(e.args[1])
+        if inner is None or split is None:
             return None
-        k, h0, corners = _tf_split(e.args[1])
+        k, h0, corners = split
         notes = list(inner.notes)
         new_role = inner.role
         if inner.role == "angle_wrapped" and k > 0:
@@ -217,7 +224,10 @@ def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
     c = float(c)
     # A nonlinear function filtered afterwards: classify its low-frequency part.
     if isinstance(core, LTI) and _leaf(core, u, role) is None:
-        k, h0, corners = _tf_split(core.args[1])
+        split = _tf_split(core.args[1])
+        if split is None:
+            return [_unclassified(term, f"a transfer function that is not numeric: {core}")]
+        k, h0, corners = split
         if k == 0:
             note = ("; through a filter with corner(s) "
                     + ", ".join(f"{x:.4g}" for x in corners) + " rad/s") if corners else ""
@@ -444,20 +454,30 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
 
 
 def _offset(term: sp.Expr) -> PhysicalTerm:
-    note = ""
+    """A constant term; through filters, delays and relays, its final value."""
+    notes = []
     value = term
-    dyn = [a for a in sp.preorder_traversal(term) if isinstance(a, (LTI, Delay))]
-    for d in dyn:
+    for d in [a for a in sp.preorder_traversal(term) if isinstance(a, (LTI, Delay, Relay))]:
         if isinstance(d, LTI):
-            k, h0, _ = _tf_split(d.args[1])
-            if k != 0:
+            split = _tf_split(d.args[1])
+            if split is None or split[0] != 0:
                 return _unclassified(term, "a constant through a derivative or integral")
-            value = value.xreplace({d: h0 * d.args[0]})
-            note = " (final value after the filter's step response)"
-        else:
+            value = value.xreplace({d: split[1] * d.args[0]})
+            notes.append("the final value of a filter's step response")
+        elif isinstance(d, Delay):
             value = value.xreplace({d: d.args[0]})
-            note = " (after the delay)"
-    level = float(value)
+            notes.append("after a delay")
+        else:
+            x, a = (float(v) for v in d.args) if all(v.is_Number for v in d.args) else (0, -1)
+            if a < 0:
+                return _unclassified(term, f"a relay of a constant that is not numeric: {d}")
+            value = value.xreplace({d: sp.Float(1.0 if x >= a else -1.0 if x <= -a else 0.0)})
+            notes.append("a relay's output once switched")
+    try:
+        level = float(fold_constants(value))
+    except TypeError:
+        return _unclassified(term, f"a constant that does not evaluate to a number: {term}")
+    note = f" ({'; '.join(notes)})" if notes else ""
     return PhysicalTerm("offset", {"level": (level, "N m")},
                         f"constant offset {level:.6g} N m{note}", term)
 

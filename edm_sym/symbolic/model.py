@@ -161,6 +161,10 @@ class SymbolicModel:
         Every named parameter, in a_k order.
     source_sha256 : str or None
         The sha256 of the result file decoded.
+    target : str or None
+        The name of the target column.
+    roles : dict of str to str or None
+        The physical role of each input (filled by :func:`edm_sym.symbolic.decode`).
     """
 
     compensator: Compensator

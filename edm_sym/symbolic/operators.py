@@ -26,11 +26,6 @@ import sympy as sp
 s = sp.Symbol("s")
 
 
-def _is_constant(expr: sp.Expr, s_too: bool = False) -> bool:
-    """True when ``expr`` holds no input signal (and, with ``s_too``, no s either)."""
-    return not (expr.free_symbols - {s}) if not s_too else not expr.free_symbols
-
-
 class LTI(sp.Function):
     """``LTI(x, G)``: the signal ``x`` through the transfer function ``G(s)``, from rest.
 

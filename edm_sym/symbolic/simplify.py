@@ -142,15 +142,38 @@ def _rewrite(e: sp.Expr, ctx: _Context, memo: dict[sp.Expr, sp.Expr]) -> sp.Expr
     else:
         args = tuple(_rewrite(a, ctx, memo) for a in e.args)
         new = e.func(*args) if args != e.args else e
-    if ctx.numeric and not new.is_Number and not new.free_symbols and not new.is_Atom:
-        new = new.evalf(17)
+    if ctx.numeric:
+        new = fold_constants(new)
     for cls, rule in _RULES:
         if isinstance(new, cls):
-            new = rule(new, ctx)
+            ruled = rule(new, ctx)
+            if ruled is not new and ctx.numeric:
+                ruled = fold_constants(ruled)
+            new = ruled
             break
     if isinstance(new, sp.Function) and not isinstance(new, (LTI, Delay)):
         new = _delay_outwards(new, ctx)
     memo[e] = new
+    return new
+
+
+def fold_constants(e: sp.Expr) -> sp.Expr:
+    """Evaluate every constant subexpression to a Float (numeric forms).
+
+    ``evalf`` alone leaves the project's functions unevaluated
+    (``Sat(-5.0*sin(1), ...)``); rebuilding them from evaluated arguments
+    lets their own ``eval`` compute the number, with the simulator's guard.
+    """
+    if e.is_Number:
+        return e
+    if e.is_NumberSymbol:
+        return e.evalf(17)
+    if e.is_Atom:
+        return e
+    args = tuple(fold_constants(a) for a in e.args)
+    new = e.func(*args) if args != e.args else e
+    if not new.is_Number and not new.free_symbols:
+        new = new.evalf(17)
     return new
 
 
@@ -161,8 +184,7 @@ _FIXED = {
     sp.atan: (-math.pi / 2, math.pi / 2), GAsin: (-math.pi / 2, math.pi / 2),
     sp.asin: (-math.pi / 2, math.pi / 2), GAcos: (0.0, math.pi), sp.acos: (0.0, math.pi),
 }
-_INCREASING = (sp.tanh, sp.atan, sp.sign, Sat, SymPow, SymLog, DeadZone, GAsin, sp.asin,
-               sp.Max)
+_INCREASING = (sp.tanh, sp.atan, sp.sign, Sat, SymPow, SymLog, DeadZone, GAsin, sp.asin)
 _DECREASING = (GAcos, sp.acos)
 
 
@@ -201,6 +223,12 @@ def bounds(e: sp.Expr) -> tuple[float, float] | None:
                 return None
             lo, hi = lo + b[0], hi + b[1]
         return (lo, hi)
+    if isinstance(e, sp.Max):
+        parts = [bounds(a) for a in e.args]
+        lows = [p[0] for p in parts if p is not None]
+        if len(lows) < len(parts):  # an unbounded argument: only a floor is known
+            return None
+        return (max(lows), max(p[1] for p in parts))
     if not isinstance(e, sp.Function):
         return None
     fixed = _FIXED.get(e.func)
