@@ -158,7 +158,7 @@ def sweep(cc: str, count: int, tmp_path: Path, run_count: int) -> None:
             cg.compile_objects(cc, [folder / f"{p}.c" for p in rest], folder, ["-O1"])
         outputs = cg.build_and_run_host(cc, folder, prefixes[:run_count], X[:n])
         if real == "double":
-            for prefix, comp in zip(prefixes[:run_count], comps, strict=True):
+            for prefix, comp in zip(prefixes[:run_count], comps[:run_count], strict=True):
                 sim = simulate(comp, short)
                 ref = np.vstack([sim.rows, sim.total]).T
                 ok = np.abs(outputs[prefix] - ref) <= 1e-9 * np.maximum(1.0, np.abs(ref))

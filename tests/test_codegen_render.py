@@ -13,10 +13,13 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from edm_sym import load_result
+from edm_sym.elements import all_elements
 from edm_sym.errors import NumericsWarning, ToolMissingError
-from edm_sym.matrix import Compensator, make_matrix
+from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
 from edm_sym.render import TARGETS, export, render
 from edm_sym.render.context import c_context, input_macros, plan, source_of
 from edm_sym.render.environment import environment, template_dir
@@ -223,3 +226,33 @@ def test_only_the_render_layer_imports_jinja2() -> None:
             names = ([a.name for a in node.names] if isinstance(node, ast.Import)
                      else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             assert not any(n.split(".")[0] == "jinja2" for n in names), f"{path} imports jinja2"
+
+
+def test_a_result_without_a_file_is_named_by_its_canonical_bytes(tmp_path: Path) -> None:
+    from edm_sym.result import save_result
+
+    result = cg.as_result(comp_of([("omega", [("lpf", 0.4), ("sign", 0.0)])]))
+    fresh = render(result, "c")["edm_comp.h"]
+    path = save_result(result, tmp_path / "result.json")
+    assert render(load_result(path), "c")["edm_comp.h"] == fresh
+    assert hashlib.sha256(path.read_bytes()).hexdigest() in fresh
+
+
+GENES = st.integers(1, 4).flatmap(lambda n: st.lists(
+    st.tuples(st.integers(0, 2), st.lists(
+        st.tuples(st.sampled_from([e.code for e in all_elements()]), st.floats(0.0, 1.0)),
+        min_size=n, max_size=n)),
+    min_size=1, max_size=4))
+
+
+@pytest.mark.filterwarnings("ignore::edm_sym.errors.NumericsWarning")
+@settings(max_examples=40, deadline=None)
+@given(rows=GENES, real=st.sampled_from(["double", "float"]))
+def test_any_valid_matrix_renders_valid_python_and_plausible_c(rows: list, real: str) -> None:
+    matrix = ElementMatrix(cg.INPUTS, tuple(
+        Row(inp, tuple(Gene(c, p) for c, p in genes)) for inp, genes in rows))
+    files = render(cg.as_result(Compensator(matrix, 1e-3, {}, 20.0)), "all", real=real)
+    compile(files["edm_comp.py"], "edm_comp.py", "exec")
+    source = files["edm_comp.c"]
+    assert source.count("{") == source.count("}")
+    assert f"r[{len(rows) - 1}] = x;" in source

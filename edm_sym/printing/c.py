@@ -309,6 +309,26 @@ class EdmC99Printer(C99CodePrinter):
                 "}", f"{x} = {out};"]
 
     # -- declarations ----------------------------------------------------------
+    def state_ref(self, name: str) -> str:
+        """The lvalue of state member ``name`` inside init and step (``s->name``)."""
+        return f"s->{name}"
+
+    def declare_placeholder(self, comment: str) -> str:
+        """The member of a state struct with nothing to hold (C99 has no empty structs)."""
+        return f"uint8_t unused;  /* {c_comment_text(comment)} */"
+
+    def zero_placeholder(self) -> list[str]:
+        """Init's line for :meth:`declare_placeholder`."""
+        return [f"{self.state_ref('unused')} = 0u;"]
+
+    def loop_index(self) -> list[str]:
+        """Declaration of the index :meth:`zero_real_array` loops use."""
+        return ["size_t i;"]
+
+    def state_unused(self) -> list[str]:
+        """Marks the state argument of a stateless step as deliberately unused."""
+        return ["(void)s;"]
+
     def declare_real_array(self, name: str, size: int, comment: str) -> str:
         """A struct member line for ``size`` reals."""
         return f"{self.real_t} {name}[{size}];  /* {c_comment_text(comment)} */"

@@ -181,6 +181,14 @@ class EdmPythonPrinter(PythonCodePrinter):
                 f"elif {x} <= {py_literal(-threshold)}:", f"    {out} = -1.0",
                 f"{x} = {out}"]
 
+    def state_ref(self, name: str) -> str:
+        """The attribute holding state member ``name`` (``self._name``)."""
+        return f"self._{name}"
+
+    def empty_body(self) -> list[str]:
+        """The body of a method with nothing to do."""
+        return ["pass"]
+
     def zero_state(self, attr: str, size: int | None) -> str:
         """``attr = [0.0] * size`` (a list of reals) or ``attr = 0`` (an index, size None)."""
         return f"{attr} = 0" if size is None else f"{attr} = [0.0] * {size}"

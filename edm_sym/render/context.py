@@ -301,7 +301,7 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
         stages = []
         for sp in row.stages:
             st = sp.stage
-            lv = {p.name: f"s->{p.name}" for p in sp.state}
+            lv = {p.name: pr.state_ref(p.name) for p in sp.state}
             for p in sp.state:
                 if p.size is None:
                     members.append(pr.declare_index(p.name, p.comment))
@@ -324,8 +324,8 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
                          "comment": c_comment_text(row.summary), "stages": stages})
     has_state = bool(members)
     if not has_state:  # C99 has no empty structs
-        members.append(f"uint8_t unused;  /* {c_comment_text('no state: every element is static')} */")
-        init.append("s->unused = 0u;")
+        members.append(pr.declare_placeholder("no state: every element is static"))
+        init += pr.zero_placeholder()
     ctx = _common(model, source, rows)
     ctx.update({
         "prefix": prefix,
@@ -344,9 +344,9 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
         "source_name": c_comment_text(source.name),
         "target": c_comment_text(source.target),
         "members": members,
-        "init_locals": ["size_t i;"] if loops else [],
+        "init_locals": pr.loop_index() if loops else [],
         "init_lines": init,
-        "step_unused": [] if has_state else ["(void)s;"],
+        "step_unused": [] if has_state else pr.state_unused(),
         "rows": out_rows,
         "tail_rows": out_rows[1:],
     })
@@ -366,7 +366,7 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
         stages = []
         for sp in row.stages:
             st = sp.stage
-            attr = {p.name: f"self._{p.name}" for p in sp.state}
+            attr = {p.name: pr.state_ref(p.name) for p in sp.state}
             reset += [pr.zero_state(attr[p.name], p.size) for p in sp.state]
             if sp.kind == "static":
                 lines = pr.assign("x", st.numeric_expr())
@@ -394,7 +394,7 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
         "sample_time": pr.literal(model.sample_time),
         "constants": pr.helper_constants(helpers),
         "helpers": helpers,
-        "reset_lines": reset or ["pass"],
+        "reset_lines": reset or pr.empty_body(),
         "rows": out_rows,
         "tail_rows": out_rows[1:],
     })

@@ -1,0 +1,130 @@
+"""Cost of one compensator sample in generated C, against the reference simulator.
+
+Exports a result (default: the shipped auger example) as double-precision C,
+compiles it with -O2 and a timing harness, runs ``<prefix>_step`` over a
+20 000-sample log several times and prints nanoseconds per sample; then
+times the reference simulator (:func:`edm_sym.simulate.simulate`, vectorised
+over the log), the plain per-sample Python loop and the generated Python
+module on the same log and prints each one's per-sample cost as a ratio to
+the C.
+
+Run: ``python benchmarks/bench_c_step.py [RESULT.json] [--cc gcc] [--repeat 20]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from edm_sym import load_result
+from edm_sym.render import export
+from edm_sym.simulate import plain_loop, simulate
+
+REPO = Path(__file__).resolve().parent.parent
+N = 20_000
+TS = 1e-3
+
+HARNESS = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include "edm_comp.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int main(int argc, char **argv)
+{
+    size_t n = (size_t)strtoul(argv[2], NULL, 10), k;
+    int repeat = atoi(argv[3]), r;
+    double *u = malloc(n * EDM_COMP_NUM_INPUTS * sizeof *u), best = 1e300, t0, sink = 0.0;
+    static edm_comp_state_t s;
+    FILE *in = fopen(argv[1], "rb");
+    if (argc != 4 || !u || !in || fread(u, sizeof *u, n * EDM_COMP_NUM_INPUTS, in)
+            != n * EDM_COMP_NUM_INPUTS) return 2;
+    for (r = 0; r < repeat; ++r) {
+        edm_comp_init(&s);
+        t0 = now();
+        for (k = 0; k < n; ++k) sink += edm_comp_step(&s, u + k * EDM_COMP_NUM_INPUTS, NULL);
+        t0 = now() - t0;
+        if (t0 < best) best = t0;
+    }
+    printf("%.6g %.17g\n", 1e9 * best / (double)n, sink);
+    return 0;
+}
+"""
+
+
+def make_log(inputs: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """A smooth servo-like log for the given input names (angles from a velocity)."""
+    t = np.arange(N) * TS
+    omega = 2.0 * np.sin(2 * np.pi * 0.25 * t) + 0.6 * np.sin(2 * np.pi * 1.7 * t + 0.4)
+    theta = np.cumsum(omega) * TS
+    known = {"omega": omega, "theta_uw": theta, "theta_w": np.mod(theta, 2 * np.pi)}
+    rng = np.random.default_rng(0)
+    return {name: known.get(name, rng.standard_normal(N)) for name in inputs}
+
+
+def best_time(fn, repeat: int) -> float:  # noqa: ANN001
+    """Shortest wall time of ``repeat`` calls of ``fn``."""
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print ns per sample and ratios."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("result", nargs="?", default=str(REPO / "examples/auger/result.json"))
+    ap.add_argument("--cc", default="gcc")
+    ap.add_argument("--repeat", type=int, default=20)
+    args = ap.parse_args(argv)
+    if not shutil.which(args.cc):
+        print(f"bench_c_step: {args.cc} is not installed", file=sys.stderr)
+        return 1
+    result = load_result(args.result)
+    log = make_log(result.inputs)
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        export(result, "all", d, real="double")
+        (d / "harness.c").write_text(HARNESS)
+        np.column_stack([log[k] for k in result.inputs]).astype(np.float64).tofile(d / "in.bin")
+        subprocess.run([args.cc, "-std=c99", "-O2", "-o", str(d / "bench"), str(d / "harness.c"),
+                        str(d / "edm_comp.c"), "-lm"], check=True, cwd=d)
+        out = subprocess.run([str(d / "bench"), str(d / "in.bin"), str(N), str(args.repeat)],
+                             check=True, capture_output=True, text=True).stdout
+        c_ns = float(out.split()[0])
+        spec = importlib.util.spec_from_file_location("edm_bench_generated", d / "edm_comp.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        gen_s = best_time(lambda: module.simulate(log), max(1, args.repeat // 10))
+    sim_s = best_time(lambda: simulate(result, log), args.repeat)
+    loop_s = best_time(lambda: plain_loop(result.compensator, log), max(1, args.repeat // 10))
+    print(f"result: {args.result} ({result.matrix.shape}, {N} samples, {args.cc} -O2, double)")
+    print(f"{'generated C (edm_comp_step)':36s} {c_ns:10.1f} ns/sample")
+    for name, seconds in (("reference simulator (vectorised)", sim_s),
+                          ("plain Python loop (steppers)", loop_s),
+                          ("generated Python module", gen_s)):
+        ns = 1e9 * seconds / N
+        print(f"{name:36s} {ns:10.1f} ns/sample   ratio to C {ns / c_ns:8.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
