@@ -80,7 +80,8 @@ def is_c_identifier(name: str) -> bool:
 
 def c_comment_text(text: str) -> str:
     """``text`` made safe inside a ``/* ... */`` comment (one line)."""
-    return " ".join(str(text).replace("*/", "* /").replace("/*", "/ *").split())
+    text = str(text).replace("*/", "* /").replace("/*", "/ *")
+    return re.sub(r"\s", " ", text).rstrip()
 
 
 class EdmC99Printer(C99CodePrinter):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import math
 import re
+import textwrap
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -262,6 +263,24 @@ def _dynamic_notes(rows: tuple[RowPlan, ...], ts: float) -> list[str]:
     return out
 
 
+#: Width of the text of wrapped comment and docstring lines (their indentation aside).
+TEXT_WIDTH = 88
+
+
+_KEEP = "\x00"  # stands for a space that must not break a line
+
+
+def wrap(text: str, width: int = TEXT_WIDTH) -> list[str]:
+    """``text`` as lines of at most ``width`` characters; continuation lines indented by 4.
+
+    Lines break between words, never inside parentheses (``gain (a_2 = 0.95)``).
+    """
+    kept = re.sub(r"\([^()]*\)", lambda m: m.group(0).replace(" ", _KEEP), text)
+    lines = textwrap.wrap(kept, width, subsequent_indent="    ", break_long_words=False,
+                          break_on_hyphens=False) or [""]
+    return [line.replace(_KEEP, " ") for line in lines]
+
+
 def _common(model: SymbolicModel, source: Source, rows: tuple[RowPlan, ...]) -> dict[str, Any]:
     return {
         "source": source,
@@ -321,7 +340,8 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
             stages.append({"comment": c_comment_text(f"element {sp.col + 1}: {sp.label}"),
                            "lines": lines})
         out_rows.append({"index": row.index, "input_macro": row.input_macro,
-                         "comment": c_comment_text(row.summary), "stages": stages})
+                         "comment": [c_comment_text(t) for t in wrap(row.summary)],
+                         "stages": stages})
     has_state = bool(members)
     if not has_state:  # C99 has no empty structs
         members.append(pr.declare_placeholder("no state: every element is static"))
@@ -339,8 +359,8 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
         "sample_time": pr.literal(model.sample_time),
         "inputs": [{"macro": m, "index": i, "name": c_comment_text(n)} for i, (n, m)
                    in enumerate(zip(model.inputs, input_macros(prefix, model.inputs), strict=True))],
-        "summary": [c_comment_text(s) for s in ctx["summary"]],
-        "dynamics": [c_comment_text(s) for s in ctx["dynamics"]],
+        "summary": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["summary"]],
+        "dynamics": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["dynamics"]],
         "source_name": c_comment_text(source.name),
         "target": c_comment_text(source.target),
         "members": members,
@@ -378,7 +398,7 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
                 lines = pr.relay_lines(st.threshold, f"{attr[f'{sp.name}_out']}[0]")
             stages.append({"comment": f"element {sp.col + 1}: {sp.label}", "lines": lines})
         out_rows.append({"index": row.index, "number": row.index + 1,
-                         "input_index": row.input_index, "comment": row.summary,
+                         "input_index": row.input_index, "comment": wrap(row.summary),
                          "stages": stages})
     helpers = pr.helper_definitions()
     code = helpers + [ln for r in out_rows for s in r["stages"] for ln in s["lines"]]
@@ -399,6 +419,8 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
         "tail_rows": out_rows[1:],
     })
     _check_docstring_text(ctx)
+    ctx["summary"] = [wrap(t) for t in ctx["summary"]]
+    ctx["dynamics"] = [wrap(t) for t in ctx["dynamics"]]
     return check_context(ctx, PY_KEYS)
 
 

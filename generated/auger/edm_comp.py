@@ -7,11 +7,15 @@ Matrix: 4 element(s) per row, 4 row(s); each row takes one input
 through its elements left to right, and the rows are summed:
     row 1: omega -> sign -> gain (a_2 = 0.95) -> through -> through
     row 2: omega -> power_gain (a_5 = 0.005) -> through -> through -> through
-    row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) -> through
-    row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) -> through
+    row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) ->
+        through
+    row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) ->
+        through
 Discrete time (sample time 0.001 s), elements with state:
-    row 3, element 1, derivative (a_9 = 1): backward difference, s = (z - 1)/(Ts z) (order 1)
-    row 3, element 2, lpf (a_10 = 100): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+    row 3, element 1, derivative (a_9 = 1): backward difference, s = (z - 1)/(Ts z)
+        (order 1)
+    row 3, element 2, lpf (a_10 = 100): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via
+        scipy.signal.cont2discrete (order 1)
 
 Uses only the Python standard library. ``Compensator().step(u)`` consumes one
 sample ``u`` (in ``INPUTS`` order) and returns the compensation torque;
@@ -61,7 +65,8 @@ class Compensator:
         # element 3: through
         # element 4: through
         r2 = x
-        # row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) -> through
+        # row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) ->
+        #     through
         x = u[2]
         # element 1: derivative (a_9 = 1)
         z = self._r3_e1_z
@@ -77,7 +82,8 @@ class Compensator:
         x = 0.0019999999999988916*x
         # element 4: through
         r3 = x
-        # row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) -> through
+        # row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) ->
+        #     through
         x = u[0]
         # element 1: gain (a_13 = 2)
         x = 2.0*x
@@ -102,4 +108,4 @@ class Compensator:
 def simulate(columns) -> list[float]:
     """Run a fresh :class:`Compensator` over ``columns`` (a mapping name -> sequence)."""
     comp = Compensator()
-    return [comp.step(u) for u in zip(*(columns[name] for name in INPUTS))]
+    return [comp.step(u) for u in zip(*(columns[name] for name in INPUTS), strict=True)]

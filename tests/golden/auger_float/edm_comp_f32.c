@@ -49,7 +49,8 @@ edm_comp_f32_real_t edm_comp_f32_step(edm_comp_f32_state_t *s,
     /* element 4: through */
     r[1] = x;
 
-    /* row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) -> through */
+    /* row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) -> */
+    /*     through */
     x = u[EDM_COMP_F32_INPUT_OMEGA];
     /* element 1: derivative (a_9 = 1) */
     {
@@ -68,7 +69,8 @@ edm_comp_f32_real_t edm_comp_f32_step(edm_comp_f32_state_t *s,
     /* element 4: through */
     r[2] = x;
 
-    /* row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) -> through */
+    /* row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) -> */
+    /*     through */
     x = u[EDM_COMP_F32_INPUT_THETA_W];
     /* element 1: gain (a_13 = 2) */
     x = 2.0f*x;

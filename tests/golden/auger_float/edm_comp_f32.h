@@ -8,11 +8,15 @@
  *            input through its elements left to right, the rows are summed:
  *              row 1: omega -> sign -> gain (a_2 = 0.95) -> through -> through
  *              row 2: omega -> power_gain (a_5 = 0.005) -> through -> through -> through
- *              row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain (a_11 = 0.002) -> through
- *              row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp (a_15 = 0.05) -> through
+ *              row 3: omega -> derivative (a_9 = 1) -> lpf (a_10 = 100) -> gain
+ *                  (a_11 = 0.002) -> through
+ *              row 4: theta_w -> gain (a_13 = 2) -> sin_phase (a_14 = 0.3) -> sin_amp
+ *                  (a_15 = 0.05) -> through
  * Discrete time (sample time 0.001 s), elements with state:
- *              row 3, element 1, derivative (a_9 = 1): backward difference, s = (z - 1)/(Ts z) (order 1)
- *              row 3, element 2, lpf (a_10 = 100): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *              row 3, element 1, derivative (a_9 = 1): backward difference, s =
+ *                  (z - 1)/(Ts z) (order 1)
+ *              row 3, element 2, lpf (a_10 = 100): Tustin (bilinear), s = (2/Ts)
+ *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
  * Real type: float
  *
  * Call edm_comp_f32_init() once, then edm_comp_f32_step() once per sample, every

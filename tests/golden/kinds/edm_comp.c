@@ -76,7 +76,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     edm_comp_real_t x;
     edm_comp_real_t total;
 
-    /* row 1: omega -> notch (a_1 = 78.9132) -> dead_time (a_2 = 0.0072478) -> hysteresis (a_3 = 0.1) -> gain (a_4 = 1) */
+    /* row 1: omega -> notch (a_1 = 78.9132) -> dead_time (a_2 = 0.0072478) -> hysteresis */
+    /*     (a_3 = 0.1) -> gain (a_4 = 1) */
     x = u[EDM_COMP_INPUT_OMEGA];
     /* element 1: notch (a_1 = 78.9132) */
     {
@@ -103,7 +104,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     x = 1.0*x;
     r[0] = x;
 
-    /* row 2: theta_w -> sin_phase (a_5 = -1.25664) -> tan_amp (a_6 = 2) -> saturation (a_7 = 0.398107) -> asin */
+    /* row 2: theta_w -> sin_phase (a_5 = -1.25664) -> tan_amp (a_6 = 2) -> saturation */
+    /*     (a_7 = 0.398107) -> asin */
     x = u[EDM_COMP_INPUT_THETA_W];
     /* element 1: sin_phase (a_5 = -1.25664) */
     x = sin(x - 1.2566370614359172);
@@ -115,7 +117,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     x = edm_comp_asin(x);
     r[1] = x;
 
-    /* row 3: theta_uw -> shift (a_9 = 1) -> log (a_10 = 0.1) -> power (a_11 = 1.26) -> dead_zone (a_12 = 0.00158489) */
+    /* row 3: theta_uw -> shift (a_9 = 1) -> log (a_10 = 0.1) -> power (a_11 = 1.26) -> */
+    /*     dead_zone (a_12 = 0.00158489) */
     x = u[EDM_COMP_INPUT_THETA_UW];
     /* element 1: shift (a_9 = 1) */
     {
@@ -131,7 +134,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     x = edm_comp_dead_zone(x, 0.0015848931924611141);
     r[2] = x;
 
-    /* row 4: omega -> one_way (a_13 = -0.5) -> acos -> integral (a_15 = 0.0630957) -> lead (a_16 = 9.93459) */
+    /* row 4: omega -> one_way (a_13 = -0.5) -> acos -> integral (a_15 = 0.0630957) -> lead */
+    /*     (a_16 = 9.93459) */
     x = u[EDM_COMP_INPUT_OMEGA];
     /* element 1: one_way (a_13 = -0.5) */
     x = fmax(-0.5, x);

@@ -6,17 +6,26 @@
  * Output:    the compensation torque, a model of tau_ext [N m]
  * Matrix:    4 element(s) per row, 4 row(s); each row takes one
  *            input through its elements left to right, the rows are summed:
- *              row 1: omega -> notch (a_1 = 78.9132) -> dead_time (a_2 = 0.0072478) -> hysteresis (a_3 = 0.1) -> gain (a_4 = 1)
- *              row 2: theta_w -> sin_phase (a_5 = -1.25664) -> tan_amp (a_6 = 2) -> saturation (a_7 = 0.398107) -> asin
- *              row 3: theta_uw -> shift (a_9 = 1) -> log (a_10 = 0.1) -> power (a_11 = 1.26) -> dead_zone (a_12 = 0.00158489)
- *              row 4: omega -> one_way (a_13 = -0.5) -> acos -> integral (a_15 = 0.0630957) -> lead (a_16 = 9.93459)
+ *              row 1: omega -> notch (a_1 = 78.9132) -> dead_time (a_2 = 0.0072478) ->
+ *                  hysteresis (a_3 = 0.1) -> gain (a_4 = 1)
+ *              row 2: theta_w -> sin_phase (a_5 = -1.25664) -> tan_amp (a_6 = 2) ->
+ *                  saturation (a_7 = 0.398107) -> asin
+ *              row 3: theta_uw -> shift (a_9 = 1) -> log (a_10 = 0.1) -> power
+ *                  (a_11 = 1.26) -> dead_zone (a_12 = 0.00158489)
+ *              row 4: omega -> one_way (a_13 = -0.5) -> acos -> integral (a_15 = 0.0630957)
+ *                  -> lead (a_16 = 9.93459)
  * Discrete time (sample time 0.001 s), elements with state:
- *              row 1, element 1, notch (a_1 = 78.9132): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 2)
- *              row 1, element 2, dead_time (a_2 = 0.0072478): z^-7, a ring buffer of 7 sample(s)
- *              row 1, element 3, hysteresis (a_3 = 0.1): relay, +1 once x >= 0.1, -1 once x <= -0.1, starts at 0
+ *              row 1, element 1, notch (a_1 = 78.9132): Tustin (bilinear), s = (2/Ts)
+ *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 2)
+ *              row 1, element 2, dead_time (a_2 = 0.0072478): z^-7, a ring buffer of 7
+ *                  sample(s)
+ *              row 1, element 3, hysteresis (a_3 = 0.1): relay, +1 once x >= 0.1, -1 once x
+ *                  <= -0.1, starts at 0
  *              row 3, element 1, shift (a_9 = 1): z^-1, a ring buffer of 1 sample(s)
- *              row 4, element 3, integral (a_15 = 0.0630957): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
- *              row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *              row 4, element 3, integral (a_15 = 0.0630957): Tustin (bilinear), s = (2/Ts)
+ *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *              row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts)
+ *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
  * Real type: float
  *
  * Call kinds_f32_init() once, then kinds_f32_step() once per sample, every
