@@ -199,7 +199,7 @@ def test_templates_hold_no_logic_beyond_loops() -> None:
     assert {"c_header.h.j2", "c_source.c.j2", "python_module.py.j2"} <= set(names)
     for name in names:
         tags = re.findall(r"{%-?\s*(\w+)", (folder / name).read_text())
-        assert set(tags) <= {"for", "endfor"}, f"{name}: {sorted(set(tags))}"
+        assert set(tags) <= {"for", "endfor", "raw", "endraw"}, f"{name}: {sorted(set(tags))}"
 
 
 def test_every_table_template_exists_and_environment_is_strict() -> None:
@@ -256,3 +256,14 @@ def test_any_valid_matrix_renders_valid_python_and_plausible_c(rows: list, real:
     source = files["edm_comp.c"]
     assert source.count("{") == source.count("}")
     assert f"r[{len(rows) - 1}] = x;" in source
+
+
+def test_a_failed_write_is_an_output_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import edm_sym.render.writer as writer
+
+    def refuse(path, data):  # noqa: ANN001, ANN202
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(writer, "write_atomic", refuse)
+    with pytest.raises(OutputError, match=r"edm_comp\.h: cannot write the file \(Permission denied\)"):
+        export(EXAMPLE, "c", tmp_path)
