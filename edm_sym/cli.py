@@ -13,6 +13,7 @@ import json
 import os
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -244,6 +245,15 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
 
 
 def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
+    def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+        print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = one_line
+        return _dispatch(argv, parser)
+
+
+def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     try:
         args = parser.parse_args(argv)
         return int(args.func(args) or 0)

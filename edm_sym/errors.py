@@ -54,6 +54,10 @@ class ConfigError(EdmError, ValueError):
         super().__init__(f"{where}: {problem}")
 
 
+class OutputError(EdmError, OSError):
+    """The output folder or a file in it cannot be created or written."""
+
+
 class ToolMissingError(EdmError, RuntimeError):
     """An optional external tool (latexmk, arm-none-eabi-gcc, ...) is not installed."""
 

@@ -8,20 +8,15 @@ file written atomically, so a failure leaves no half-written file.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from edm_sym.errors import EdmError
+from edm_sym.errors import OutputError
 from edm_sym.fileio import write_atomic
 from edm_sym.render.context import c_context, python_context
 from edm_sym.render.environment import environment
-
-
-class OutputError(EdmError, OSError):
-    """The output folder or a file in it cannot be created or written."""
 
 
 @dataclass(frozen=True)
@@ -87,19 +82,10 @@ def write_files(out_dir: str | Path, files: Mapping[str, str]) -> list[Path]:
         raise OutputError(f"{out}: cannot create the output folder "
                           f"({exc.strerror or type(exc).__name__})") from None
     written = []
-    mode = 0o666 & ~_umask()
     for name, text in files.items():
         try:
-            path = write_atomic(out / name, text)
-            os.chmod(path, mode)  # the temporary file was private (0600)
-            written.append(path)
+            written.append(write_atomic(out / name, text))
         except OSError as exc:
             raise OutputError(f"{out / name}: cannot write the file "
                               f"({exc.strerror or type(exc).__name__})") from None
     return written
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
