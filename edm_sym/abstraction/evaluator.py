@@ -1,228 +1,60 @@
-"""Batched fitness evaluation: a row-output cache and any concurrent.futures executor.
+"""Batched fitness evaluation: cached rows, any concurrent.futures executor.
 
 The fitness of an individual is eq. 8 on ``target - sum(rows)``, and a row's
 output depends only on its genes (input code, element codes, parameters). So
 every row output is cached under a canonical key of its genes, and a
-generation only simulates the rows that no earlier generation has seen.
+generation only simulates the rows no earlier generation has left in the
+cache. The rows of a batch are sorted by their genes (so a chunk holds rows
+with common prefixes) and cut into chunks for the workers.
 
-The rows to simulate are sorted by their genes (rows sharing a prefix of
-elements then sit next to each other and share the prefix's intermediate
-signals), cut into chunks and sent to an executor: a
-:class:`~concurrent.futures.ProcessPoolExecutor` over every core by default,
-or any :class:`~concurrent.futures.Executor` the caller passes (a
-``dask.distributed`` client's ``get_executor()`` spreads a run over a
-cluster). Results are collected in submission order and each row's output is
-a pure function of its genes, so the outcome never depends on the number of
-workers or on which task finishes first.
+Where the rows are simulated:
+
+* ``workers=1``: in this process.
+* default (``executor=None``): a :class:`~concurrent.futures.ProcessPoolExecutor`
+  over every core, forked after a shared memory map of row slots was made.
+  Workers write rows into their slots; nothing but gene tables and slot
+  numbers is pickled, because sending a row back would cost more than
+  simulating it.
+* any other :class:`~concurrent.futures.Executor` (``executor=``, e.g. a
+  ``dask.distributed`` client's ``get_executor()``): the context is sent with
+  each chunk (unpickled once per worker) and the row outputs come back.
+
+Results are gathered in submission order and are pure functions of the
+genes, so a run's outcome never depends on the number of workers or on
+which task finishes first.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
+import multiprocessing
 import pickle
-import signal
 import time
-from collections import OrderedDict
+import warnings
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from edm_sym.elements import REGISTRY, Element, ParamRange
-from edm_sym.simulate import fitness, simulate_element_fast
+from edm_sym.abstraction.cache import RowCache, SlotStore
+from edm_sym.abstraction.rowsim import (
+    SimContext,
+    default_workers,
+    fill_slots,
+    forget,
+    ignore_sigint,
+    ping,
+    row_table,
+    simulate_chunk,
+    simulate_table,
+    worker_for,
+)
+from edm_sym.elements import ParamRange
+from edm_sym.simulate import fitness
 
-#: Codes of the elements that use their parameter (others ignore p).
-_MAX_CODE = max(REGISTRY) + 1
-HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
-                      for c in range(_MAX_CODE)], dtype=bool)
+__all__ = ["EvalStats", "Evaluator", "RowCache", "row_table"]
 
-
-def row_table(inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray) -> np.ndarray:
-    """Canonical gene table of rows: one float64 line ``[input, codes..., p...]`` per row.
-
-    ``p`` of parameter-free elements is set to 0, since it changes nothing.
-
-    Parameters
-    ----------
-    inputs : numpy.ndarray
-        Shape (R,) input codes.
-    codes : numpy.ndarray
-        Shape (R, n) element codes.
-    ps : numpy.ndarray
-        Shape (R, n) normalised parameters.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (R, 1 + 2 n).
-    """
-    r, n = codes.shape
-    out = np.empty((r, 1 + 2 * n))
-    out[:, 0] = inputs
-    out[:, 1:1 + n] = codes
-    out[:, 1 + n:] = np.where(HAS_PARAM[codes], ps, 0.0)
-    return out
-
-
-class RowCache:
-    """Least-recently-used row outputs, bounded by memory.
-
-    Parameters
-    ----------
-    max_bytes : int
-        Upper bound on the bytes of cached arrays (at least one row is kept).
-    """
-
-    def __init__(self, max_bytes: int):
-        self.max_bytes = int(max_bytes)
-        self.nbytes = 0
-        self._data: OrderedDict[bytes, np.ndarray] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def get(self, key: bytes) -> np.ndarray | None:
-        """The cached output of ``key`` (refreshing it), or None."""
-        arr = self._data.get(key)
-        if arr is None:
-            self.misses += 1
-            return None
-        self._data.move_to_end(key)
-        self.hits += 1
-        return arr
-
-    def put(self, key: bytes, arr: np.ndarray) -> None:
-        """Store ``arr`` under ``key``, evicting the least recently used rows."""
-        if key in self._data:
-            self._data.move_to_end(key)
-            return
-        self._data[key] = arr
-        self.nbytes += arr.nbytes
-        while self.nbytes > self.max_bytes and len(self._data) > 1:
-            _, old = self._data.popitem(last=False)
-            self.nbytes -= old.nbytes
-
-    def clear(self) -> None:
-        """Drop every row."""
-        self._data.clear()
-        self.nbytes = 0
-
-
-# -- worker side ------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class SimContext:
-    """What a worker needs to simulate rows: the input signals, Ts and the ranges."""
-
-    inputs: np.ndarray
-    ts: float
-    ranges: Mapping[str, ParamRange]
-
-    def decoder(self) -> dict[int, tuple[type[Element], ParamRange | None]]:
-        """Element class and range by element code."""
-        return {c: (cls, self.ranges[cls.name] if cls.param is not None else None)
-                for c, cls in REGISTRY.items()}
-
-
-_CONTEXTS: OrderedDict[str, tuple[SimContext, dict]] = OrderedDict()
-
-
-def _context(token: str, blob: bytes | None, local: SimContext | None = None
-             ) -> tuple[SimContext, dict]:
-    hit = _CONTEXTS.get(token)
-    if hit is not None:
-        _CONTEXTS.move_to_end(token)
-        return hit
-    ctx = local if local is not None else pickle.loads(blob)  # noqa: S301 (our own bytes)
-    hit = (ctx, ctx.decoder())
-    _CONTEXTS[token] = hit
-    while len(_CONTEXTS) > 4:
-        _CONTEXTS.popitem(last=False)
-    return hit
-
-
-def simulate_table(ctx: SimContext, decoder: Mapping[int, tuple], table: np.ndarray
-                   ) -> np.ndarray:
-    """Simulate rows given as a canonical gene table (see :func:`row_table`).
-
-    Consecutive rows that share their input and first elements reuse the
-    shared prefix's signals, so sort the table first.
-
-    Parameters
-    ----------
-    ctx : SimContext
-        Input signals, Ts, ranges.
-    decoder : mapping
-        ``ctx.decoder()``.
-    table : numpy.ndarray
-        Shape (R, 1 + 2 n).
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (R, N) row outputs.
-    """
-    n = (table.shape[1] - 1) // 2
-    out = np.empty((table.shape[0], ctx.inputs.shape[1]))
-    stack: list[np.ndarray] = []
-    prev: np.ndarray | None = None
-    for r, line in enumerate(table):
-        k = 0
-        if prev is not None and prev[0] == line[0]:
-            while k < n and prev[1 + k] == line[1 + k] and prev[1 + n + k] == line[1 + n + k]:
-                k += 1
-        del stack[k:]
-        y = stack[-1] if stack else ctx.inputs[int(line[0])]
-        for i in range(k, n):
-            cls, rng = decoder[int(line[1 + i])]
-            a = rng.decode(float(line[1 + n + i])) if rng is not None else None
-            y = simulate_element_fast(cls, y, a, ctx.ts)
-            stack.append(y)
-        out[r] = y
-        prev = line
-    return out
-
-
-def simulate_chunk(token: str, blob: bytes, table: np.ndarray) -> np.ndarray:
-    """Executor task: simulate the rows of ``table`` (the context travels as ``blob``).
-
-    Parameters
-    ----------
-    token : str
-        Digest of ``blob``; a worker unpickles each context once.
-    blob : bytes
-        The pickled :class:`SimContext`.
-    table : numpy.ndarray
-        Canonical gene table, sorted.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (R, N) row outputs.
-    """
-    ctx, decoder = _context(token, blob)
-    return simulate_table(ctx, decoder, table)
-
-
-def _ignore_sigint() -> None:
-    # Ctrl-C is for the main process, which ends the run cleanly; workers
-    # finish their chunk and are shut down.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def default_workers() -> int:
-    """Usable cores of this process."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover (not Linux)
-        return max(1, os.cpu_count() or 1)
-
-
-# -- main side --------------------------------------------------------------------
 
 @dataclass
 class EvalStats:
@@ -260,45 +92,68 @@ class Evaluator:
     ranges : mapping of element name to ParamRange
         Decode ``p`` to ``a``.
     executor : concurrent.futures.Executor, optional
-        Where to simulate rows. None: a process pool of ``workers``
-        processes, started on first need (``workers=1``: in this process).
+        Where to simulate rows (it is not shut down here). None: a process
+        pool of ``workers`` processes (``workers=1``: this process).
     workers : int, optional
-        Process count of the default pool (default: every usable core); with
-        an ``executor``, a hint for how many chunks to cut a batch into.
+        Processes of the default pool (default: every usable core). A batch
+        is cut into twice this many chunks (also for a caller's executor).
     cache_bytes : int
-        Memory bound of the row cache.
+        Memory bound of the row cache; each process's prefix cache gets half.
+    max_batch_rows : int
+        The most distinct rows one batch can hold (sizes the shared store).
     """
 
-    #: Batches with fewer rows than this are simulated in this process.
+    #: Batches with fewer new rows than this are simulated in this process.
     MIN_PARALLEL_ROWS = 8
 
     def __init__(self, inputs: np.ndarray, target: np.ndarray, ts: float,
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
-                 workers: int | None = None, cache_bytes: int = 512 * 2**20):
+                 workers: int | None = None, cache_bytes: int = 256 * 2**20,
+                 max_batch_rows: int = 1024):
         self.inputs = np.ascontiguousarray(inputs, dtype=float)
         self.target = np.ascontiguousarray(target, dtype=float)
-        self.ctx = SimContext(self.inputs, float(ts), dict(ranges))
+        n = self.target.shape[0]
+        self.ctx = SimContext(self.inputs, float(ts), dict(ranges), max(1, cache_bytes // 2))
         self._blob = pickle.dumps(self.ctx, protocol=pickle.HIGHEST_PROTOCOL)
-        self._token = hashlib.sha256(self._blob).hexdigest()
+        self._token = hashlib.sha256(self._blob).hexdigest() + f"-{id(self):x}"
         self.executor = executor
         self._own_pool = executor is None
         self.workers = int(workers) if workers else default_workers()
-        self.cache = RowCache(cache_bytes)
+        self.shared = (self._own_pool and self.workers > 1
+                       and "fork" in multiprocessing.get_all_start_methods())
+        if self.shared:
+            slots = max(cache_bytes // (8 * n), 2 * max_batch_rows + 16)
+            self.cache: RowCache | SlotStore = SlotStore(slots, n)
+            store = self.cache.rows
+        else:
+            self.cache = RowCache(cache_bytes)
+            store = None
+        # Made before any fork, so forked workers inherit it (and the store).
+        self._local = worker_for(self._token, ctx=self.ctx, store=store)
         self.stats = EvalStats()
         self._weights: np.ndarray | float = 1.0
         self._memo: dict[bytes, float] = {}
+        self._dots: dict[bytes, float] = {}
 
-    # -- configuration --------------------------------------------------------
-    def set_weights(self, weights: np.ndarray | float) -> None:
-        """Set Lambda(q) for the following evaluations."""
-        self._weights = weights if np.isscalar(weights) else np.asarray(weights, dtype=float)
-        self._memo.clear()
+    # -- life cycle -------------------------------------------------------------
+    def start(self) -> None:
+        """Start the default process pool now, before any other thread exists."""
+        if self._own_pool and self.workers > 1 and self.executor is None:
+            ctx = multiprocessing.get_context("fork" if self.shared else None)
+            with warnings.catch_warnings():
+                # Forking is safe here: the pool starts before the run makes threads.
+                warnings.simplefilter("ignore", DeprecationWarning)
+                self.executor = ProcessPoolExecutor(self.workers, mp_context=ctx,
+                                                    initializer=ignore_sigint)
+                for f in [self.executor.submit(ping) for _ in range(self.workers)]:
+                    f.result()
 
     def close(self) -> None:
         """Shut down the process pool this evaluator started (not a caller's executor)."""
         if self._own_pool and self.executor is not None:
             self.executor.shutdown(wait=True, cancel_futures=True)
             self.executor = None
+        forget(self._token)
 
     def abort(self) -> None:
         """Shut down an own pool without waiting (after an interrupt)."""
@@ -312,7 +167,57 @@ class Evaluator:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    # -- evaluation -----------------------------------------------------------
+    # -- weighting ----------------------------------------------------------------
+    @property
+    def weights(self) -> np.ndarray | float:
+        """The current Lambda(q)."""
+        return self._weights
+
+    def set_weights(self, weights: np.ndarray | float) -> None:
+        """Set Lambda(q) for the following evaluations."""
+        self._weights = weights if np.isscalar(weights) else np.asarray(weights, dtype=float)
+        self._memo.clear()
+        self._dots.clear()
+
+    def gram(self, keys: Sequence[bytes], rows: Sequence[np.ndarray]
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted inner products of rows, remembered by their keys.
+
+        Parameters
+        ----------
+        keys, rows : sequence
+            Row keys and outputs (as from ``evaluate(..., rows_out=...)``).
+
+        Returns
+        -------
+        gram : numpy.ndarray
+            ``G[i, j] = sum(Lambda * r_i * r_j)``, shape (m, m).
+        gy : numpy.ndarray
+            ``sum(Lambda * r_i * target)``, shape (m,).
+        """
+        m = len(keys)
+        gram, gy = np.empty((m, m)), np.empty(m)
+        if len(self._dots) > 500_000:
+            self._dots.clear()
+        for i in range(m):
+            gy[i] = self._dot(keys[i], rows[i], b"target", self.target)
+            for j in range(i + 1):
+                gram[i, j] = gram[j, i] = self._dot(keys[i], rows[i], keys[j], rows[j])
+        return gram, gy
+
+    def _dot(self, ka: bytes, a: np.ndarray, kb: bytes, b: np.ndarray) -> float:
+        key = ka + b"|" + kb if ka <= kb else kb + b"|" + ka
+        v = self._dots.get(key)
+        if v is None:
+            w = self._weights
+            # einsum's own loops, not BLAS: the same bits whatever the thread settings.
+            with np.errstate(over="ignore", invalid="ignore"):
+                v = float(np.einsum("i,i", a, b) * w if np.isscalar(w)
+                          else np.einsum("i,i,i", w, a, b))
+            self._dots[key] = v
+        return v
+
+    # -- evaluation -----------------------------------------------------------------
     def individual_keys(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray
                         ) -> list[bytes]:
         """Canonical key of each individual (equal keys: equal compensators)."""
@@ -333,9 +238,8 @@ class Evaluator:
         ps : numpy.ndarray
             Shape (P, m, n) normalised parameters.
         rows_out : list, optional
-            When given, filled with one entry per individual: its m row
-            outputs, or None when its fitness came from the memo of
-            individuals already evaluated under the current weighting.
+            When given, filled with one entry per individual: its m row keys
+            and m row outputs (valid until the next call).
 
         Returns
         -------
@@ -348,7 +252,7 @@ class Evaluator:
         self.stats.individuals += p
         self.stats.row_requests += len(keys)
         out = np.empty(p)
-        todo = []
+        todo, want = [], []
         for k in range(p):
             ikey = b"".join(keys[k * m:(k + 1) * m])
             f = self._memo.get(ikey)
@@ -356,92 +260,98 @@ class Evaluator:
                 todo.append((k, ikey))
             else:
                 out[k] = f
-        need = {keys[k * m + j] for k, _ in todo for j in range(m)}
+            if f is None or rows_out is not None:
+                want.append(k)
         rows: dict[bytes, np.ndarray] = {}
         missing: list[int] = []
-        seen: set[bytes] = set()
-        for idx, key in enumerate(keys):
-            if key not in need or key in seen:
-                continue
-            seen.add(key)
-            arr = self.cache.get(key)
-            if arr is None:
-                missing.append(idx)
-            else:
-                rows[key] = arr
+        for k in want:
+            for idx in range(k * m, (k + 1) * m):
+                key = keys[idx]
+                if key in rows:
+                    continue
+                arr = self.cache.get(key)
+                if arr is None:
+                    rows[key] = None  # placeholder: simulated below
+                    missing.append(idx)
+                else:
+                    rows[key] = arr
         self.stats.rows_missed += len(missing)
         if missing:
             sub = table[missing]
-            order = np.lexsort(sub.T[::-1])
-            sub = sub[order]
-            outputs = self._simulate(sub)
-            for r, line in enumerate(sub):
-                key = line.tobytes()
-                row = outputs[r].copy()  # own memory, so the cache's byte count is true
-                rows[key] = row
-                self.cache.put(key, row)
+            sub = sub[np.lexsort(sub.T[::-1])]
+            for line, row in zip(sub, self._simulate(sub, keep=rows.keys()), strict=True):
+                rows[line.tobytes()] = row
         if rows_out is not None:
-            rows_out[:] = [None] * p
+            rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[keys[k * m + j]] for j in range(m)])
+                           for k in range(p)]
         for k, ikey in todo:
-            mine = [rows[keys[k * m + j]] for j in range(m)]
-            if rows_out is not None:
-                rows_out[k] = mine
-            f = self._fitness(mine)
+            f = self._fitness([rows[keys[k * m + j]] for j in range(m)])
             out[k] = f
             if len(self._memo) > 200_000:
                 self._memo.clear()
             self._memo[ikey] = f
         return out
 
-    @property
-    def weights(self) -> np.ndarray | float:
-        """The current Lambda(q)."""
-        return self._weights
-
     def _fitness(self, rows: Sequence[np.ndarray]) -> float:
-        total = rows[0].copy()
-        for r in rows[1:]:
+        total = rows[0] + rows[1] if len(rows) > 1 else rows[0]
+        for r in rows[2:]:
             total += r
         with np.errstate(over="ignore", invalid="ignore"):
             f = fitness(self.target - total, self._weights)
         return f if np.isfinite(f) else float("inf")
 
-    def simulate_rows(self, table: np.ndarray) -> np.ndarray:
-        """Simulate rows of a canonical gene table (no cache), in table order."""
-        order = np.lexsort(table.T[::-1])
-        out = np.empty((table.shape[0], self.inputs.shape[1]))
-        out[order] = self._simulate(table[order])
-        return out
+    def simulate_rows(self, table: np.ndarray) -> list[np.ndarray]:
+        """Simulate the rows of a canonical gene table (bypassing the row cache).
 
-    def _simulate(self, table: np.ndarray) -> np.ndarray:
+        Returns copies, in table order.
+        """
+        if isinstance(self.cache, SlotStore):
+            slots = self.cache.allocate(len(table), ())
+            try:
+                self._fill(table, slots)
+                return [self.cache.rows[s].copy() for s in slots]
+            finally:
+                self.cache.release(slots)
+        return [np.array(r) for r in self._simulate(table, keep=())]
+
+    def _simulate(self, table: np.ndarray, keep: object) -> list[np.ndarray]:
+        """Simulate rows and enter them in the cache; their outputs in table order."""
         t0 = time.perf_counter()
         rows = table.shape[0]
-        n = (table.shape[1] - 1) // 2
-        if rows < self.MIN_PARALLEL_ROWS or (self._own_pool and self.workers <= 1):
-            ctx, decoder = _context(self._token, None, self.ctx)
-            out = simulate_table(ctx, decoder, table)
+        if isinstance(self.cache, SlotStore):
+            slots = self.cache.allocate(rows, keep)
+            self._fill(table, slots)
+            out = [self.cache.commit(line.tobytes(), s) for line, s in zip(table, slots,
+                                                                           strict=True)]
         else:
-            executor = self._pool()
-            chunks = min(rows, 2 * self.workers)
-            bounds = np.linspace(0, rows, chunks + 1).astype(int)
-            futures = [executor.submit(simulate_chunk, self._token, self._blob,
-                                       table[bounds[c]:bounds[c + 1]])
-                       for c in range(chunks)]
-            # In submission order, never in completion order.
-            out = np.concatenate([f.result() for f in futures], axis=0)
+            if rows < self.MIN_PARALLEL_ROWS or self.executor is None:
+                out = simulate_table(self._local, table)
+            else:
+                futures = [self.executor.submit(simulate_chunk, self._token, self._blob, part)
+                           for part in self._chunks(table)]
+                # In submission order, never in completion order.
+                out = [row for f in futures for row in f.result()]
+            for line, row in zip(table, out, strict=True):
+                self.cache.put(line.tobytes(), row)
+        n = (table.shape[1] - 1) // 2
         self.stats.rows_simulated += rows
         self.stats.element_samples += rows * n * self.inputs.shape[1]
         self.stats.sim_seconds += time.perf_counter() - t0
         return out
 
-    def _pool(self) -> Executor:
-        if self.executor is None:
-            # Python's default start method (fork on Linux up to 3.13): workers
-            # need no copy of the data from a re-imported main module.
-            self.executor = ProcessPoolExecutor(self.workers, initializer=_ignore_sigint)
-        return self.executor
+    def _fill(self, table: np.ndarray, slots: list[int]) -> None:
+        if len(table) < self.MIN_PARALLEL_ROWS or self.executor is None:
+            fill_slots(self._token, table, slots)
+            return
+        parts = self._chunks(table)
+        bounds = np.cumsum([0] + [len(p) for p in parts])
+        futures = [self.executor.submit(fill_slots, self._token, part,
+                                        slots[bounds[c]:bounds[c + 1]])
+                   for c, part in enumerate(parts)]
+        for f in futures:
+            f.result()
 
-    def start(self) -> None:
-        """Start the default process pool now (before any thread is started)."""
-        if self._own_pool and self.workers > 1:
-            self._pool()
+    def _chunks(self, table: np.ndarray) -> list[np.ndarray]:
+        count = min(len(table), 2 * self.workers)
+        bounds = np.linspace(0, len(table), count + 1).astype(int)
+        return [table[bounds[c]:bounds[c + 1]] for c in range(count)]

@@ -18,7 +18,7 @@ level, a viscous gain) much easier to find; it draws no random numbers.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -54,17 +54,12 @@ def scale_position(codes: Sequence[int], gain_allowed: bool) -> tuple[int, bool]
     return (through_at, True) if through_at is not None else None
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> float:
-    # numpy's pairwise sum, not BLAS: the same bits on every machine setting.
-    return float(np.add.reduce(a * b))
-
-
 def gain_fit(
     pop: Population,
-    rows: Sequence[Sequence[np.ndarray] | None],
+    rows: Sequence[tuple[Sequence[bytes], Sequence[np.ndarray]] | None],
     fitness: np.ndarray,
-    target: np.ndarray,
-    weights: np.ndarray | float,
+    n_samples: int,
+    gram: Callable[[Sequence[bytes], Sequence[np.ndarray]], tuple[np.ndarray, np.ndarray]],
     ranges: Mapping[str, ParamRange],
     *,
     gain_allowed: bool,
@@ -77,13 +72,14 @@ def gain_fit(
     pop : Population
         The individuals.
     rows : sequence
-        Per individual its m row outputs, or None to skip it.
+        Per individual its m row keys and outputs (None: skip it).
     fitness : numpy.ndarray
         Their eq. 8 values.
-    target : numpy.ndarray
-        The target column.
-    weights : float or numpy.ndarray
-        Lambda(q).
+    n_samples : int
+        N, the number of samples (eq. 8 is a mean).
+    gram : callable
+        ``gram(keys, rows) -> (G, gy)``: weighted inner products of the rows
+        with each other and with the target (see :meth:`Evaluator.gram`).
     ranges : mapping
         Parameter ranges (new values are clipped into them).
     gain_allowed : bool
@@ -100,29 +96,21 @@ def gain_fit(
     """
     idx: list[int] = []
     out_in, out_codes, out_ps = [], [], []
-    w = weights
-    for k, r in enumerate(rows):
-        if r is None or not np.isfinite(fitness[k]) or fitness[k] == 0.0:
+    for k, entry in enumerate(rows):
+        if entry is None or not np.isfinite(fitness[k]) or fitness[k] == 0.0:
             continue
-        places = [scale_position(pop.codes[k, j], gain_allowed) for j in range(len(r))]
+        keys, outs = entry
+        places = [scale_position(pop.codes[k, j], gain_allowed) for j in range(len(keys))]
         free = [j for j, pl in enumerate(places) if pl is not None]
         if not free:
             continue
-        total = r[0].copy()
-        for x in r[1:]:
-            total += x
-        e = target - total
-        we = w * e
-        base = _dot(we, e)
-        if not base > 0:
+        g_all, gy = gram(keys, outs)
+        if not (np.all(np.isfinite(g_all)) and np.all(np.isfinite(gy))):
             continue
-        wr = [w * r[j] for j in free]
-        g = np.array([_dot(wr[i], e) for i in range(len(free))])
-        gram = np.array([[_dot(wr[i], r[free[j]]) for j in range(len(free))]
-                         for i in range(len(free))])
-        if not (np.all(np.isfinite(gram)) and np.all(np.isfinite(g))):
-            continue
-        delta = np.linalg.lstsq(gram, g, rcond=1e-10)[0]
+        # Residual e = y - sum(r): r_i' W e = r_i' W y - sum_j r_i' W r_j.
+        g = (gy - g_all.sum(axis=1))[free]
+        base = float(fitness[k]) ** 2 * n_samples
+        delta = np.linalg.lstsq(g_all[np.ix_(free, free)], g, rcond=1e-10)[0]
         if not float(g @ delta) > tol * base:
             continue
         codes, ps = pop.codes[k].copy(), pop.ps[k].copy()

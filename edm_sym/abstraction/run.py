@@ -19,9 +19,10 @@ import hashlib
 import json
 import sys
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,15 +34,16 @@ from edm_sym.abstraction.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
-from edm_sym.abstraction.evaluator import Evaluator
+from edm_sym.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
 from edm_sym.abstraction.polish import GAIN, gain_fit
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.data import DataLog
 from edm_sym.elements import BY_NAME, ParamRange
-from edm_sym.errors import ConfigError
-from edm_sym.matrix import Compensator
+from edm_sym.errors import ConfigError, NumericsWarning
+from edm_sym.matrix import Compensator, ElementMatrix
 from edm_sym.result import EdmResult, StepRecord
+from edm_sym.simulate import fitness, simulate_rows
 
 #: Elements whose output is identically 0 at a = 0 (a new row that changes nothing).
 _ZERO_ELEMENTS = ("gain", "sin_amp", "tan_amp")
@@ -63,6 +65,9 @@ class GenerationInfo:
         Individuals evaluated in this step.
     elapsed : float
         Seconds since the run (or the resumed run) started.
+    stats : EvalStats
+        The evaluator's counters so far (rows requested and simulated, cache
+        hit rate, element-samples and seconds in simulation).
     """
 
     step: int
@@ -70,6 +75,7 @@ class GenerationInfo:
     best: float
     evaluations: int
     elapsed: float
+    stats: EvalStats
 
 
 class _Stop(Exception):
@@ -173,7 +179,8 @@ class _Runner:
                                      refresh=False)
             self.bar.update(1)
         if self.callback is not None:
-            info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed)
+            info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
+                                  replace(self.evaluator.stats))
             if self.callback(info):
                 raise _Stop("stopped")
         if self.time_limit is not None and elapsed >= self.time_limit:
@@ -236,7 +243,7 @@ class _Runner:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
         rows: list = []
         fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
-        idx, cand = gain_fit(pop, rows, fit, self.y, self.evaluator.weights, self.ranges,
+        idx, cand = gain_fit(pop, rows, fit, len(self.y), self.evaluator.gram, self.ranges,
                              gain_allowed=GAIN in ops.allowed)
         del rows
         if len(idx):
@@ -390,8 +397,9 @@ def abstract(
         rng.bit_generator.state = state.rng_state
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
+    batch = max(s.ga.population * s.n_rows for s in cfg.steps)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
-                          cache_bytes=int(cfg.cache_mb * 2**20))
+                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
     evaluator.start()
     runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
@@ -409,15 +417,40 @@ def abstract(
     finally:
         runner.close()
         evaluator.close()
-    records = runner.records()
-    steps = tuple(
-        StepRecord(step=r.step, matrix=r.best.matrix(0, inputs), fitness=r.fitness,
-                   history=tuple(r.history), generations=r.generations,
-                   evaluations=r.evaluations, weighting=r.weighting)
-        for r in records)
+    steps = []
+    for r in runner.records():
+        matrix = r.best.matrix(0, inputs)
+        lam = cfg.steps[r.step - 1].weighting.weights(t, y)
+        steps.append(StepRecord(step=r.step, matrix=matrix,
+                                fitness=_reference_fitness(matrix, ts, ranges, x, y, lam,
+                                                           r.fitness, r.step),
+                                history=tuple(r.history), generations=r.generations,
+                                evaluations=r.evaluations, weighting=r.weighting))
     comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
     provenance = {"seed": int(seed), "package_version": __version__,
                   "data_sha256": data.sha256, "stop_reason": reason}
     if reason == "completed" and checkpoint is not None and checkpoint.exists():
         checkpoint.unlink()
-    return EdmResult(comp, target, steps, provenance, steps[-1].fitness)
+    return EdmResult(comp, target, tuple(steps), provenance, steps[-1].fitness)
+
+
+def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
+                       x: np.ndarray, y: np.ndarray, lam: np.ndarray | float, ga_value: float,
+                       step: int) -> float:
+    """Eq. 8 of a step's best by the reference simulator, the numeric truth.
+
+    The GA ranks with a faster realisation of the same difference equations;
+    the two agree to rounding unless a row amplifies rounding (a tangent of a
+    huge argument, say), which is worth a warning.
+    """
+    comp = Compensator(matrix, ts, ranges, len(y) * ts)
+    with np.errstate(over="ignore", invalid="ignore"):
+        value = fitness(y - simulate_rows(comp, matrix.rows, x).sum(axis=0), lam)
+    if not np.isfinite(value):
+        value = float("inf")
+    if abs(value - ga_value) > 1e-6 * max(abs(value), 1e-300):
+        warnings.warn(NumericsWarning(
+            f"step {step}: the best matrix's fitness is {value:.10g} by the reference "
+            f"simulator but {ga_value:.10g} in the GA; one of its rows amplifies rounding"),
+            stacklevel=3)
+    return float(value)

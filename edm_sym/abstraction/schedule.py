@@ -133,7 +133,7 @@ class GaSettings:
         for f in fields(self):
             key = "continue" if f.name == "continue_mode" else f.name
             _check_value(f"GaSettings.{f.name}", key, getattr(self, f.name))
-        _cross_check("GaSettings", self)
+        _cross_check("GaSettings", {f.name: getattr(self, f.name) for f in fields(self)})
 
     def to_json(self) -> dict[str, Any]:
         """The settings as a config table (``continue`` spelled as in the file)."""
@@ -210,7 +210,7 @@ class AbstractionConfig:
     steps: tuple[StepConfig, ...] = ()
     ranges: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     initial: tuple[InitialRow, ...] = ()
-    cache_mb: float = 512.0
+    cache_mb: float = 256.0
     source: str = "<default config>"
 
     def __post_init__(self) -> None:
@@ -335,16 +335,16 @@ def _check_value(where: str, key: str, value: Any) -> Any:
     return value
 
 
-def _cross_check(where: str, ga: GaSettings) -> None:
-    if ga.elites >= ga.population:
-        raise ConfigError(f"{where}.elites",
-                          f"expected fewer than population ({ga.population}), found {ga.elites}")
-    if ga.tournament > ga.population:
-        raise ConfigError(f"{where}.tournament",
-                          f"expected at most population ({ga.population}), found {ga.tournament}")
-    if ga.shift_min > ga.shift_max:
-        raise ConfigError(f"{where}.shift_min",
-                          f"expected <= shift_max ({ga.shift_max}), found {ga.shift_min}")
+def _cross_check(where: str, ga: Mapping[str, Any]) -> None:
+    if ga["elites"] >= ga["population"]:
+        raise ConfigError(f"{where}.elites", f"expected fewer than population "
+                                             f"({ga['population']}), found {ga['elites']}")
+    if ga["tournament"] > ga["population"]:
+        raise ConfigError(f"{where}.tournament", f"expected at most population "
+                                                 f"({ga['population']}), found {ga['tournament']}")
+    if ga["shift_min"] > ga["shift_max"]:
+        raise ConfigError(f"{where}.shift_min", f"expected <= shift_max ({ga['shift_max']}), "
+                                                f"found {ga['shift_min']}")
 
 
 def _unknown(where: str, table: Mapping[str, Any], known: Any) -> None:
@@ -365,9 +365,8 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
     for key, value in table.items():
         name = "continue_mode" if key == "continue" else key
         kw[name] = _check_value(f"{where}.{key}", key, value)
-    ga = replace(base, **kw) if kw else base
-    _cross_check(where, ga)
-    return ga
+    _cross_check(where, {**{f.name: getattr(base, f.name) for f in fields(base)}, **kw})
+    return replace(base, **kw) if kw else base
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step")
@@ -397,7 +396,7 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     for key in doc:
         if key not in _TOP_KEYS:
             raise ConfigError(f"{source}: {key}", f"unknown key (known: {', '.join(_TOP_KEYS)})")
-    cache_mb = 512.0
+    cache_mb = 256.0
     if "cache_mb" in doc:
         v = doc["cache_mb"]
         if isinstance(v, bool) or not isinstance(v, int | float) or not v > 0:

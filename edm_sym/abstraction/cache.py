@@ -1,0 +1,122 @@
+"""Row-output caches: an LRU of arrays, and an LRU of slots in shared memory.
+
+:class:`RowCache` holds arrays and is bounded by their bytes. :class:`SlotStore`
+holds rows in one anonymous shared memory map of fixed-size slots; worker
+processes forked after it was made write simulated rows straight into their
+slots, so no row output is ever pickled between processes.
+"""
+
+from __future__ import annotations
+
+import mmap
+from collections import OrderedDict
+from collections.abc import Collection
+
+import numpy as np
+
+
+class RowCache:
+    """Least-recently-used row outputs, bounded by memory.
+
+    Parameters
+    ----------
+    max_bytes : int
+        Upper bound on the bytes of cached arrays (at least one row is kept).
+    """
+
+    def __init__(self, max_bytes: int):
+        self.max_bytes = int(max_bytes)
+        self.nbytes = 0
+        self._data: OrderedDict[bytes, np.ndarray] = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def get(self, key: bytes) -> np.ndarray | None:
+        """The cached output of ``key`` (refreshing it), or None."""
+        arr = self._data.get(key)
+        if arr is not None:
+            self._data.move_to_end(key)
+        return arr
+
+    def put(self, key: bytes, arr: np.ndarray) -> None:
+        """Store ``arr`` under ``key``, evicting the least recently used rows."""
+        if key in self._data:
+            self._data.move_to_end(key)
+            return
+        self._data[key] = arr
+        self.nbytes += arr.nbytes
+        while self.nbytes > self.max_bytes and len(self._data) > 1:
+            _, old = self._data.popitem(last=False)
+            self.nbytes -= old.nbytes
+
+    def clear(self) -> None:
+        """Drop every row."""
+        self._data.clear()
+        self.nbytes = 0
+
+
+class SlotStore:
+    """Rows of N float64 in a shared anonymous memory map, by least recent use.
+
+    The map is ``MAP_SHARED``: a process forked after the store was made
+    sees the same memory, so workers fill slots in place.
+
+    Parameters
+    ----------
+    slots : int
+        Number of rows the store holds.
+    n : int
+        Samples per row.
+    """
+
+    def __init__(self, slots: int, n: int):
+        self.slots = int(slots)
+        # Anonymous and shared (mmap's default for fileno -1); pages are made on first use.
+        self._map = mmap.mmap(-1, max(1, self.slots * n * 8))
+        self.rows = np.frombuffer(self._map, dtype=np.float64,
+                                  count=self.slots * n).reshape(self.slots, n)
+        self._lru: OrderedDict[bytes, int] = OrderedDict()
+        self._free = list(range(self.slots - 1, -1, -1))
+
+    def __len__(self) -> int:
+        return len(self._lru)
+
+    def get(self, key: bytes) -> np.ndarray | None:
+        """A view of the row of ``key`` (refreshing it), or None."""
+        slot = self._lru.get(key)
+        if slot is None:
+            return None
+        self._lru.move_to_end(key)
+        return self.rows[slot]
+
+    def allocate(self, count: int, keep: Collection[bytes]) -> list[int]:
+        """``count`` free slots, evicting least recently used rows not in ``keep``.
+
+        Raises
+        ------
+        RuntimeError
+            When the store is too small for a batch.
+        """
+        out = []
+        while len(out) < count:
+            if self._free:
+                out.append(self._free.pop())
+                continue
+            for key in self._lru:
+                if key not in keep:
+                    out.append(self._lru.pop(key))
+                    break
+            else:
+                raise RuntimeError(f"row store of {self.slots} slots is too small for a "
+                                   f"batch of {count} new rows")
+        return out
+
+    def commit(self, key: bytes, slot: int) -> np.ndarray:
+        """Record that ``slot`` holds the row of ``key``; return its view."""
+        self._lru[key] = slot
+        return self.rows[slot]
+
+    def release(self, slots: list[int]) -> None:
+        """Give back allocated slots that were not committed."""
+        self._free.extend(slots)

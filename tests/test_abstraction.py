@@ -1,0 +1,259 @@
+"""Hierarchical abstraction (issue 7): recovery, determinism, resume, the result file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from edm_sym.abstraction import GenerationInfo, abstract, parse_config
+from edm_sym.data import DataLog
+from edm_sym.elements import BY_NAME, default_ranges
+from edm_sym.result import dumps, load_result, save_result
+from edm_sym.simulate import fitness, simulate, simulate_row
+
+TS = 1e-3
+COULOMB, VISCOUS, NOISE = 1.0, 0.01, 0.05
+
+
+def friction_log(duration: float = 5.0, seed: int = 0, noise: float = NOISE
+                 ) -> tuple[DataLog, float]:
+    """A log made by a known 2-row compensator: Coulomb 1.0 N m + viscous 0.01 N m s/rad.
+
+    The velocity holds steps for the first half and a chirp (as the paper's
+    eq. 9) for the second; the target gets Gaussian noise. Returns the log
+    and the RMS of the noise actually added (the noise floor).
+    """
+    n = int(round(duration / TS))
+    t = np.arange(n) * TS
+    half = duration / 2
+    levels = np.array([5, -5, 15, -15, 30, -30, 50, -50, 2, -2.0])
+    k = np.minimum((t / (half / len(levels))).astype(int), len(levels) - 1)
+    chirp = 20 * np.pi * np.sin(np.pi * (10.0 / (duration - half)) * (t - half) ** 2)
+    omega = np.where(t < half, levels[k], chirp)
+    alpha = np.gradient(omega, TS)
+    e = noise * np.random.default_rng(seed).standard_normal(n)
+    tau = COULOMB * np.sign(omega) + VISCOUS * omega + e
+    cols = {"t": t, "omega": omega, "alpha": alpha, "tau_ext": tau}
+    return DataLog(cols, TS, "friction"), float(np.sqrt(np.mean(e**2)))
+
+
+def steady_state_friction(result, velocity: str = "omega") -> tuple[float, float, float]:
+    """Read the friction curve of eq. 14 off the matrix: tau_ss = c sgn(v) + b v + d.
+
+    Each row of the matrix is run on constant inputs (velocity v, every other
+    input 0, i.e. no acceleration) until its filters settle, and the sum of
+    the rows' final values is fitted by c sgn(v) + b v + d. This reads any
+    way the GA writes the same physics: ``sign`` then ``gain 1.0``, or
+    ``tanh`` of a large slope after ``sign`` times ``gain 1.0``.
+    """
+    comp = result.compensator
+    grid = np.array([0.5, 1, 2, 5, 10, 20, 40, 60.0])
+    v = np.concatenate([grid, -grid])
+    tau = []
+    for vel in v:
+        x = comp.matrix.inputs.index(velocity)
+        const = np.full(20_000, vel)
+        total = 0.0
+        for row in comp.matrix.rows:
+            sig = const if row.input == x else np.zeros_like(const)
+            total += simulate_row(comp, row, sig)[-1]
+        tau.append(total)
+    a = np.column_stack([np.sign(v), v, np.ones_like(v)])
+    (c, b, d), *_ = np.linalg.lstsq(a, np.array(tau), rcond=None)
+    return float(c), float(b), float(d)
+
+
+STEP_4X2 = {"step": [{"n_rows": 2, "n_elements": 4}]}
+SMALL = {"ga": {"population": 24, "generations": 6, "continue": "no"},
+         "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 3, "n_elements": 3}]}
+
+
+@pytest.fixture(scope="module")
+def log() -> DataLog:
+    return friction_log(2.0)[0]
+
+
+def run(data: DataLog, doc: dict, **kw) -> object:
+    return abstract(data, target="tau_ext", inputs=["omega", "alpha"],
+                    config=parse_config(doc, "test.toml"), **kw)
+
+
+# -- acceptance: the GA finds Coulomb + viscous friction -------------------------
+
+def test_ga_recovers_coulomb_and_viscous_friction() -> None:
+    data, floor = friction_log(5.0)
+    res = run(data, STEP_4X2, seed=0, workers=1)
+    rmse = fitness(data.columns["tau_ext"] - simulate(res, data).total)
+    assert rmse <= 1.05 * floor, f"rmse {rmse} vs noise floor {floor}"
+    c, b, d = steady_state_friction(res)
+    assert abs(c / COULOMB - 1) <= 0.02, f"Coulomb level {c}"
+    assert abs(b / VISCOUS - 1) <= 0.02, f"viscous coefficient {b}"
+    assert abs(d) < 0.01
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_default_schedule_recovers_friction_on_a_20_s_log(seed: int) -> None:
+    data, floor = friction_log(20.0, seed=seed)
+    res = abstract(data, target="tau_ext", inputs=["omega", "alpha"], seed=seed, workers=1)
+    assert [s.matrix.shape for s in res.steps] == ["4x2", "4x3", "4x4", "4x5"]
+    rmse = fitness(data.columns["tau_ext"] - simulate(res, data).total)
+    assert rmse <= 1.05 * floor
+    c, b, _ = steady_state_friction(res)
+    assert abs(c / COULOMB - 1) <= 0.02 and abs(b / VISCOUS - 1) <= 0.02
+
+
+# -- determinism -----------------------------------------------------------------
+
+def test_same_seed_gives_byte_identical_results_with_any_worker_count(log: DataLog) -> None:
+    one = dumps(run(log, SMALL, seed=5, workers=1))
+    assert dumps(run(log, SMALL, seed=5, workers=1)) == one
+    assert dumps(run(log, SMALL, seed=5, workers=2)) == one
+    assert dumps(run(log, SMALL, seed=6, workers=1)) != one
+
+
+def test_a_thread_pool_executor_gives_the_same_result(log: DataLog) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    one = dumps(run(log, SMALL, seed=5, workers=1))
+    with ThreadPoolExecutor(2) as ex:
+        assert dumps(run(log, SMALL, seed=5, executor=ex)) == one
+        assert not ex._shutdown  # a caller's executor is left running
+
+
+@pytest.mark.parametrize("stop_after", [1, 4, 7, 8, 11])
+def test_resume_after_a_stop_gives_the_uninterrupted_result(
+    log: DataLog, tmp_path: Path, stop_after: int
+) -> None:
+    want = dumps(run(log, SMALL, seed=2, workers=1))
+    ckpt = tmp_path / "r.json.checkpoint"
+    seen: list[GenerationInfo] = []
+
+    def hook(info: GenerationInfo) -> bool:
+        seen.append(info)
+        return len(seen) >= stop_after
+
+    part = run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, callback=hook)
+    assert part.provenance["stop_reason"] == "stopped"
+    assert ckpt.exists()
+    again = run(log, SMALL, seed=2, workers=2, checkpoint=ckpt, resume=True)
+    assert dumps(again) == want
+    assert not ckpt.exists()  # a completed run removes its checkpoint
+
+
+def test_an_interrupt_returns_the_best_so_far_and_resumes(log: DataLog, tmp_path: Path) -> None:
+    want = dumps(run(log, SMALL, seed=4, workers=1))
+    ckpt = tmp_path / "c"
+    count = [0]
+
+    def hook(info: GenerationInfo) -> None:
+        count[0] += 1
+        if count[0] == 5:
+            raise KeyboardInterrupt
+
+    part = run(log, SMALL, seed=4, workers=1, checkpoint=ckpt, callback=hook)
+    assert part.provenance["stop_reason"] == "interrupted"
+    assert part.steps[-1].generations == 4
+    again = run(log, SMALL, seed=4, workers=1, checkpoint=ckpt, resume=True)
+    assert dumps(again) == want
+
+
+def test_a_checkpoint_of_another_run_is_refused(log: DataLog, tmp_path: Path) -> None:
+    from edm_sym.errors import ConfigError
+
+    ckpt = tmp_path / "c"
+    run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
+    with pytest.raises(ConfigError, match="another run"):
+        run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
+
+
+def test_time_limit_ends_at_a_generation_boundary_with_a_valid_result(
+    log: DataLog, tmp_path: Path
+) -> None:
+    res = run(log, SMALL, seed=0, workers=1, time_limit=1e-9)
+    assert res.provenance["stop_reason"] == "time_limit"
+    assert len(res.steps) == 1 and res.steps[0].generations == 0
+    back = load_result(save_result(res, tmp_path / "r.json"))
+    assert back.fitness == res.fitness
+
+
+# -- the algorithm's guarantees ----------------------------------------------------
+
+def test_the_best_never_gets_worse_and_steps_inherit(log: DataLog) -> None:
+    doc = {"ga": {"population": 24, "generations": 15, "continue": "no"},
+           "step": [{"n_rows": 1, "n_elements": 3}, {"n_rows": 2, "n_elements": 4},
+                    {"n_rows": 3, "n_elements": 4}]}
+    res = run(log, doc, seed=3, workers=1)
+    for s in res.steps:
+        assert all(b <= a for a, b in zip(s.history, s.history[1:], strict=False))
+        assert s.history[-1] == min(s.history)
+        # The record holds the reference simulator's eq. 8, the GA's to rounding.
+        assert s.fitness == pytest.approx(s.history[-1], rel=1e-12)
+        assert len(s.history) == s.generations + 1
+    for prev, cur in zip(res.steps, res.steps[1:], strict=False):
+        # Same weighting: the inherited model (new rows at zero) is in the first population.
+        assert cur.history[0] <= prev.fitness
+        kept = {(r.input, tuple((g.code, g.p) for g in r.genes)) for r in cur.matrix.rows}
+        assert cur.matrix.n_rows == prev.matrix.n_rows + 1
+        assert kept  # rows are free to evolve: nothing is frozen
+
+
+def test_a_human_model_seeds_the_first_step(log: DataLog) -> None:
+    doc = {"ga": {"population": 16, "generations": 2, "continue": "no"},
+           "initial": {"rows": [{"input": "omega", "elements": [["sign"], ["gain", 1.0]]},
+                                {"input": "omega", "elements": [["gain", 0.01]]}]},
+           "step": [{"n_rows": 2, "n_elements": 4}]}
+    res = run(log, doc, seed=0, workers=1)
+    data_floor = fitness(log.columns["tau_ext"] - np.sign(log.columns["omega"])
+                         - 0.01 * log.columns["omega"])
+    assert res.steps[0].history[0] <= data_floor * (1 + 1e-9)
+
+
+def test_a_restricted_element_set_is_respected(log: DataLog) -> None:
+    names = ["through", "gain", "sign", "lpf"]
+    doc = {"ga": {"population": 16, "generations": 5, "continue": "no", "elements": names},
+           "step": [{"n_rows": 2, "n_elements": 3}]}
+    res = run(log, doc, seed=0, workers=1)
+    allowed = {BY_NAME[n].code for n in names}
+    for s in res.steps:
+        assert {g.code for r in s.matrix.rows for g in r.genes} <= allowed
+
+
+def test_windows_weighting_ignores_the_masked_part(log: DataLog) -> None:
+    # Only the first 0.5 s count: the target there is explained by the data alone.
+    doc = {"ga": {"population": 16, "generations": 3, "continue": "no"},
+           "step": [{"n_rows": 2, "n_elements": 3,
+                     "weighting": {"windows": [[0.0, 0.5, 1.0]]}}]}
+    res = run(log, doc, seed=0, workers=1)
+    sim = simulate(res, log).total
+    lam = (log.columns["t"] < 0.5).astype(float)
+    assert res.fitness == pytest.approx(fitness(log.columns["tau_ext"] - sim, lam), rel=1e-9)
+    assert res.steps[0].weighting == {"constant": 1.0, "windows": [[0.0, 0.5, 1.0]],
+                                      "otherwise": 0.0}
+
+
+# -- the result file --------------------------------------------------------------
+
+def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: Path) -> None:
+    doc = {**SMALL, "ranges": {"gain": {"low": -3.0, "high": 3.0}}}
+    res = run(log, doc, seed=7, workers=1)
+    path = save_result(res, tmp_path / "r.json")
+    back = load_result(path)
+    raw = json.loads(path.read_text())
+    assert raw["provenance"]["seed"] == 7
+    assert raw["provenance"]["data_sha256"] is None  # an in-memory log has no file
+    assert raw["provenance"]["package_version"]
+    assert [s["n_rows"] for s in raw["steps"]] == [2, 3]
+    assert all(s["evaluations"] > 0 and len(s["history"]) == s["generations"] + 1
+               for s in raw["steps"])
+    ranges = default_ranges(TS, len(log) * TS)
+    ranges["gain"] = ranges["gain"].__class__(-3.0, 3.0, "linear")
+    assert dict(back.compensator.ranges) == ranges
+    assert back.compensator.record_length == pytest.approx(len(log) * TS)
+    # The recorded fitness is eq. 8 of the reference simulator.
+    ref = fitness(log.columns["tau_ext"] - simulate(back, log).total)
+    assert back.fitness == pytest.approx(ref, rel=1e-14)
+    assert back.matrix == res.steps[-1].matrix

@@ -1,0 +1,204 @@
+"""Batched evaluation: eq. 8 as the reference simulator gives it, caches, executors, fast path."""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+from conftest import TS, smooth_signal
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from edm_sym.abstraction import Evaluator, RowCache
+from edm_sym.abstraction.cache import SlotStore
+from edm_sym.abstraction.ga import Operators
+from edm_sym.abstraction.rowsim import row_table
+from edm_sym.abstraction.schedule import GaSettings
+from edm_sym.elements import LinearElement, all_elements, default_ranges
+from edm_sym.matrix import Compensator
+from edm_sym.simulate import (
+    fast_coefficients,
+    fitness,
+    simulate,
+    simulate_element_fast,
+    simulate_genes_fast,
+    simulate_row,
+)
+
+N = 3000
+NAMES = ["u0", "u1", "u2"]
+
+
+@pytest.fixture(scope="module")
+def signals() -> tuple[np.ndarray, np.ndarray]:
+    x = np.vstack([3 * smooth_signal(N, seed=s) for s in range(3)])
+    y = np.sign(x[1]) + 0.1 * x[0] + 0.05 * np.random.default_rng(0).standard_normal(N)
+    return x, y
+
+
+def _population(seed: int, p: int = 24, m: int = 3, n: int = 4):  # noqa: ANN202
+    ops = Operators(GaSettings(through_rate=0.2), 3)
+    return ops.random_population(np.random.default_rng(seed), p, m, n)
+
+
+def _reference(pop, k: int, x: np.ndarray, y: np.ndarray, lam) -> float:  # noqa: ANN001
+    comp = Compensator(pop.matrix(k, NAMES), TS, {}, N * TS)
+    total = simulate(comp, dict(zip(NAMES, x, strict=True))).total
+    return fitness(y - total, lam)
+
+
+@pytest.mark.parametrize("weights", ["one", "array"])
+def test_fitness_is_eq_8_of_the_reference_simulator(signals, weights: str) -> None:
+    x, y = signals
+    lam = 1.0 if weights == "one" else np.where(np.arange(N) < N // 2, 3.0, 0.5)
+    pop = _population(1)
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
+        ev.set_weights(lam)
+        got = ev.evaluate(pop.inputs, pop.codes, pop.ps)
+    for k in range(len(pop)):
+        want = _reference(pop, k, x, y, lam)
+        assert got[k] == pytest.approx(want, rel=1e-9), k
+
+
+def test_rows_are_simulated_once_then_served_from_the_cache(signals) -> None:
+    x, y = signals
+    pop = _population(2)
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
+        first = ev.evaluate(pop.inputs, pop.codes, pop.ps)
+        simulated = ev.stats.rows_simulated
+        assert simulated <= pop.codes.shape[0] * pop.codes.shape[1]
+        # A new individual made of rows already seen needs no simulation.
+        mixed = pop.take([0])
+        mixed.inputs[0, 0], mixed.codes[0, 0], mixed.ps[0, 0] = (
+            pop.inputs[5, 1], pop.codes[5, 1], pop.ps[5, 1])
+        ev.evaluate(mixed.inputs, mixed.codes, mixed.ps)
+        again = ev.evaluate(pop.inputs, pop.codes, pop.ps)
+        assert ev.stats.rows_simulated == simulated
+        assert np.array_equal(first, again)
+        assert ev.stats.hit_rate > 0.4
+
+
+def test_a_parameter_free_gene_keeps_its_row_key(signals) -> None:
+    x, y = signals
+    pop = _population(3, p=1, m=1, n=2)
+    pop.codes[0, 0] = [19, 0]  # sign, through: p means nothing
+    other = pop.take([0])
+    other.ps[0, 0] = [0.123, 0.987]
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
+        a = ev.evaluate(pop.inputs, pop.codes, pop.ps)
+        b = ev.evaluate(other.inputs, other.codes, other.ps)
+        assert a[0] == b[0] and ev.stats.rows_simulated == 1
+
+
+def test_the_row_cache_is_bounded_by_memory() -> None:
+    cache = RowCache(max_bytes=3 * 800)
+    for k in range(10):
+        cache.put(bytes([k]), np.zeros(100))
+        assert cache.nbytes <= 3 * 800
+    assert len(cache) == 3
+    assert cache.get(bytes([9])) is not None and cache.get(bytes([0])) is None
+    cache.get(bytes([7]))
+    cache.put(b"new", np.zeros(100))
+    assert cache.get(bytes([7])) is not None and cache.get(bytes([8])) is None
+
+
+def test_the_slot_store_evicts_least_recent_rows_but_never_kept_ones() -> None:
+    store = SlotStore(3, 4)
+    for k, key in enumerate([b"a", b"b", b"c"]):
+        store.commit(key, store.allocate(1, ())[0])[:] = k
+    store.get(b"a")
+    slot = store.allocate(1, keep={b"b"})  # b is kept, a was used lately: c goes
+    assert store.get(b"c") is None and store.get(b"b") is not None
+    store.commit(b"d", slot[0])
+    with pytest.raises(RuntimeError, match="too small"):
+        store.allocate(1, keep={b"a", b"b", b"d"})
+
+
+@pytest.mark.parametrize("mode", ["forked pool", "thread executor"])
+def test_parallel_evaluation_gives_the_same_bits(signals, mode: str) -> None:
+    x, y = signals
+    pops = [_population(s, p=32) for s in range(3)]
+    ranges = default_ranges(TS, N * TS)
+    with Evaluator(x, y, TS, ranges, workers=1) as ev:
+        want = [ev.evaluate(p.inputs, p.codes, p.ps) for p in pops]
+    if mode == "forked pool":
+        ev = Evaluator(x, y, TS, ranges, workers=2, cache_bytes=1)
+        ev.start()
+        with ev:
+            got = [ev.evaluate(p.inputs, p.codes, p.ps) for p in pops]
+            assert ev.shared
+    else:
+        with ThreadPoolExecutor(2) as pool, Evaluator(x, y, TS, ranges, executor=pool,
+                                                      workers=2) as ev:
+            got = [ev.evaluate(p.inputs, p.codes, p.ps) for p in pops]
+    for a, b in zip(want, got, strict=True):
+        assert np.array_equal(a, b)
+
+
+def test_rows_out_gives_every_individuals_rows_and_the_gram_matrix(signals) -> None:
+    x, y = signals
+    pop = _population(4, p=6)
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
+        ev.evaluate(pop.inputs, pop.codes, pop.ps)
+        rows: list = []
+        ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)  # all from the memo
+        assert len(rows) == 6 and all(r is not None for r in rows)
+        keys, outs = rows[2]
+        gram, gy = ev.gram(keys, outs)
+        a = np.array(outs)
+        assert np.allclose(gram, a @ a.T, rtol=1e-12) and np.allclose(gy, a @ y, rtol=1e-12)
+
+
+# -- the fast path in edm_sym.simulate ---------------------------------------------
+
+LINEAR = [e for e in all_elements() if issubclass(e, LinearElement)]
+
+
+@pytest.mark.parametrize("el", LINEAR, ids=lambda e: e.name)
+def test_fast_coefficients_equal_the_reference_discretisation(el) -> None:  # noqa: ANN001
+    ranges = default_ranges(TS, 20.0)
+    for p in np.linspace(0, 1, 11):
+        a = ranges[el.name].decode(p)
+        b0, a0 = el.coefficients(a, TS)
+        b1, a1 = fast_coefficients(el, a, TS)
+        assert len(b1) == len(b0) and len(a1) == len(a0)
+        scale = max(np.max(np.abs(b0)), 1.0)
+        assert np.allclose(b1, b0, rtol=1e-10, atol=1e-12 * scale), (p, b0, b1)
+        assert np.allclose(a1, a0, rtol=1e-12, atol=1e-14), (p, a0, a1)
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_fast_element_output_equals_the_reference(el) -> None:  # noqa: ANN001
+    ranges = default_ranges(TS, 20.0)
+    x = 4 * smooth_signal(4000, seed=el.code)
+    for p in (0.0, 0.3, 0.77, 1.0):
+        a = ranges[el.name].decode(p) if el.param is not None else None
+        want = el.simulate(x, a, TS)
+        got = simulate_element_fast(el, x, a, TS)
+        scale = max(float(np.max(np.abs(want))), 1e-300)
+        assert np.max(np.abs(got - want)) <= 1e-9 * scale, (el.name, p)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000))
+def test_fast_rows_equal_reference_rows_stage_by_stage(seed: int) -> None:
+    # Stage by stage: a chain like tan(1e4 x) turns rounding into chaos, so whole
+    # rows agree only where the chain is well conditioned.
+    pop = _population(seed, p=1, m=2, n=4)
+    comp = Compensator(pop.matrix(0, NAMES), TS, {}, 20.0)
+    x = [3 * smooth_signal(1500, seed=seed + k) for k in range(3)]
+    for j, row in enumerate(comp.matrix.rows):
+        y = x[row.input]
+        for el, a in comp.row_elements(j):
+            want = el.simulate(y, a, TS)
+            got = simulate_genes_fast([(el, a)], y, TS)
+            scale = max(float(np.max(np.abs(want))), 1e-300)
+            assert np.max(np.abs(got - want)) <= 1e-9 * scale, el.name
+            y = want
+        assert np.array_equal(y, simulate_row(comp, row, x[row.input]))
+
+
+def test_row_table_is_canonical() -> None:
+    t = row_table(np.array([1]), np.array([[19, 3]]), np.array([[0.4, 0.6]]))
+    assert t.tolist() == [[1.0, 19.0, 3.0, 0.0, 0.6]]
