@@ -257,3 +257,22 @@ def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: 
     ref = fitness(log.columns["tau_ext"] - simulate(back, log).total)
     assert back.fitness == pytest.approx(ref, rel=1e-14)
     assert back.matrix == res.steps[-1].matrix
+
+
+def test_the_progress_bar_shows_step_generation_best_and_rate(
+    log: DataLog, capsys: pytest.CaptureFixture
+) -> None:
+    run(log, SMALL, seed=0, workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert "step 2/2 3x3" in err and "best" in err and "eval/s" in err and "gen 6" in err
+
+
+def test_the_config_example_in_the_docs_is_valid() -> None:
+    import re
+
+    from edm_sym.abstraction.schedule import tomllib
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "abstraction.md").read_text()
+    block = re.search(r"```toml\n(.*?)```", text, re.S).group(1)
+    cfg = parse_config(tomllib.loads(block), "docs")
+    assert [s.n_rows for s in cfg.steps] == [2, 3, 5] and cfg.steps[1].ga.population == 96

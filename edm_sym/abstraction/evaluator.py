@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
+import os
 import pickle
 import time
 import warnings
@@ -43,12 +44,12 @@ from edm_sym.abstraction.rowsim import (
     default_workers,
     fill_slots,
     forget,
-    ignore_sigint,
     ping,
     row_table,
     simulate_chunk,
     simulate_table,
     worker_for,
+    worker_init,
 )
 from edm_sym.elements import ParamRange
 from edm_sym.simulate import fitness
@@ -144,7 +145,8 @@ class Evaluator:
                 # Forking is safe here: the pool starts before the run makes threads.
                 warnings.simplefilter("ignore", DeprecationWarning)
                 self.executor = ProcessPoolExecutor(self.workers, mp_context=ctx,
-                                                    initializer=ignore_sigint)
+                                                    initializer=worker_init,
+                                                    initargs=(os.getpid(),))
                 for f in [self.executor.submit(ping) for _ in range(self.workers)]:
                     f.result()
 

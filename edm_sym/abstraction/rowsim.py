@@ -13,6 +13,8 @@ from __future__ import annotations
 import os
 import pickle
 import signal
+import threading
+import time
 from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -194,9 +196,21 @@ def fill_slots(token: str, table: np.ndarray, slots: list[int]) -> int:
     return len(slots)
 
 
-def ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is for the main process, which ends the run cleanly."""
+def worker_init(parent: int) -> None:
+    """Pool initializer: leave Ctrl-C to the main process, and end with it.
+
+    The main process ends a run cleanly on Ctrl-C; a worker finishes its chunk.
+    Should the main process be killed outright, a watchdog thread ends the
+    worker too instead of leaving it orphaned.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch, daemon=True).start()
 
 
 def ping() -> int:

@@ -1,0 +1,187 @@
+"""``edm abstract``: output, exit status, one-line errors, interrupt and resume."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from test_abstraction import friction_log
+
+from edm_sym.abstraction.cli import checkpoint_path
+from edm_sym.cli import main
+from edm_sym.data import write_csv
+from edm_sym.result import load_result
+
+QUICK = """
+[ga]
+population = 16
+generations = 4
+continue = "no"
+
+[[step]]
+n_rows = 2
+n_elements = 3
+"""
+
+
+@pytest.fixture(scope="module")
+def data_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    log, _ = friction_log(1.0)
+    return write_csv(tmp_path_factory.mktemp("d") / "log.csv", log.columns)
+
+
+def _config(tmp_path: Path, text: str = QUICK) -> Path:
+    path = tmp_path / "cfg.toml"
+    path.write_text(text)
+    return path
+
+
+def test_abstract_writes_the_result_and_prints_fitness_and_path(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    out = tmp_path / "res.json"
+    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega, alpha",
+               "--config", str(_config(tmp_path)), "--seed", "3", "-o", str(out),
+               "--workers", "1", "--quiet"])
+    lines = capsys.readouterr().out.splitlines()
+    assert rc == 0
+    res = load_result(out)
+    assert lines == [f"wrote {out}", f"fitness {res.fitness:.10g}"]
+    assert res.inputs == ("omega", "alpha") and res.target == "tau_ext"
+    assert res.provenance["seed"] == 3 and len(res.provenance["data_sha256"]) == 64
+    assert not checkpoint_path(out).exists()
+
+
+def test_time_limit_exits_0_with_the_best_so_far(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    out = tmp_path / "res.json"
+    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+               "--config", str(_config(tmp_path)), "--time-limit", "1e-6", "-o", str(out),
+               "--workers", "1"])
+    assert rc == 0
+    assert load_result(out).provenance["stop_reason"] == "time_limit"
+    assert checkpoint_path(out).exists()  # --resume would continue it
+    assert "time limit" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, expect", [
+    (["--config", "{bad}"], "cfg.toml: ga.populaton: unknown key"),
+    (["--config", "{type}"], "cfg.toml: ga.population: expected an integer, found string"),
+    (["--config", "{toml}"], "cfg.toml: expected TOML"),
+    (["--config", "{missing}"], "nope.toml: cannot be read"),
+    (["--target", "torque"], "log.csv: column 'torque': expected a target column"),
+    (["--inputs", "omega,speed"], "log.csv: column 'speed': expected a input column"),
+    (["--inputs", "omega,,alpha"], "--inputs: expected comma-separated column names"),
+    (["--workers", "0"], "--workers: expected an integer >= 1"),
+    (["--seed", "-4"], "--seed: expected an integer >= 0"),
+])
+def test_bad_input_exits_2_with_one_line(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str
+) -> None:
+    texts = {"bad": "[ga]\npopulaton = 3\n", "type": "[ga]\npopulation = '64'\n",
+             "toml": "[ga\n"}
+    fixed = []
+    for a in args:
+        if a.startswith("{"):
+            key = a.strip("{}")
+            a = str(tmp_path / "nope.toml") if key == "missing" else str(
+                _config(tmp_path, texts[key]))
+        fixed.append(a)
+    argv = ["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+            "-o", str(tmp_path / "r.json"), "--workers", "1"]
+    for k in range(0, len(fixed), 2):
+        flag = fixed[k]
+        if flag in argv:
+            argv[argv.index(flag) + 1] = fixed[k + 1]
+        else:
+            argv += fixed[k:k + 2]
+    rc = main(argv)
+    err = capsys.readouterr().err.strip()
+    assert rc == 2
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert expect in err
+    assert not (tmp_path / "r.json").exists()
+
+
+# -- a real process, interrupted and resumed ---------------------------------------
+
+LONG = """
+[ga]
+population = 32
+generations = 25
+continue = "no"
+
+[[step]]
+n_rows = 2
+n_elements = 4
+
+[[step]]
+n_rows = 3
+n_elements = 4
+"""
+
+
+def _cmd(data: Path, cfg: Path, out: Path, *extra: str) -> list[str]:
+    return [sys.executable, "-m", "edm_sym", "abstract", str(data), "--target", "tau_ext",
+            "--inputs", "omega,alpha", "--config", str(cfg), "--seed", "11", "-o", str(out),
+            "--quiet", *extra]
+
+
+def _wait_for_generation(ckpt: Path, proc: subprocess.Popen, generation: int) -> None:
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        try:
+            cur = json.loads(ckpt.read_text())["current"]
+            if cur is not None and (cur["step"] > 0 or cur["generation"] >= generation):
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.05)
+    raise AssertionError("the run did not reach the generation in time")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+def test_an_interrupted_process_resumes_to_the_uninterrupted_result(
+    tmp_path: Path, sig: signal.Signals
+) -> None:
+    log, _ = friction_log(4.0)
+    data = write_csv(tmp_path / "log.csv", log.columns)
+    cfg = _config(tmp_path, LONG)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    ref = tmp_path / "ref.json"
+    subprocess.run(_cmd(data, cfg, ref), check=True, env=env, capture_output=True)
+
+    out = tmp_path / "out.json"
+    ckpt = checkpoint_path(out)
+    proc = subprocess.Popen(_cmd(data, cfg, out), env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_generation(ckpt, proc, 6)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    if sig == signal.SIGINT:
+        assert proc.returncode == 1
+        assert "interrupted" in err and "Traceback" not in err
+        part = load_result(out)  # the best so far was written
+        assert part.provenance["stop_reason"] == "interrupted"
+    else:
+        assert proc.returncode == -signal.SIGKILL
+        assert not out.exists()
+    assert ckpt.exists()
+    done = subprocess.run(_cmd(data, cfg, out, "--resume"), env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes() == ref.read_bytes()
+    assert not ckpt.exists()
