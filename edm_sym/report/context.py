@@ -1,0 +1,522 @@
+"""The report's context: everything the LaTeX template shows, computed and validated here.
+
+:func:`report_context` reads the decoded model, the runs on the data logs and
+the names of the figures, and returns nested dicts and lists whose leaves are
+all strings of finished LaTeX (from :class:`~edm_sym.printing.latex.EdmLatexPrinter`).
+Optional parts (a data log, the fitness history, the LuGre comparison) are
+lists of zero or one item, so the template needs nothing but loops.
+:func:`check_report_context` refuses a context the template could not render.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import sympy as sp
+
+from edm_sym.printing.latex import EdmLatexPrinter
+from edm_sym.report.diagrams import chain_diagram, chain_printer, matrix_diagram
+from edm_sym.report.runs import LogRun, LuGreRef
+from edm_sym.symbolic.model import RowModel, SymbolicModel, X
+
+#: Readable names of the physical term kinds (edm_sym.symbolic.classify.KINDS).
+KIND_TITLES = {
+    "coulomb": "Coulomb friction",
+    "viscous": "viscous friction",
+    "acceleration": "acceleration-dependent term (inertia)",
+    "spatial": "position-dependent (spatial) friction",
+    "stribeck": "Stribeck friction",
+    "offset": "constant offset",
+    "unclassified": "unclassified term",
+}
+
+#: Readable names of the input roles (edm_sym.symbolic.roles.ROLES).
+ROLE_TITLES = {
+    "velocity": "angular velocity",
+    "acceleration": "angular acceleration",
+    "angle": "unwrapped angle",
+    "angle_wrapped": "wrapped angle",
+    None: "no physical role",
+}
+
+#: How each discretisation method is named in the report.
+METHOD_TITLES = {"bilinear": "Tustin", "backward_diff": "backward difference"}
+
+#: Packages whose versions the report names.
+VERSION_PACKAGES = ("edm_sym", "numpy", "scipy", "sympy", "control", "jinja2", "matplotlib")
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """What a report is made from.
+
+    Attributes
+    ----------
+    result : EdmResult
+    model : SymbolicModel
+        ``edm_sym.decode(result)``.
+    source_name, source_sha256 : str
+        The result file's name and digest.
+    prefix : str
+    abstraction, evaluation : LogRun or None
+        The compensator on the abstraction and evaluation logs.
+    lugre : LuGreRef or None
+    figures : mapping of str to str
+        Figure key -> file name, for the figures that were drawn.
+    versions : sequence of (str, str)
+        Package name -> version.
+    ts : float or None
+        The ``--ts`` option the logs were read with.
+    """
+
+    result: Any
+    model: SymbolicModel
+    source_name: str
+    source_sha256: str
+    prefix: str
+    abstraction: LogRun | None = None
+    evaluation: LogRun | None = None
+    lugre: LuGreRef | None = None
+    figures: Mapping[str, str] = field(default_factory=dict)
+    versions: Sequence[tuple[str, str]] = ()
+    ts: float | None = None
+
+
+def package_versions() -> tuple[tuple[str, str], ...]:
+    """The versions of edm_sym and its main dependencies (importlib.metadata).
+
+    Returns
+    -------
+    tuple of (str, str)
+        ``(name, version)``, ``"not installed"`` for a missing package.
+    """
+    import sys
+    from importlib import metadata
+
+    out = [("python", sys.version.split()[0])]
+    for name in VERSION_PACKAGES:
+        try:
+            out.append((name, metadata.version(name)))
+        except metadata.PackageNotFoundError:
+            out.append((name, "not installed"))
+    return tuple(out)
+
+
+# -- pieces ----------------------------------------------------------------------
+
+def _recorded(p: EdmLatexPrinter, v: Any) -> str:
+    return "not recorded" if v is None else p.text(str(v))
+
+
+def _rms_text(p: EdmLatexPrinter, v: float | None) -> str:
+    return "--" if v is None else p.math(p.number(v))
+
+
+def _equation_lines(p: EdmLatexPrinter, lhs: str, exprs: Sequence[tuple[sp.Expr, str]]
+                    ) -> list[dict[str, str]]:
+    """Lines of an ``align*``: each additive term on its own line, the tag on a group's first."""
+    lines = []
+    for expr, tag in exprs:
+        terms = p.signed_terms(expr)
+        for k, (sign, body) in enumerate(terms):
+            first = not lines
+            lines.append({
+                "lhs": f"{lhs} ={{}}" if first else "",
+                "sign": ("-" if sign == "-" else "") if first else sign,
+                "body": body,
+                "tag": p.math_text(tag) if k == 0 and tag else "",
+                "end": r"\\",
+            })
+    if lines:
+        lines[-1]["end"] = ""
+    return lines
+
+
+def _row_equations(p: EdmLatexPrinter, row: RowModel) -> list[dict[str, str]]:
+    lhs = f"{p.signal('y', row.index + 1)}(t)"
+    groups = []
+    for expr, tag in ((row.expr_raw, "elements"), (row.expr, "simplified"),
+                      (row.expr_numeric, "values")):
+        if not groups or expr != groups[-1][0]:
+            groups.append((expr, tag))
+    lines = []
+    for k, (expr, tag) in enumerate(groups):
+        lines.append({"lhs": lhs if k == 0 else "", "body": p.doprint(expr),
+                      "tag": p.math_text(tag), "end": r"\\"})
+    lines[-1]["end"] = ""
+    return lines
+
+
+def _difference_equations(row: RowModel, ts: float, digits: int = 10
+                          ) -> tuple[list[dict[str, str]], list[dict[str, str]]]:
+    """The row in discrete time, from the stages' coefficients (the simulator's numbers).
+
+    Consecutive static elements are composed into one signal; each filter,
+    delay or relay gets its own. The last signal is the row output ``y_j``.
+
+    Returns
+    -------
+    lines : list of dict
+        ``lhs``, ``body``, ``end`` of each equation.
+    signals : list of dict
+        ``name`` and ``what`` of each signal.
+    """
+    j = row.index + 1
+    segments: list[tuple[str, int, int, Any]] = []  # (kind, first column, last column, data)
+    acc_sym = sp.Dummy("v", real=True)
+    acc: sp.Expr = acc_sym
+    first = 1
+    for st in row.stages:
+        if st.kind == "static":
+            acc = st.numeric_expr().xreplace({X: acc})
+            continue
+        if acc != acc_sym:
+            segments.append(("static", first, st.col, (acc_sym, acc)))
+        segments.append((st.kind, st.col + 1, st.col + 1, st))
+        first = st.col + 2
+        acc_sym = sp.Dummy("v", real=True)
+        acc = acc_sym
+    if acc != acc_sym or not segments:
+        segments.append(("static", first, len(row.stages), (acc_sym, acc)))
+    base = EdmLatexPrinter()
+    names = [base.signal("y", j) if k == len(segments) - 1 else base.signal("x", j, last)
+             for k, (_, _, last, _) in enumerate(segments)]
+    lines, signals = [], []
+    prev = base._print(row.input_symbol)
+    for k, (kind, col0, col1, data) in enumerate(segments):
+        out = names[k]
+        where = f"element {col0}" if col0 == col1 else f"elements {col0}--{col1}"
+        if kind == "static":
+            sym, expr = data
+            pr = EdmLatexPrinter({"digits": digits, "symbol_names": {sym: f"{prev}[k]"}})
+            rhs = pr.doprint(expr)
+            what = f"{where}, static" if col0 <= col1 else "the input, passed through"
+        elif kind == "linear":
+            rhs = EdmLatexPrinter({"digits": digits}).difference_equation(out, prev, data.b, data.a)
+            what = f"{where}, {data.element.name}, {METHOD_TITLES.get(data.method, data.method)}"
+        elif kind == "delay":
+            rhs = base.delayed(prev, data.delay)
+            what = (f"{where}, {data.element.name}, {data.delay} sample(s) = "
+                    f"{data.delay * ts:.6g} s")
+        else:
+            rhs = EdmLatexPrinter({"digits": digits}).relay_equation(out, prev, data.threshold)
+            what = f"{where}, hysteresis relay, starts at 0"
+        lines.append({"lhs": f"{out}[k]", "body": rhs, "end": r"\\"})
+        signals.append({"name": base.math(out), "what": base.text(what)})
+        prev = out
+    lines[-1]["end"] = ""
+    for sg in signals:
+        sg["sep"] = "; "
+    signals[-1]["sep"] = "."
+    return lines, signals
+
+
+def _term(p: EdmLatexPrinter, term: Any) -> dict[str, Any]:
+    params = [{"name": p.text(name.replace("_", " ")), "value": p.math(p.number(v)),
+               "unit": p.unit(unit)} for name, (v, unit) in term.parameters.items()]
+    desc = term.description or ""
+    notes = desc if term.kind == "unclassified" else "; ".join(desc.split("; ")[1:])
+    # The expression is printed above; the description's plain-text copy of it adds nothing.
+    notes = re.sub(r"^no physical pattern for .* \((\w+) input\)", r"no physical pattern for "
+                   r"this term (\1 input)", notes)
+    return {
+        "title": p.text(KIND_TITLES.get(term.kind, term.kind)),
+        "expr": p.doprint(term.expr) if term.expr is not None else "",
+        "params": params,
+        "notes": [p.breakable(notes)] if notes else [],
+    }
+
+
+def _elements_text(p: EdmLatexPrinter, row: RowModel) -> str:
+    parts = [p.text(row.input)]
+    for st in row.stages:
+        label = p.text(st.element.name)
+        if st.param is not None:
+            label += " (" + p.math(f"{p._print(st.param.symbol)} = {p.number(st.param.value)}") + ")"
+        parts.append(label)
+    return r" $\to$ ".join(parts)
+
+
+def _row(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
+         runs: Sequence[LogRun]) -> dict[str, Any]:
+    titles = [KIND_TITLES.get(t.kind, t.kind) for t in row.terms] or ["no output (identically 0)"]
+    j = row.index + 1
+    discrete, signals = _difference_equations(row, model.sample_time)
+    return {
+        "number": str(j),
+        "title": p.math(p._print(row.input_symbol)) + " -- " + p.text(", ".join(titles)),
+        "bookmark": p.text(f"Row {j}: {row.input}, {', '.join(titles)}"),
+        "input": p.text(row.input),
+        "role": p.text(ROLE_TITLES.get(row.role, str(row.role))),
+        "elements": _elements_text(p, row),
+        "chain": [chain_diagram(row, chain_printer())],
+        "equations": _row_equations(p, row),
+        "discrete": discrete,
+        "signals": signals,
+        "term_lists": [[_term(p, t) for t in row.terms]] if row.terms else [],
+        "no_terms": [] if row.terms else ["The row's output is identically zero: it can be removed."],
+        "rms": [{"log": p.text(r.label), "value": _rms_text(p, r.contributions.rms[row.index])}
+                for r in runs],
+    }
+
+
+def _params(model: SymbolicModel) -> list[dict[str, str]]:
+    p6 = EdmLatexPrinter({"digits": 6})
+    p4 = EdmLatexPrinter()
+    out = []
+    for info in model.params:
+        out.append({
+            "symbol": p6.math(p6._print(info.symbol)),
+            "where": p6.text(f"{info.row + 1}, {info.col + 1}"),
+            "element": p6.text(info.element),
+            "meaning": p6.text(info.meaning),
+            "value": p6.math(p6.number(info.value)),
+            "p": p6.math(p6.number(info.p)),
+            "range": p4.math(p4.interval(info.range.low, info.range.high)),
+            "scaling": p6.text(info.range.scaling),
+            "unit": p6.text(info.unit),
+        })
+    return out
+
+
+def _contribution_tables(p: EdmLatexPrinter, runs: Sequence[LogRun],
+                         figures: Mapping[str, str]) -> list[dict[str, Any]]:
+    out = []
+    for r in runs:
+        c = r.contributions
+        rows = [{"row": p.math(p.signal("y", k + 1)), "rms": p.math(p.number(rms)),
+                 "rmse": p.math(p.number(e)), "drop": p.math(p.number(d))}
+                for k, (rms, e, d) in enumerate(zip(c.rms, c.rmse_cumulative, c.improvement,
+                                                    strict=True))]
+        out.append({
+            "log": p.text(r.label), "name": p.mono(r.name),
+            "baseline": p.math(p.number(c.rmse_none)), "rows": rows,
+            "figures": [f for f in (_figure(figures, f"contributions_{r.label}",
+                                            f"Row contributions on the {r.label} log "
+                                            f"{p.mono(r.name)}: RMS of each row's output (left) and "
+                                            "the RMSE as the rows are added one by one (right).",
+                                            0.95),
+                                    _figure(figures, f"rows_{r.label}",
+                                            f"Output of each row on the {r.label} log, on a common "
+                                            "scale (signal flow of the element matrix).", 0.95))
+                        if f],
+        })
+    return out
+
+
+def _figure(figures: Mapping[str, str], key: str, caption: str, width: float) -> dict[str, str] | None:
+    if key not in figures:
+        return None
+    return {"file": figures[key], "caption": caption, "label": f"fig:{key.replace('_', '-')}",
+            "width": f"{width:.2f}"}
+
+
+def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun],
+                  figures: Mapping[str, str]) -> list[dict[str, str]]:
+    out = []
+    for r in runs:
+        vs = ", the LuGre model's," if r.lugre is not None else ""
+        for key, what in ((f"time_{r.label}", "over the whole log"),
+                          (f"zoom_{r.label}", "enlarged where the EDM residual is largest")):
+            f = _figure(figures, key, f"Target torque, EDM compensation torque{vs} and the "
+                        f"residuals on the {r.label} log {p.mono(r.name)}, {what}.", 1.0)
+            if f:
+                out.append(f)
+    return out
+
+
+def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
+    return [{
+        "step": str(s.step), "size": p.math(f"{s.matrix.n_elements} \\times {s.matrix.n_rows}"),
+        "generations": str(s.generations), "evaluations": str(s.evaluations),
+        "fitness": p.math(p.number(s.fitness)),
+        "weighting": p.math(p.weighting(s.weighting)) if s.weighting else "--",
+    } for s in result.steps]
+
+
+def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun) -> dict[str, Any]:
+    from edm_sym.lugre import PARAMETER_NAMES
+
+    symbols = {"v_s": r"\dot\nu_s", "tau_c": r"\tau_c", "tau_s": r"\tau_s", "z0": "z_0",
+               "sigma0": r"\sigma_0", "sigma1": r"\sigma_1", "sigma2": r"\sigma_2"}
+    lr = ref.result
+    params = [{"symbol": p.math(symbols.get(n, p.text(n))), "name": p.text(n),
+               "value": p.math(EdmLatexPrinter({"digits": 5}).number(getattr(lr.params, n)))}
+              for n in PARAMETER_NAMES]
+    return {
+        "name": p.mono(ref.name), "log": p.text(run.label), "log_name": p.mono(run.name),
+        "method": p.text(lr.method), "fitness": p.math(p.number(lr.rmse)),
+        "params": params,
+        "rmse": [{"method": "LuGre (conventional)", "value": p.math(p.number(run.lugre_rmse)),
+                  "unit": p.unit("N m")},
+                 {"method": "EDM (this compensator)", "value": p.math(p.number(run.rmse)),
+                  "unit": p.unit("N m")}],
+        "ratio": p.math(p.number(run.rmse / run.lugre_rmse if run.lugre_rmse else float("nan"))),
+    }
+
+
+def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
+    """The shell commands that regenerate the report and check its numbers."""
+    q = shlex.quote
+    name = q(inp.source_name)
+    export = [f"edm-export {name} --target latex --prefix {inp.prefix}"]
+    for flag, run in (("--data", inp.abstraction), ("--eval-data", inp.evaluation)):
+        if run is not None:
+            export.append(f"    {flag} {q(run.name)}")
+    if inp.lugre is not None:
+        export.append(f"    --lugre {q(inp.lugre.name)}")
+    if inp.ts is not None:
+        export.append(f"    --ts {inp.ts!r}")
+    export.append("    --pdf -o DIR")
+    lines = [line + " \\" for line in export[:-1]] + export[-1:]
+    for run in (inp.abstraction, inp.evaluation):
+        if run is not None:
+            ts = f" --ts {inp.ts!r}" if inp.ts is not None else ""
+            lines.append(f"edm simulate {name} {q(run.name)}{ts}   # prints rmse")
+    lines.append(f"edm-export {name} --target all --prefix {inp.prefix} -o DIR")
+    text = "\n".join(lines)
+    if "\\end{Verbatim}" in text:
+        raise ValueError(f"commands: a file name holds '\\end{{Verbatim}}': {text!r}")
+    return text.split("\n")
+
+
+def report_context(inp: ReportInputs) -> dict[str, Any]:
+    """The validated context of ``templates/report.tex.j2``.
+
+    Parameters
+    ----------
+    inp : ReportInputs
+
+    Returns
+    -------
+    dict
+        Nested dicts and lists of finished LaTeX strings; optional parts are
+        lists of zero or one item.
+
+    Raises
+    ------
+    ValueError
+        When the context is incomplete (a defect of this module, not of the input).
+    """
+    p = EdmLatexPrinter()
+    model, result = inp.model, inp.result
+    runs = [r for r in (inp.abstraction, inp.evaluation) if r is not None]
+    mat = model.compensator.matrix
+    roles = [f"{p.mono(n)} ({p.text(ROLE_TITLES.get(model.roles.get(n), 'no physical role'))})"
+             for n in model.inputs]
+    facts = [
+        ("Result file", p.mono(inp.source_name)),
+        ("sha256 of the result", p.digest(inp.source_sha256)),
+        ("Target (estimated torque)", p.mono(result.target)),
+        ("Inputs", ", ".join(roles)),
+        ("Sample time", p.math(f"T_s = {p.number(model.sample_time)}") + r"~s"),
+        ("Element matrix", p.math(f"{mat.n_elements} \\times {mat.n_rows}")
+         + f" ({mat.n_elements} elements per row, {mat.n_rows} rows)"),
+        ("Hierarchical steps", str(len(result.steps)) if result.steps
+         else "none recorded (hand-written or imported model)"),
+        ("Fitness in the result file", p.math(p.number(result.fitness)) + r"~N\,m"
+         if result.fitness is not None else "not recorded"),
+    ]
+    for r in runs:
+        facts.append((f"{r.label.capitalize()} log",
+                      f"{p.mono(r.name)}, {len(r.t)} samples, {p.math(p.number(r.duration))}~s"))
+        if r.sha256:
+            facts.append((f"sha256 of the {r.label} log", p.digest(r.sha256)))
+        facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + r"~N\,m"))
+    if inp.lugre is not None:
+        facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
+    rows = [_row(p, model, row, runs) for row in model.rows]
+    overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),
+                 "input": p.math(p._print(row.input_symbol)),
+                 "terms": p.text(", ".join(KIND_TITLES.get(t.kind, t.kind) for t in row.terms)
+                                 or "none (identically 0)"),
+                 "rms": [x["value"] for x in r["rms"]]}
+                for r, row in zip(rows, model.rows, strict=True)]
+    total = [(row.expr_numeric, f"row {row.index + 1}") for row in model.rows]
+    compare = runs[-1] if runs else None
+    lugre = ([_lugre(p, inp.lugre, compare)]
+             if inp.lugre is not None and compare is not None and compare.lugre is not None else [])
+    fig = inp.figures
+    prov = result.provenance
+    ctx: dict[str, Any] = {
+        "title": p.text(f"EDM compensator {inp.prefix}: model report"),
+        "subtitle": p.mono(inp.source_name),
+        "facts": [{"label": p.text(k), "value": v} for k, v in facts],
+        "equation": _equation_lines(p, r"\tau_{\mathrm{cmp}}(t)", total),
+        "overview": overview,
+        "log_labels": [p.text(r.label) for r in runs],
+        "no_data": [] if runs else ["no data log was given (edm-export --data LOG)"],
+        "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
+        "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
+        "rows": rows,
+        "params": _params(model),
+        "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
+        "contributions": _contribution_tables(p, runs, fig),
+        "fitness": [f for f in [_figure(fig, "fitness", "Best fitness per generation of each "
+                                        "hierarchical step (weighted RMSE, eq.~8).", 1.0)] if f],
+        "steps": _steps(p, result),
+        "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
+        "time": _time_figures(p, runs, fig),
+        "lugre": lugre,
+        "no_lugre": [] if lugre else ["no LuGre result was given (edm-export --lugre LUGRE.json)"],
+        "provenance": [
+            {"label": p.text("sha256 of the result"), "value": p.digest(inp.source_sha256)},
+            {"label": p.text("seed"), "value": _recorded(p, prov.get("seed"))},
+            {"label": p.text("data sha256 (in the result)"),
+             "value": p.digest(prov["data_sha256"]) if prov.get("data_sha256")
+             else "not recorded"},
+            {"label": p.text("written by edm_sym"), "value": _recorded(p, prov.get("package_version"))},
+        ] + [{"label": p.text(str(k).replace("_", " ")), "value": p.text(str(v))}
+             for k, v in sorted(prov.items())
+             if k not in ("seed", "data_sha256", "package_version")],
+        "versions": [{"name": p.text(n), "version": p.text(v)} for n, v in inp.versions],
+        "commands": _commands(p, inp),
+        "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
+    }
+    return check_report_context(ctx)
+
+
+#: Keys every report context holds.
+REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "params", "contributions",
+               "fitness", "steps", "time", "lugre", "provenance", "versions", "commands")
+
+
+def check_report_context(ctx: dict[str, Any]) -> dict[str, Any]:
+    """Check a report context: every key present, every leaf a string.
+
+    Strings are finished LaTeX, so the template formats nothing; only the
+    verbatim ``commands`` may hold no ``\\end{Verbatim}``, and no other
+    string a line break.
+
+    Raises
+    ------
+    ValueError
+        Naming the key at fault.
+    """
+    for k in REPORT_KEYS:
+        if k not in ctx:
+            raise ValueError(f"report context: expected the key {k!r}, found it missing")
+
+    def walk(v: Any, where: str) -> None:
+        if isinstance(v, str):
+            if "\n" in v:
+                raise ValueError(f"report context: {where} holds a line break")
+            return
+        if isinstance(v, Mapping):
+            for k, x in v.items():
+                walk(x, f"{where}.{k}")
+            return
+        if isinstance(v, (list, tuple)):
+            for i, x in enumerate(v):
+                walk(x, f"{where}[{i}]")
+            return
+        raise ValueError(f"report context: {where} is a {type(v).__name__}, expected finished text")
+
+    walk(ctx, "context")
+    if not ctx["rows"]:
+        raise ValueError("report context: expected at least one row, found 0")
+    return ctx

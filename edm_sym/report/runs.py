@@ -1,0 +1,175 @@
+"""The compensator (and the LuGre baseline) run on the report's data logs.
+
+A :class:`LogRun` holds everything the report shows about one log: the
+target, each row's output and their sum from the reference simulator, the
+residual's RMSE, the row contributions (paper, Fig. 18 f-j) and, when a LuGre
+result is given, the LuGre model's torque on the same log (Table III).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from edm_sym.data import DataLog, load_data
+from edm_sym.errors import DataFormatError
+from edm_sym.simulate import simulate
+from edm_sym.symbolic.contributions import Contributions, contributions
+
+
+@dataclass(frozen=True)
+class LuGreRef:
+    """A LuGre result for the comparison, with where it came from.
+
+    Attributes
+    ----------
+    result : LuGreResult
+    name : str
+        The file name (no folder).
+    sha256 : str
+        The sha256 of the file.
+    """
+
+    result: Any
+    name: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class LogRun:
+    """The compensator run on one data log.
+
+    Attributes
+    ----------
+    label : str
+        ``"abstraction"`` or ``"evaluation"``.
+    name, sha256 : str
+        The log file's name (no folder) and digest.
+    ts : float
+        Sample time [s].
+    t, target, total : numpy.ndarray
+        Time [s], target torque, compensation torque (the sum of the rows) [N m].
+    rows : numpy.ndarray
+        Shape (m, N): each row's output [N m].
+    rmse : float
+        RMSE of ``target - total`` [N m].
+    contributions : Contributions
+        Row RMS and cumulative RMSE.
+    lugre, lugre_rmse : numpy.ndarray or None, float or None
+        The LuGre model's torque on this log and its RMSE, when a LuGre result is given.
+    """
+
+    label: str
+    name: str
+    sha256: str | None
+    ts: float
+    t: np.ndarray
+    target: np.ndarray
+    rows: np.ndarray
+    total: np.ndarray
+    rmse: float
+    contributions: Contributions
+    lugre: np.ndarray | None = None
+    lugre_rmse: float | None = None
+
+    @property
+    def residual(self) -> np.ndarray:
+        """``target - total`` [N m]."""
+        return self.target - self.total
+
+    @property
+    def duration(self) -> float:
+        """Length of the log, ``N Ts`` [s]."""
+        return len(self.t) * self.ts
+
+
+def _rmse(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
+def load_log(path: str | Path, result: Any, *, ts: float | None = None,
+             lugre: LuGreRef | None = None) -> DataLog:
+    """Read a data log holding the result's inputs and target (and the LuGre velocity).
+
+    Parameters
+    ----------
+    path : path-like
+    result : EdmResult
+    ts : float, optional
+        Sample time for logs without a ``t`` column.
+    lugre : LuGreRef, optional
+
+    Raises
+    ------
+    DataFormatError
+        On a missing column or a sample time other than the result's.
+    """
+    need = [*result.inputs, result.target]
+    if lugre is not None and lugre.result.velocity_name:
+        need.append(lugre.result.velocity_name)
+    data = load_data(path, ts=ts, require=need)
+    want = result.sample_time
+    if abs(data.ts - want) > 1e-6 * want:
+        raise DataFormatError(f"{data.source}: sample time",
+                              f"expected {want:g} s as in the result, found {data.ts:g} s")
+    return data
+
+
+def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = None) -> LogRun:
+    """Simulate the compensator (and the LuGre model) on ``data``.
+
+    Parameters
+    ----------
+    result : EdmResult
+    data : DataLog
+        From :func:`load_log`.
+    label : {"abstraction", "evaluation"}
+    lugre : LuGreRef, optional
+
+    Returns
+    -------
+    LogRun
+    """
+    if label not in ("abstraction", "evaluation"):
+        raise ValueError(f"label: expected 'abstraction' or 'evaluation', found {label!r}")
+    sim = simulate(result, data)
+    target = np.asarray(data.column(result.target, role="target"), dtype=float)
+    n = len(target)
+    t = np.asarray(data.columns["t"], dtype=float) if "t" in data.columns else np.arange(n) * data.ts
+    lugre_tau = lugre_rmse = None
+    if lugre is not None:
+        from edm_sym.lugre import simulate_lugre
+
+        lr = lugre.result
+        if abs(lr.sample_time - data.ts) > 1e-6 * data.ts:
+            raise DataFormatError(f"{lugre.name}: sample_time",
+                                  f"expected {data.ts:g} s as in {data.source}, "
+                                  f"found {lr.sample_time:g} s")
+        lugre_tau = np.asarray(simulate_lugre(lr.params, data.column(lr.velocity_name), data.ts))
+        lugre_rmse = _rmse(target - lugre_tau)
+    contrib = contributions(result, data, target)
+    return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
+                  sim.total, _rmse(target - sim.total), contrib, lugre_tau, lugre_rmse)
+
+
+def load_lugre_ref(path: str | Path) -> LuGreRef:
+    """Load a LUGRE.json for the comparison.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    LuGreRef
+    """
+    import hashlib
+
+    from edm_sym.lugre import load_lugre
+
+    path = Path(path)
+    res = load_lugre(path)
+    return LuGreRef(res, path.name, hashlib.sha256(path.read_bytes()).hexdigest())

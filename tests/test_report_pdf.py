@@ -1,0 +1,109 @@
+"""The report compiles with latexmk: no errors, no undefined references, nothing off the page.
+
+Needs TeX Live with latexmk (marker ``toolchain``); skipped cleanly without it.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
+
+import edm_sym
+from edm_sym.printing.latex import format_number
+from edm_sym.report import write_report
+from edm_sym.report.context import KIND_TITLES
+from edm_sym.report.pdf import AUX_SUFFIXES, compile_pdf
+
+pytestmark = [
+    pytest.mark.toolchain,
+    pytest.mark.skipif(shutil.which("latexmk") is None, reason="latexmk is not installed"),
+]
+
+#: The widest overfull box accepted [pt].
+OVERFULL_LIMIT = 10.0
+#: The largest accepted report PDF [bytes].
+PDF_LIMIT = 2_000_000
+
+
+def _build(case: ugr.Case, folder: Path):  # noqa: ANN202
+    result, kw = ugr.case_inputs(case, folder)
+    files = write_report(result, folder, **kw)
+    pdf, log = compile_pdf(files[0], keep_aux=True)
+    return result, files, pdf, log
+
+
+def _check_log(log) -> None:  # noqa: ANN001
+    assert log.errors == ()
+    assert log.undefined == ()
+    assert log.worst_overfull <= OVERFULL_LIMIT, log.overfull
+    assert not [w for w in log.warnings if "multiply defined" in w or "Rerun" in w]
+
+
+def _pdftext(pdf: Path) -> str:
+    if shutil.which("pdftotext") is None:
+        pytest.skip("pdftotext is not installed")
+    out = subprocess.run(["pdftotext", "-layout", str(pdf), "-"], capture_output=True, text=True,
+                         check=True).stdout
+    return re.sub(r"\s+", " ", out)
+
+
+def _as_printed(value: float) -> str:
+    """A table value as pdftotext reads it: the mantissa of the 6-digit form."""
+    return format_number(value, 6).split(r" \times")[0].replace("-", "−")
+
+
+def test_example_report_compiles_cleanly(tmp_path: Path) -> None:
+    case = ugr.CASES[0]  # the shipped example, both logs, LuGre
+    result, files, pdf, log = _build(case, tmp_path)
+    _check_log(log)
+    assert pdf.stat().st_size < PDF_LIMIT
+    text = _pdftext(pdf)
+    model = edm_sym.decode(result)
+    for row in model.rows:
+        for term in row.terms:
+            assert KIND_TITLES[term.kind] in text, term.kind
+    for info in model.params:
+        assert _as_printed(info.value) in text, info.symbol
+    for heading in ("Summary", "The element matrix", "Parameters", "Contributions of the rows",
+                    "Time responses", "Comparison with the LuGre model", "Reproducibility"):
+        assert heading in text
+    assert "LuGre (conventional)" in text and "EDM (this compensator)" in text
+    assert result.sha256 in text
+
+
+def test_write_report_pdf_keeps_only_tex_figures_and_pdf(tmp_path: Path) -> None:
+    result, kw = ugr.case_inputs(ugr.CASES[1], tmp_path / "in")
+    out = tmp_path / "out"
+    files = write_report(result, out, pdf=True, **kw)
+    assert files[-1] == out / "steps_report.pdf" and files[-1].is_file()
+    assert files[0] == out / "steps_report.tex"
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in files)
+    for suffix in AUX_SUFFIXES:
+        assert not (out / f"steps_report{suffix}").exists()
+
+
+@pytest.mark.parametrize("which", ["one_row", "eight_rows"])
+def test_one_and_eight_row_reports_compile(which: str, tmp_path: Path) -> None:
+    if which == "one_row":
+        case = ugr.Case("one", ugr.steps_result, logs=(), options={"prefix": "one"})
+    else:
+        case = ugr.Case("eight", ugr.eight_row_result, lugre=True, options={"prefix": "eight"})
+    result, _, pdf, log = _build(case, tmp_path)
+    _check_log(log)
+    assert pdf.stat().st_size < PDF_LIMIT
+    text = _pdftext(pdf)
+    assert f"{result.compensator.matrix.n_elements} × {result.compensator.matrix.n_rows}" in text
+
+
+@pytest.mark.slow
+def test_pdf_is_byte_identical_when_rebuilt(tmp_path: Path) -> None:
+    result, kw = ugr.case_inputs(ugr.CASES[1], tmp_path / "a")
+    first = write_report(result, tmp_path / "a", pdf=True, **kw)[-1].read_bytes()
+    _, kw = ugr.case_inputs(ugr.CASES[1], tmp_path / "b")
+    second = write_report(result, tmp_path / "b", pdf=True, **kw)[-1].read_bytes()
+    assert first == second
