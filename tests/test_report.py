@@ -104,9 +104,9 @@ def test_row_chain_of_a_constant_and_of_a_non_chain() -> None:
 # -- context ---------------------------------------------------------------------------
 
 def test_check_report_context_refuses_unformatted_values() -> None:
-    ctx = {k: [] for k in ("title", "facts", "equation", "overview", "matrix", "rows", "params",
-                           "contributions", "fitness", "steps", "time", "lugre", "provenance",
-                           "versions", "commands")}
+    from edm_sym.report.context import REPORT_KEYS
+
+    ctx = {k: [] for k in REPORT_KEYS}
     ctx["rows"] = [{"number": "1"}]
     check_report_context(ctx)
     with pytest.raises(ValueError, match=r"context\.rows\[0\]\.value is a float"):
@@ -136,7 +136,7 @@ def test_parse_log_reads_overfull_boxes_and_undefined_references() -> None:
 
 def test_report_without_data_has_every_section(tmp_path: Path, example, example_model) -> None:
     files = write_report(example, tmp_path, model=example_model)
-    assert [f.name for f in files] == ["edm_comp_report.tex"]
+    assert [f.name for f in files] == ["edm_comp_report.tex", "edm_comp_fig_friction.pdf"]
     tex = files[0].read_text()
     for heading in ("Summary", "The element matrix", "The rows", "Parameters",
                     "Contributions of the rows", "Fitness history", "Time responses",
@@ -148,7 +148,8 @@ def test_report_without_data_has_every_section(tmp_path: Path, example, example_
     # Every parameter a_k of the table, with the value printed to 6 digits.
     for info in example_model.params:
         assert f"${format_number(info.value, 6)}$" in tex
-    assert "includegraphics" not in tex
+    # Only the friction characteristic, which needs no data (rows 1-3 have a velocity input).
+    assert re.findall(r"includegraphics\[[^]]*\]\{([^}]*)\}", tex) == ["edm_comp_fig_friction.pdf"]
 
 
 def test_report_with_data_writes_named_deterministic_figures(tmp_path: Path, example, logs) -> None:
@@ -158,7 +159,7 @@ def test_report_with_data_writes_named_deterministic_figures(tmp_path: Path, exa
     names = [f.name for f in first]
     assert names[0] == "axis_report.tex"
     assert all(re.fullmatch(r"axis_fig_[a-z_]+\.pdf", n) for n in names[1:])
-    assert len(names) == 9  # tex + 4 figures per log
+    assert len(names) == 10  # tex, the friction curve, 4 figures per log
     for f, g in zip(first, again, strict=True):
         assert f.read_bytes() == g.read_bytes(), f.name
     tex = first[0].read_text()
@@ -204,3 +205,28 @@ def test_bad_inputs_are_refused_before_anything_is_written(tmp_path: Path, examp
     with pytest.raises(DataFormatError, match="sample time"):
         write_report(example, tmp_path / "s", data=slow, ts=0.002)
     assert not any((tmp_path / d).exists() for d in ("p", "c", "s"))
+
+
+def test_friction_characteristic_of_the_example(example, example_model) -> None:
+    from edm_sym.report.runs import steady_state
+
+    st = steady_state(example, [r.role for r in example_model.rows], 5.0)
+    assert st.rows == (0, 1, 2) and st.unsettled == ()
+    v = st.velocity
+    assert v[0] == -5.0 and v[-1] == 5.0 and 0.0 in v
+    # Coulomb 0.95 sgn(v), viscous 0.005 v, and nothing from the derivative row at constant velocity.
+    np.testing.assert_allclose(st.torque[0], 0.95 * np.sign(v), atol=1e-12)
+    np.testing.assert_allclose(st.torque[1], 0.005 * v, atol=1e-12)
+    np.testing.assert_allclose(st.torque[2], 0.0, atol=1e-9)
+
+
+def test_friction_characteristic_flags_a_row_that_never_settles() -> None:
+    from edm_sym.matrix import Compensator, make_matrix
+    from edm_sym.report.runs import steady_state
+    from edm_sym.result import EdmResult
+
+    m = make_matrix(["omega"], [("omega", [("integral", 0.5)]), ("omega", [("sign", 0.0)])])
+    res = EdmResult(Compensator(m, 1e-3, {}, 10.0), "tau_ext")
+    st = steady_state(res, ["velocity", "velocity"], 2.0, points=11, settle=1.0)
+    assert st.rows == (1,) and st.unsettled == (0,)
+    assert steady_state(res, [None, "angle"], 2.0) is None

@@ -20,7 +20,7 @@ import sympy as sp
 
 from edm_sym.printing.latex import EdmLatexPrinter
 from edm_sym.report.diagrams import chain_diagram, chain_printer, matrix_diagram
-from edm_sym.report.runs import LogRun, LuGreRef
+from edm_sym.report.runs import LogRun, LuGreRef, SteadyState
 from edm_sym.symbolic.model import RowModel, SymbolicModel, X
 
 #: Readable names of the physical term kinds (edm_sym.symbolic.classify.KINDS).
@@ -71,6 +71,8 @@ class ReportInputs:
         Package name -> version.
     ts : float or None
         The ``--ts`` option the logs were read with.
+    steady : SteadyState or None
+        The friction characteristic of the velocity rows.
     """
 
     result: Any
@@ -84,6 +86,7 @@ class ReportInputs:
     figures: Mapping[str, str] = field(default_factory=dict)
     versions: Sequence[tuple[str, str]] = ()
     ts: float | None = None
+    steady: SteadyState | None = None
 
 
 def package_versions() -> tuple[tuple[str, str], ...]:
@@ -329,6 +332,32 @@ def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun],
     return out
 
 
+def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, str],
+              has_data: bool) -> dict[str, list[str]]:
+    """The friction characteristic's figure and what it shows, as sentences."""
+    if st is None:
+        return {"figures": [], "notes": ["No row has a velocity input, so the compensator has "
+                                         "no friction characteristic."]}
+    rows = ", ".join(p.math(p.signal("y", j + 1)) for j in st.rows)
+    span = p.math(rf"\pm {p.number(st.velocity[-1])}")
+    where = "the largest velocity of the data logs" if has_data else "no data log was given"
+    notes = []
+    if st.rows:
+        notes.append(f"The rows with a velocity input ({rows}) held at each constant velocity "
+                     f"for {p.math(p.number(st.settle))}~s, over {span}~rad/s ({where}): the "
+                     "friction the compensator predicts in steady state, to check against the "
+                     "axis's friction curve (Coulomb level, viscous slope, Stribeck hump).")
+    if st.unsettled:
+        un = ", ".join(p.math(p.signal("y", j + 1)) for j in st.unsettled)
+        notes.append(f"Not shown: {un}, whose output is still changing after "
+                     f"{p.math(p.number(st.settle))}~s at constant velocity (a slow filter or "
+                     "an integral).")
+    caption = ("Steady-state torque of the velocity rows against constant velocity"
+               + (", with the LuGre model's (eq.~14)" if st.lugre is not None else "") + ".")
+    fig = _figure(figures, "friction", caption, 0.95)
+    return {"figures": [fig] if fig else [], "notes": notes}
+
+
 def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
     return [{
         "step": str(s.step), "size": p.math(f"{s.matrix.n_elements} \\times {s.matrix.n_rows}"),
@@ -453,6 +482,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
         "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
         "rows": rows,
+        "friction": _friction(p, inp.steady, fig, bool(runs)),
         "params": _params(model),
         "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
         "contributions": _contribution_tables(p, runs, fig),
@@ -481,7 +511,8 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
 
 
 #: Keys every report context holds.
-REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "params", "contributions",
+REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "params",
+               "contributions",
                "fitness", "steps", "time", "lugre", "provenance", "versions", "commands")
 
 

@@ -218,3 +218,34 @@ def contributions(labels: Sequence[str], rms: Sequence[float], cumulative_rmse: 
     a2.set_ylabel("RMSE [N m]")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def friction_curve(velocity: np.ndarray, rows: Sequence[tuple[str, np.ndarray]], path: Path, *,
+                   lugre: np.ndarray | None = None) -> Path:
+    """Steady-state torque against constant velocity: each row and their sum (paper, Fig. 13).
+
+    Parameters
+    ----------
+    velocity : numpy.ndarray
+        The constant velocities [rad/s].
+    rows : sequence of (label, numpy.ndarray)
+        Each velocity row's settled output [N m].
+    path : path-like
+        The PDF to write.
+    lugre : numpy.ndarray, optional
+        The LuGre model's steady state, drawn dashed.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(WIDTH, 2.6))
+    for k, (label, y) in enumerate(rows):
+        ax.plot(velocity, y, color=f"C{(k + 2) % 10}", lw=0.8, label=label)
+    if len(rows) > 1:
+        total = np.sum([y for _, y in rows], axis=0)
+        ax.plot(velocity, total, color="C3", lw=1.4, label="sum (EDM)")
+    if lugre is not None:
+        ax.plot(velocity, lugre, color="C0", lw=1.0, ls="--", label="LuGre")
+    ax.set_xlabel("angular velocity [rad/s]")
+    ax.set_ylabel("torque [N m]")
+    ax.legend(loc="upper left", ncol=2)
+    fig.tight_layout()
+    return _save(fig, path)

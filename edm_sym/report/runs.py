@@ -155,6 +155,86 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
                   sim.total, _rmse(target - sim.total), contrib, lugre_tau, lugre_rmse)
 
 
+@dataclass(frozen=True)
+class SteadyState:
+    """The velocity rows' torque at constant velocities (the friction characteristic).
+
+    Attributes
+    ----------
+    velocity : numpy.ndarray
+        The constant velocities [rad/s].
+    settle : float
+        How long each velocity was held [s].
+    rows : tuple of int
+        The rows shown (0-based): those whose input is a velocity and whose
+        output settles.
+    torque : numpy.ndarray
+        Shape (len(rows), len(velocity)): each row's settled output [N m].
+    unsettled : tuple of int
+        Velocity rows whose output keeps changing (an integral, say).
+    lugre : numpy.ndarray or None
+        The LuGre model's steady state (eq. 14), when given.
+    """
+
+    velocity: np.ndarray
+    settle: float
+    rows: tuple[int, ...]
+    torque: np.ndarray
+    unsettled: tuple[int, ...]
+    lugre: np.ndarray | None = None
+
+
+def steady_state(result: Any, roles: Any, v_max: float, *, lugre: LuGreRef | None = None,
+                 settle: float = 5.0, points: int = 201) -> SteadyState | None:
+    """Hold each velocity for ``settle`` seconds and read the velocity rows' outputs.
+
+    Parameters
+    ----------
+    result : EdmResult
+    roles : sequence of str or None
+        The role of each row's input (``RowModel.role``).
+    v_max : float
+        The velocities span ``[-v_max, v_max]`` [rad/s].
+    lugre : LuGreRef, optional
+    settle : float
+        Seconds each velocity is held; a row still changing by more than
+        0.1 % of its level over the last tenth of that is "unsettled".
+    points : int
+        Number of velocities (odd, so 0 is one of them).
+
+    Returns
+    -------
+    SteadyState or None
+        None when no row has a velocity input.
+    """
+    from edm_sym.simulate import simulate_row
+
+    comp = result.compensator
+    idx = [j for j, role in enumerate(roles) if role == "velocity"]
+    if not idx:
+        return None
+    v = np.linspace(-v_max, v_max, points)
+    n = max(10, round(settle / comp.sample_time))
+    x = np.repeat(v[:, None], n, axis=1)
+    shown, curves, unsettled = [], [], []
+    for j in idx:
+        y = simulate_row(comp, comp.matrix.rows[j], x)
+        end, before = y[:, -1], y[:, -1 - n // 10]
+        scale = max(float(np.max(np.abs(end))), 1e-12)
+        if not np.all(np.isfinite(end)) or float(np.max(np.abs(end - before))) > 1e-3 * scale:
+            unsettled.append(j)
+            continue
+        shown.append(j)
+        curves.append(end)
+    torque = np.vstack(curves) if curves else np.empty((0, points))
+    lugre_ss = None
+    if lugre is not None:
+        from edm_sym.lugre import steady_state as lugre_steady_state
+
+        lugre_ss = np.asarray(lugre_steady_state(lugre.result.params, v))
+    return SteadyState(v, n * comp.sample_time, tuple(shown), torque, tuple(unsettled), lugre_ss)
+
+
 def load_lugre_ref(path: str | Path) -> LuGreRef:
     """Load a LUGRE.json for the comparison.
 

@@ -5,12 +5,17 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from edm_sym.report import figures as fg
 from edm_sym.report.context import ReportInputs, package_versions, report_context
-from edm_sym.report.runs import LogRun, load_log, load_lugre_ref, run_log
+from edm_sym.report.runs import LogRun, SteadyState, load_log, load_lugre_ref, run_log, steady_state
 
 #: The template of the report (in the templates folder).
 TEMPLATE = "report.tex.j2"
+#: Velocity range of the friction characteristic without a data log [rad/s]
+#: (the classification's default velocity range).
+DEFAULT_VELOCITY = 10.0
 
 
 def figure_name(prefix: str, key: str) -> str:
@@ -18,8 +23,8 @@ def figure_name(prefix: str, key: str) -> str:
     return f"{prefix}_fig_{key}.pdf"
 
 
-def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str
-                 ) -> dict[str, Path]:
+def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
+                 steady: SteadyState | None = None) -> dict[str, Path]:
     """Draw every figure the inputs allow; return figure key -> path.
 
     Parameters
@@ -29,12 +34,18 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str
         The compensator on the abstraction and (or) evaluation logs.
     out_dir : pathlib.Path
     prefix : str
+    steady : SteadyState, optional
+        The friction characteristic.
     """
     out: dict[str, Path] = {}
 
     def path(key: str) -> Path:
         return out_dir / figure_name(prefix, key)
 
+    if steady is not None and steady.rows:
+        curves = [(f"$y_{{{j + 1}}}$", y) for j, y in zip(steady.rows, steady.torque, strict=True)]
+        out["friction"] = fg.friction_curve(steady.velocity, curves, path("friction"),
+                                            lugre=steady.lugre)
     if result.steps:
         hist = [(f"Step {s.step} ({s.matrix.n_elements}x{s.matrix.n_rows})", s.history)
                 for s in result.steps]
@@ -128,20 +139,27 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
         model = decode(result)
     ref = load_lugre_ref(lugre) if lugre is not None else None
     runs: dict[str, LogRun] = {}
+    v_max = 0.0
+    roles = [row.role for row in model.rows]
     for label, path in (("abstraction", data), ("evaluation", eval_data)):
         if path is not None:
             log = load_log(path, result, ts=ts, lugre=ref)
             runs[label] = run_log(result, log, label=label, lugre=ref)
+            for j, role in enumerate(roles):
+                if role == "velocity":
+                    col = result.inputs[result.compensator.matrix.rows[j].input]
+                    v_max = max(v_max, float(np.max(np.abs(log.column(col)))))
+    steady = steady_state(result, roles, v_max or DEFAULT_VELOCITY, lugre=ref)
     source = source_of(result)
     # Render before writing anything, so a failure leaves no file behind.
     inputs = ReportInputs(result, model, source.name, source.sha256, prefix,
                           runs.get("abstraction"), runs.get("evaluation"), ref,
-                          {k: figure_name(prefix, k) for k in _figure_keys(result, runs)},
-                          package_versions(), ts)
+                          {k: figure_name(prefix, k) for k in _figure_keys(result, runs, steady)},
+                          package_versions(), ts, steady)
     text = render_report(inputs)
     tex_name = f"{prefix}_report.tex"
     written = write_files(out, {tex_name: text})
-    drawn = draw_figures(result, list(runs.values()), out, prefix)
+    drawn = draw_figures(result, list(runs.values()), out, prefix, steady)
     if set(drawn) != set(inputs.figures):  # the context names exactly the drawn figures
         raise RuntimeError(f"report figures: drew {sorted(drawn)}, the report names "
                            f"{sorted(inputs.figures)}")
@@ -154,8 +172,9 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     return written
 
 
-def _figure_keys(result: Any, runs: dict[str, LogRun]) -> list[str]:
-    keys = ["fitness"] if result.steps else []
+def _figure_keys(result: Any, runs: dict[str, LogRun], steady: SteadyState | None) -> list[str]:
+    keys = ["friction"] if steady is not None and steady.rows else []
+    keys += ["fitness"] if result.steps else []
     for label in runs:
         keys += [f"{k}_{label}" for k in ("contributions", "rows", "time", "zoom")]
     return keys
