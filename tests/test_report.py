@@ -230,3 +230,12 @@ def test_friction_characteristic_flags_a_row_that_never_settles() -> None:
     st = steady_state(res, ["velocity", "velocity"], 2.0, points=11, settle=1.0)
     assert st.rows == (1,) and st.unsettled == (0,)
     assert steady_state(res, [None, "angle"], 2.0) is None
+
+
+def test_term_notes_drop_plain_text_copies_of_expressions() -> None:
+    from edm_sym.report.context import _drop_code
+
+    assert _drop_code("not odd (0.0032*GAcos(Max(-0.5, omega))); through a filter") == (
+        "not odd; through a filter")
+    assert _drop_code("Coulomb friction (tanh-smoothed): 1 N m") == (
+        "Coulomb friction (tanh-smoothed): 1 N m")

@@ -87,10 +87,21 @@ def test_write_report_pdf_keeps_only_tex_figures_and_pdf(tmp_path: Path) -> None
         assert not (out / f"steps_report{suffix}").exists()
 
 
-@pytest.mark.parametrize("which", ["one_row", "eight_rows"])
+def _parameter_free():  # noqa: ANN202
+    from edm_sym.matrix import Compensator, make_matrix
+    from edm_sym.result import EdmResult
+
+    m = make_matrix(ugr.INPUTS, [("omega", [("sign", 0.0), ("invert", 0.0)]),
+                                 ("theta_w", [("asin", 0.0), ("through", 0.0)])])
+    return EdmResult(Compensator(m, ugr.TS, {}, 10.0), "tau_ext")
+
+
+@pytest.mark.parametrize("which", ["one_row", "eight_rows", "parameter_free"])
 def test_one_and_eight_row_reports_compile(which: str, tmp_path: Path) -> None:
     if which == "one_row":
         case = ugr.Case("one", ugr.steps_result, logs=(), options={"prefix": "one"})
+    elif which == "parameter_free":
+        case = ugr.Case("free", _parameter_free, logs=("evaluation",), options={"prefix": "free"})
     else:
         case = ugr.Case("eight", ugr.eight_row_result, lugre=True, options={"prefix": "eight"})
     result, _, pdf, log = _build(case, tmp_path)

@@ -25,6 +25,7 @@ _TEXT_ESCAPES = {
     "<": r"\textless{}", ">": r"\textgreater{}",
 }
 _TEXT_RE = re.compile("|".join(re.escape(k) for k in _TEXT_ESCAPES))
+_PLAIN_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def escape_text(text: str) -> str:
@@ -84,7 +85,13 @@ class EdmLatexPrinter(LatexPrinter):
         merged.update(settings or {})
         super().__init__(merged)
 
-    # -- numbers ---------------------------------------------------------------
+    # -- symbols and numbers -----------------------------------------------------
+    def _print_Symbol(self, expr: Any, style: str = "plain") -> str:
+        # Names beyond letters, digits and "_" (a log's column "tau%ext") would be LaTeX syntax.
+        if expr in self._settings["symbol_names"] or _PLAIN_NAME.fullmatch(expr.name):
+            return super()._print_Symbol(expr, style=style)
+        return rf"\mathrm{{{escape_text(expr.name)}}}"
+
     def _print_Float(self, expr: Any) -> str:
         return format_number(float(expr), self._settings["digits"])
 

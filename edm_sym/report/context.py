@@ -226,12 +226,36 @@ def _term(p: EdmLatexPrinter, term: Any) -> dict[str, Any]:
     # The expression is printed above; the description's plain-text copy of it adds nothing.
     notes = re.sub(r"^no physical pattern for .* \((\w+) input\)", r"no physical pattern for "
                    r"this term (\1 input)", notes)
+    notes = _drop_code(notes)
     return {
         "title": p.text(KIND_TITLES.get(term.kind, term.kind)),
         "expr": p.doprint(term.expr) if term.expr is not None else "",
         "params": params,
         "notes": [p.breakable(notes)] if notes else [],
     }
+
+
+def _drop_code(text: str) -> str:
+    """``text`` without parenthesised copies of sympy expressions (``(0.5*GAcos(x))``)."""
+    out: list[str] = []
+    i = 0
+    while i < len(text):
+        if text[i] == "(":
+            depth, j = 0, i
+            while j < len(text):
+                depth += {"(": 1, ")": -1}.get(text[j], 0)
+                if depth == 0:
+                    break
+                j += 1
+            inner = text[i + 1:j]
+            if len(inner) > 20 and ("*" in inner or "(" in inner):
+                while out and out[-1] == " ":
+                    out.pop()
+                i = j + 1
+                continue
+        out.append(text[i])
+        i += 1
+    return "".join(out)
 
 
 def _elements_text(p: EdmLatexPrinter, row: RowModel) -> str:
@@ -283,6 +307,26 @@ def _params(model: SymbolicModel) -> list[dict[str, str]]:
             "scaling": p6.text(info.range.scaling),
             "unit": p6.text(info.unit),
         })
+    return out
+
+
+#: Rows per part of the parameter table: a part never outgrows a page (no longtable,
+#: whose page breaks fight the floats).
+PARAM_ROWS_PER_TABLE = 22
+
+
+def _chunks(p: EdmLatexPrinter, rows: list[dict[str, str]]) -> list[dict[str, Any]]:
+    if not rows:  # the table stays, so every reference to it holds
+        rows = [{"symbol": "--", "where": "", "element": "none",
+                 "meaning": "every element is parameter-free", "value": "", "p": "",
+                 "range": "", "scaling": "", "unit": ""}]
+    out = []
+    for k in range(0, len(rows), PARAM_ROWS_PER_TABLE):
+        first = k == 0
+        out.append({"caption": "Parameters of the element matrix" + ("." if first else
+                                                                      " (continued)."),
+                    "label": r"\label{tab:params}" if first else "",
+                    "rows": rows[k:k + PARAM_ROWS_PER_TABLE]})
     return out
 
 
@@ -483,7 +527,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
         "rows": rows,
         "friction": _friction(p, inp.steady, fig, bool(runs)),
-        "params": _params(model),
+        "param_chunks": _chunks(p, _params(model)),
         "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
         "contributions": _contribution_tables(p, runs, fig),
         "fitness": [f for f in [_figure(fig, "fitness", "Best fitness per generation of each "
@@ -511,7 +555,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
 
 
 #: Keys every report context holds.
-REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "params",
+REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "param_chunks",
                "contributions",
                "fitness", "steps", "time", "lugre", "provenance", "versions", "commands")
 

@@ -236,7 +236,7 @@ def friction_curve(velocity: np.ndarray, rows: Sequence[tuple[str, np.ndarray]],
         The LuGre model's steady state, drawn dashed.
     """
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(WIDTH, 2.6))
+    fig, ax = plt.subplots(figsize=(WIDTH, 2.3))
     for k, (label, y) in enumerate(rows):
         ax.plot(velocity, y, color=f"C{(k + 2) % 10}", lw=0.8, label=label)
     if len(rows) > 1:
