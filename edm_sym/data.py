@@ -23,6 +23,13 @@ from edm_sym.fileio import write_atomic
 
 #: Relative tolerance on sample-time deviations (CSV text rounds time stamps).
 TIME_RTOL = 1e-3
+#: A data spec ``plant:PRESET/EXCITATION[@SEED]`` names a simulated plant log.
+PLANT_SCHEME = "plant:"
+
+
+def is_plant_spec(spec: object) -> bool:
+    """True for a ``plant:PRESET/EXCITATION[@SEED]`` data spec."""
+    return isinstance(spec, str) and spec.startswith(PLANT_SCHEME)
 
 
 @dataclass(frozen=True)
@@ -80,8 +87,10 @@ def load_data(
 
     Parameters
     ----------
-    path : path-like
-        The file. The suffix picks the reader (``.npz``, ``.mat``, else CSV).
+    path : path-like or str
+        The file; the suffix picks the reader (``.npz``, ``.mat``, else CSV).
+        Or ``"plant:PRESET/EXCITATION[@SEED]"``: the log of ``edm plant``,
+        simulated on the fly (e.g. ``"plant:auger/evaluation"``).
     ts : float, optional
         Sample time [s] when the log has no ``t`` column; with a ``t`` column
         it must agree with it.
@@ -97,6 +106,11 @@ def load_data(
     DataFormatError
         Naming the file and the row or column at fault.
     """
+    if is_plant_spec(path):
+        log = _plant_log(str(path))
+        for col in require:
+            log.column(col)
+        return log
     path = Path(path)
     name = path.name
     try:
@@ -119,6 +133,30 @@ def load_data(
     for col in require:
         log.column(col)
     return log
+
+
+def _plant_log(spec: str) -> DataLog:
+    from edm_sym.plant import EXCITATIONS, PRESETS, simulate_plant
+
+    body = spec[len(PLANT_SCHEME):]
+    body, _, seed_text = body.partition("@")
+    preset, _, excitation = body.partition("/")
+    if preset not in PRESETS:
+        raise DataFormatError(f"{spec}: preset", f"expected one of {', '.join(sorted(PRESETS))}, "
+                              f"found {preset!r}")
+    if excitation not in EXCITATIONS:
+        raise DataFormatError(f"{spec}: excitation",
+                              f"expected one of {', '.join(EXCITATIONS)}, found {excitation!r}")
+    try:
+        seed = int(seed_text) if seed_text else 0
+    except ValueError:
+        raise DataFormatError(f"{spec}: seed", f"expected an integer, found {seed_text!r}") from None
+    cols = dict(simulate_plant(preset, excitation, seed=seed).columns)
+    digest = hashlib.sha256()
+    for key, col in cols.items():
+        digest.update(key.encode() + np.ascontiguousarray(col, dtype="<f8").tobytes())
+    ts = float(cols["t"][1] - cols["t"][0])
+    return DataLog(cols, ts, spec, digest.hexdigest())
 
 
 def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:

@@ -12,7 +12,7 @@ import hashlib
 import json
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -58,6 +58,10 @@ class EdmResult:
         ``seed``, ``package_version``, ``data_sha256`` (and optional extras).
     fitness : float or None
         The final fitness (eq. 8) on the abstraction data.
+    report_inputs : mapping of str to str
+        Optional ``data``, ``eval_data`` (paths relative to the result's
+        folder, or ``plant:...`` specs) and ``lugre`` (a LUGRE.json path):
+        what the report shows when ``edm-export`` is given no such options.
     sha256 : str or None
         The sha256 of the file it was loaded from.
     """
@@ -69,6 +73,7 @@ class EdmResult:
     fitness: float | None = None
     sha256: str | None = None
     source: str | None = None
+    report_inputs: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def matrix(self) -> ElementMatrix:
@@ -101,6 +106,7 @@ class EdmResult:
             "parameter_ranges": {k: v.to_json() for k, v in sorted(comp.ranges.items())},
             "steps": [_step_to_json(s) for s in self.steps],
             "provenance": dict(self.provenance),
+            **({"report_inputs": dict(self.report_inputs)} if self.report_inputs else {}),
         }
 
 
@@ -286,7 +292,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     if fitness is not None and not math.isfinite(fitness):
         raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
     comp = Compensator(matrix, float(doc["sample_time"]), ranges, float(doc["record_length"]))
-    return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness)
+    return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
+                     report_inputs=dict(doc.get("report_inputs", {})))
 
 
 def load_result(path: str | Path) -> EdmResult:
@@ -317,8 +324,7 @@ def load_result(path: str | Path) -> EdmResult:
     except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
         raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
     res = parse_result(doc, path.name)
-    return EdmResult(res.compensator, res.target, res.steps, res.provenance, res.fitness,
-                     hashlib.sha256(raw).hexdigest(), str(path))
+    return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))
 
 
 def _reject_constant(name: str) -> float:

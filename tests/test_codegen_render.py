@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from edm_sym import load_result
 from edm_sym.elements import all_elements
-from edm_sym.errors import NumericsWarning, ToolMissingError
+from edm_sym.errors import NumericsWarning
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
 from edm_sym.render import TARGETS, export, render
 from edm_sym.render.context import c_context, input_macros, plan, source_of
@@ -54,15 +54,20 @@ def comp_of(rows) -> Compensator:  # noqa: ANN001
 def test_targets_write_their_files(target: str, names: list[str], tmp_path: Path) -> None:
     out = tmp_path / "new" / "dir"
     written = export(EXAMPLE, target, out)
-    assert [p.name for p in written] == names
-    assert sorted(p.name for p in out.iterdir()) == sorted(names)
+    assert [p.name for p in written][: len(names)] == names
+    if target == "all":  # then the report: its .tex and figures
+        assert "edm_comp_report.tex" in [p.name for p in written[len(names):]]
+    else:
+        assert len(written) == len(names)
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written)
     for p in written:
         assert p.stat().st_mode & 0o444 == 0o444  # readable like any file, not 0600
 
 
 def test_prefix_names_files_and_symbols(tmp_path: Path) -> None:
     written = export(EXAMPLE, "all", tmp_path, prefix="axis2_comp")
-    assert [p.name for p in written] == ["axis2_comp.h", "axis2_comp.c", "axis2_comp.py"]
+    assert [p.name for p in written][:3] == ["axis2_comp.h", "axis2_comp.c", "axis2_comp.py"]
+    assert "axis2_comp_report.tex" in [p.name for p in written]
     header = (tmp_path / "axis2_comp.h").read_text()
     assert "#define AXIS2_COMP_INPUT_OMEGA 2" in header
     assert "typedef double axis2_comp_real_t;" in header
@@ -71,11 +76,11 @@ def test_prefix_names_files_and_symbols(tmp_path: Path) -> None:
     assert "edm_comp" not in header + (tmp_path / "axis2_comp.c").read_text()
 
 
-def test_latex_is_not_available_yet(tmp_path: Path) -> None:
-    with pytest.raises(ToolMissingError, match="LaTeX report is not available yet"):
-        export(EXAMPLE, "latex", tmp_path / "x")
-    assert not (tmp_path / "x").exists()
-    assert "latex" not in TARGETS
+def test_latex_target_is_the_report(tmp_path: Path) -> None:
+    written = export(EXAMPLE, "latex", tmp_path / "x")
+    assert written[0].name == "edm_comp_report.tex"
+    assert all(p.name.startswith("edm_comp_") for p in written)
+    assert "latex" not in TARGETS  # written by edm_sym.report, not by a code template
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [

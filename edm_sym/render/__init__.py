@@ -12,12 +12,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from edm_sym.data import is_plant_spec
 from edm_sym.errors import ToolMissingError
 from edm_sym.render.context import source_of, validate_prefix, validate_real
 from edm_sym.render.writer import ALL, TARGETS, OutputError, render_target, write_files
 
 __all__ = ["ALL", "TARGETS", "OutputError", "export", "render"]
 
+#: The target written by :mod:`edm_sym.report` rather than by a code template.
+REPORT = "latex"
 #: The values ``target`` accepts.
 TARGET_NAMES = ("c", "python", "latex", "all")
 
@@ -25,12 +28,7 @@ TARGET_NAMES = ("c", "python", "latex", "all")
 def _targets(target: str) -> list[str]:
     if target not in TARGET_NAMES:
         raise ValueError(f"--target: expected one of {', '.join(TARGET_NAMES)}, found {target!r}")
-    if target == "all":
-        return [t for t in ALL if t in TARGETS]
-    if target not in TARGETS:
-        raise ToolMissingError(f"--target {target}: the LaTeX report is not available yet "
-                               "(use --target c or --target python)")
-    return [target]
+    return list(ALL) if target == "all" else [target]
 
 
 def render(result: Any, target: str, *, prefix: str = "edm_comp",
@@ -67,7 +65,8 @@ def render(result: Any, target: str, *, prefix: str = "edm_comp",
     model = build_model(result.compensator, sha256=source.sha256, target=result.target)
     files: dict[str, str] = {}
     for name in names:
-        files.update(render_target(name, model, source, prefix=prefix, real=real))
+        if name in TARGETS:  # the report (latex) is written by edm_sym.report
+            files.update(render_target(name, model, source, prefix=prefix, real=real))
     return files
 
 
@@ -107,4 +106,35 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         When ``out_dir`` or a file in it cannot be written.
     """
     files = render(result, target, prefix=prefix, real=real)
-    return write_files(out_dir, files)
+    if REPORT not in _targets(target):
+        return write_files(out_dir, files)
+    from edm_sym.report import write_report
+
+    inputs = report_inputs(result, data=data, eval_data=eval_data, lugre=lugre)
+    # The report validates its inputs before writing anything, so it goes first;
+    # a missing latexmk (raised after the .tex is written) still lets the code land.
+    try:
+        written = write_report(result, out_dir, prefix=prefix, ts=ts, pdf=pdf, **inputs)
+    except ToolMissingError:
+        write_files(out_dir, files)
+        raise
+    return write_files(out_dir, files) + written
+
+
+def report_inputs(result: Any, *, data: Any = None, eval_data: Any = None,
+                  lugre: Any = None) -> dict[str, Any]:
+    """The report's logs and LuGre file: the options given, else the result's ``report_inputs``.
+
+    Paths stored in the result are relative to the folder holding it; a
+    ``plant:...`` data spec is used as it is.
+    """
+    given = {"data": data, "eval_data": eval_data, "lugre": lugre}
+    stored = getattr(result, "report_inputs", None) or {}
+    base = Path(result.source).parent if getattr(result, "source", None) else Path(".")
+    out = {}
+    for key, value in given.items():
+        if value is None and key in stored:
+            spec = stored[key]
+            value = spec if is_plant_spec(spec) else base / spec
+        out[key] = value
+    return out
