@@ -92,6 +92,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=_cmd_plant)
 
+    p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
+    p.add_argument("pipeline", metavar="PIPELINE.toml")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--reuse", action="store_true",
+                   help="keep an existing lugre.json / result.json (evaluate and export only)")
+    p.set_defaults(func=_cmd_pipeline)
+
     p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
     p.add_argument("data", metavar="DATA")
     p.add_argument("--position", required=True, metavar="COL")
@@ -204,6 +211,13 @@ def _cmd_plant(args: argparse.Namespace) -> int:
     out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
     write_csv(out, log.columns)
     print(f"wrote {out}")
+    return 0
+
+
+def _cmd_pipeline(args: argparse.Namespace) -> int:
+    from edm_sym.pipeline import run_pipeline
+
+    run_pipeline(args.pipeline, progress=not args.quiet and sys.stderr.isatty(), reuse=args.reuse)
     return 0
 
 

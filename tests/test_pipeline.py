@@ -1,0 +1,84 @@
+"""The one-command pipeline: data -> LuGre -> EDM -> evaluation -> export."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from edm_sym.cli import main
+from edm_sym.errors import ConfigError
+from edm_sym.pipeline import load_pipeline
+from edm_sym.result import load_result
+
+QUICK_GA = """
+[ga]
+generations = 4
+continue = "no"
+population = 16
+[[step]]
+n_rows = 2
+n_elements = 2
+"""
+
+
+def _write(folder: Path, pipeline: str) -> Path:
+    (folder / "quick.toml").write_text(QUICK_GA)
+    p = folder / "pipeline.toml"
+    p.write_text(pipeline)
+    return p
+
+
+PIPELINE = """
+[data]
+abstraction = "plant:lugre/abstraction"
+evaluation = "plant:lugre/evaluation"
+[abstraction]
+config = "quick.toml"
+target = "tau_ext"
+inputs = ["omega", "theta_w"]
+seed = 3
+[lugre]
+velocity = "omega"
+time_limit = 5
+[export]
+target = "c"
+out_dir = "gen"
+"""
+
+
+def test_pipeline_runs_end_to_end(tmp_path: Path, capsys) -> None:
+    p = _write(tmp_path, PIPELINE)
+    assert main(["pipeline", str(p), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "EDM/LuGre" in out and "evaluation" in out
+    summary = json.loads((tmp_path / "evaluation.json").read_text())
+    for log in ("abstraction", "evaluation"):
+        assert summary[log]["edm"] > 0 and summary[log]["lugre"] > 0
+        assert summary[log]["ratio"] == pytest.approx(summary[log]["edm"] / summary[log]["lugre"])
+    res = load_result(tmp_path / "result.json")
+    assert res.report_inputs == {"data": "plant:lugre/abstraction",
+                                 "eval_data": "plant:lugre/evaluation", "lugre": "lugre.json"}
+    assert (tmp_path / "gen" / "edm_comp.c").exists()
+    # --reuse keeps the identified files and only evaluates and exports again
+    before = (tmp_path / "result.json").read_bytes()
+    assert main(["pipeline", str(p), "--quiet", "--reuse"]) == 0
+    assert (tmp_path / "result.json").read_bytes() == before
+
+
+@pytest.mark.parametrize("text,where", [
+    ("[data]\nabstraction = 3\n", "data.abstraction"),
+    ("[dta]\n", "dta"),
+    ("[data]\nabstraction = 'x.csv'\n[abstraction]\ntarget = 'y'\n", "abstraction.inputs"),
+    ("[data]\nabstraction = 'x.csv'\nfoo = 1\n", "data.foo"),
+    ("[data\n", "expected TOML"),
+])
+def test_bad_pipeline_is_refused(text: str, where: str, tmp_path: Path, capsys) -> None:
+    p = tmp_path / "pipeline.toml"
+    p.write_text(text)
+    with pytest.raises(ConfigError, match=where.replace("[", r"\[")):
+        load_pipeline(p)
+    assert main(["pipeline", str(p)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and where in err
