@@ -239,3 +239,16 @@ def test_term_notes_drop_plain_text_copies_of_expressions() -> None:
         "not odd; through a filter")
     assert _drop_code("Coulomb friction (tanh-smoothed): 1 N m") == (
         "Coulomb friction (tanh-smoothed): 1 N m")
+
+
+def test_a_row_that_makes_the_fit_worse_is_pointed_out(tmp_path: Path, example,
+                                                       example_model) -> None:
+    from edm_sym.simulate import simulate
+
+    cols = ugr.log_columns(example, "abstraction", n=2000)
+    cols["tau_ext"] = cols["tau_ext"] - 3.0 * simulate(example, cols).rows[2]  # row 3 is wrong
+    data = ugr.write_log(tmp_path / "wrong.csv", cols)
+    tex = write_report(example, tmp_path / "out", model=example_model, data=data)[0].read_text()
+    (note,) = [ln for ln in tex.splitlines() if ln.startswith(r"\textbf{Note:}")]
+    assert note.startswith(r"\textbf{Note:} Adding $y_{3}$")
+    assert "makes the fit on this log worse" in note and "$y_{1}$" not in note

@@ -118,3 +118,13 @@ def test_pdf_is_byte_identical_when_rebuilt(tmp_path: Path) -> None:
     _, kw = ugr.case_inputs(ugr.CASES[1], tmp_path / "b")
     second = write_report(result, tmp_path / "b", pdf=True, **kw)[-1].read_bytes()
     assert first == second
+
+
+def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None:
+    from edm_sym.report.pdf import LatexError
+
+    tex = tmp_path / "x.tex"
+    tex.write_text("\\documentclass{article}\\begin{document}\\undefinedmacro\\end{document}\n")
+    with pytest.raises(LatexError, match=r"x\.tex: LaTeX failed: ! Undefined control sequence"):
+        compile_pdf(tex)
+    assert (tmp_path / "x.log").is_file() and not (tmp_path / "x.pdf").exists()

@@ -299,18 +299,3 @@ def latex(expr: Any, **settings: Any) -> str:
         SymPy LaTeX printer settings (and ``digits``).
     """
     return EdmLatexPrinter(settings).doprint(expr)
-
-
-def symbol_names(names: Mapping[sp.Symbol, str]) -> dict[sp.Symbol, str]:
-    """A ``symbol_names`` printer setting, checked: every value a non-empty string.
-
-    Parameters
-    ----------
-    names : mapping of sympy.Symbol to str
-    """
-    out = {}
-    for sym, text in names.items():
-        if not isinstance(text, str) or not text:
-            raise ValueError(f"symbol_names[{sym}]: expected non-empty LaTeX, found {text!r}")
-        out[sym] = text
-    return out

@@ -339,8 +339,15 @@ def _contribution_tables(p: EdmLatexPrinter, runs: Sequence[LogRun],
                  "rmse": p.math(p.number(e)), "drop": p.math(p.number(d))}
                 for k, (rms, e, d) in enumerate(zip(c.rms, c.rmse_cumulative, c.improvement,
                                                     strict=True))]
+        worse = [k for k, d in enumerate(c.improvement) if d < 0]
+        warn = []
+        if worse:
+            names = ", ".join(p.math(p.signal("y", k + 1)) for k in worse)
+            warn.append(f"Adding {names} makes the fit on this log worse (a negative drop): "
+                        "check the sign and size of "
+                        + ("that row" if len(worse) == 1 else "those rows") + ".")
         out.append({
-            "log": p.text(r.label), "name": p.mono(r.name),
+            "log": p.text(r.label), "name": p.mono(r.name), "warnings": warn,
             "baseline": p.math(p.number(c.rmse_none)), "rows": rows,
             "figures": [f for f in (_figure(figures, f"contributions_{r.label}",
                                             f"Row contributions on the {r.label} log "

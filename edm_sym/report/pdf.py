@@ -16,7 +16,7 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
-from edm_sym.errors import EdmError, ToolMissingError
+from edm_sym.errors import ToolMissingError
 
 #: How to get latexmk and the LaTeX packages the report uses.
 INSTALL_HINT = ("install TeX Live with latexmk, e.g. 'sudo apt-get install latexmk "
@@ -34,8 +34,11 @@ _OVERFULL = re.compile(r"^Overfull \\[hv]box \((\d+(?:\.\d+)?)pt too (wide|high)
 _UNDEFINED = re.compile(r"(?:Reference|Citation) `([^']*)' on page \d+ undefined")
 
 
-class LatexError(EdmError, RuntimeError):
-    """LaTeX stopped with an error; the message holds its first error line and the log's path."""
+class LatexError(RuntimeError):
+    """LaTeX stopped with an error; the message holds its first error line and the log's path.
+
+    Not an :class:`~edm_sym.errors.EdmError`: the input was valid, the work failed (exit 1).
+    """
 
 
 @dataclass(frozen=True)
@@ -144,6 +147,8 @@ def compile_pdf(tex: str | Path, *, keep_aux: bool = False) -> tuple[Path, Latex
     log = parse_log(log_file.read_text(errors="replace")) if log_file.exists() else LatexLog()
     pdf = tex.with_suffix(".pdf")
     if proc.returncode != 0 or not pdf.exists():
+        if pdf.exists():  # no half-written PDF is left behind
+            pdf.unlink()
         first = log.errors[0] if log.errors else (proc.stderr.strip().splitlines() or ["?"])[-1]
         raise LatexError(f"{tex.name}: LaTeX failed: {first} (see {log_file})")
     if not keep_aux:
