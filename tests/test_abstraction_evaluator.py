@@ -202,3 +202,20 @@ def test_fast_rows_equal_reference_rows_stage_by_stage(seed: int) -> None:
 def test_row_table_is_canonical() -> None:
     t = row_table(np.array([1]), np.array([[19, 3]]), np.array([[0.4, 0.6]]))
     assert t.tolist() == [[1.0, 19.0, 3.0, 0.0, 0.6]]
+
+
+@pytest.mark.parametrize("name", ["sin_phase", "sin_amp"])
+def test_a_sine_reading_an_input_uses_cached_sines_to_rounding(signals, name: str) -> None:
+    x, y = signals
+    pop = _population(0, p=1, m=1, n=2)
+    from edm_sym.elements import BY_NAME
+
+    pop.codes[0, 0] = [BY_NAME[name].code, BY_NAME["gain"].code]
+    pop.ps[0, 0] = [0.37, 0.8]
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
+        rows: list = []
+        ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        got = rows[0][1][0]
+    comp = Compensator(pop.matrix(0, NAMES), TS, {}, N * TS)
+    want = simulate_row(comp, comp.matrix.rows[0], x[pop.inputs[0, 0]])
+    assert np.allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))

@@ -9,6 +9,7 @@ slots, so no row output is ever pickled between processes.
 from __future__ import annotations
 
 import mmap
+import threading
 from collections import OrderedDict
 from collections.abc import Collection
 
@@ -16,7 +17,7 @@ import numpy as np
 
 
 class RowCache:
-    """Least-recently-used row outputs, bounded by memory.
+    """Least-recently-used row outputs, bounded by memory (safe to share between threads).
 
     Parameters
     ----------
@@ -28,32 +29,36 @@ class RowCache:
         self.max_bytes = int(max_bytes)
         self.nbytes = 0
         self._data: OrderedDict[bytes, np.ndarray] = OrderedDict()
+        self._lock = threading.Lock()
 
     def __len__(self) -> int:
         return len(self._data)
 
     def get(self, key: bytes) -> np.ndarray | None:
         """The cached output of ``key`` (refreshing it), or None."""
-        arr = self._data.get(key)
-        if arr is not None:
-            self._data.move_to_end(key)
-        return arr
+        with self._lock:
+            arr = self._data.get(key)
+            if arr is not None:
+                self._data.move_to_end(key)
+            return arr
 
     def put(self, key: bytes, arr: np.ndarray) -> None:
         """Store ``arr`` under ``key``, evicting the least recently used rows."""
-        if key in self._data:
-            self._data.move_to_end(key)
-            return
-        self._data[key] = arr
-        self.nbytes += arr.nbytes
-        while self.nbytes > self.max_bytes and len(self._data) > 1:
-            _, old = self._data.popitem(last=False)
-            self.nbytes -= old.nbytes
+        with self._lock:
+            if key in self._data:
+                self._data.move_to_end(key)
+                return
+            self._data[key] = arr
+            self.nbytes += arr.nbytes
+            while self.nbytes > self.max_bytes and len(self._data) > 1:
+                _, old = self._data.popitem(last=False)
+                self.nbytes -= old.nbytes
 
     def clear(self) -> None:
         """Drop every row."""
-        self._data.clear()
-        self.nbytes = 0
+        with self._lock:
+            self._data.clear()
+            self.nbytes = 0
 
 
 class SlotStore:

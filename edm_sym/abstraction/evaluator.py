@@ -32,6 +32,7 @@ import os
 import pickle
 import time
 import warnings
+from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
@@ -45,6 +46,7 @@ from edm_sym.abstraction.rowsim import (
     fill_slots,
     forget,
     ping,
+    prefix_key,
     row_table,
     simulate_chunk,
     simulate_table,
@@ -52,7 +54,6 @@ from edm_sym.abstraction.rowsim import (
     worker_init,
 )
 from edm_sym.elements import ParamRange
-from edm_sym.simulate import fitness
 
 __all__ = ["EvalStats", "Evaluator", "RowCache", "row_table"]
 
@@ -131,6 +132,9 @@ class Evaluator:
             store = None
         # Made before any fork, so forked workers inherit it (and the store).
         self._local = worker_for(self._token, ctx=self.ctx, store=store)
+        self._started = False
+        self._pinned: list[ProcessPoolExecutor] = []
+        self._owner: OrderedDict[bytes, int] = OrderedDict()
         self.stats = EvalStats()
         self._weights: np.ndarray | float = 1.0
         self._memo: dict[bytes, float] = {}
@@ -139,29 +143,43 @@ class Evaluator:
     # -- life cycle -------------------------------------------------------------
     def start(self) -> None:
         """Start the default process pool now, before any other thread exists."""
-        if self._own_pool and self.workers > 1 and self.executor is None:
-            ctx = multiprocessing.get_context("fork" if self.shared else None)
-            with warnings.catch_warnings():
-                # Forking is safe here: the pool starts before the run makes threads.
-                warnings.simplefilter("ignore", DeprecationWarning)
-                self.executor = ProcessPoolExecutor(self.workers, mp_context=ctx,
-                                                    initializer=worker_init,
+        if not self._own_pool or self.workers <= 1 or self._started:
+            return
+        self._started = True
+        with warnings.catch_warnings():
+            # Forking is safe here: the pool starts before the run makes threads.
+            warnings.simplefilter("ignore", DeprecationWarning)
+            if self.shared:
+                # One single-process pool per worker, so rows can be routed to the
+                # worker whose prefix cache holds their first elements.
+                ctx = multiprocessing.get_context("fork")
+                self._pinned = [ProcessPoolExecutor(1, mp_context=ctx, initializer=worker_init,
                                                     initargs=(os.getpid(),))
-                for f in [self.executor.submit(ping) for _ in range(self.workers)]:
-                    f.result()
+                                for _ in range(self.workers)]
+                pools = self._pinned
+            else:
+                self.executor = ProcessPoolExecutor(self.workers, initializer=worker_init,
+                                                    initargs=(os.getpid(),))
+                pools = [self.executor] * self.workers
+            for f in [pool.submit(ping) for pool in pools]:
+                f.result()
 
     def close(self) -> None:
         """Shut down the process pool this evaluator started (not a caller's executor)."""
-        if self._own_pool and self.executor is not None:
-            self.executor.shutdown(wait=True, cancel_futures=True)
-            self.executor = None
+        self._shutdown(wait=True)
         forget(self._token)
 
     def abort(self) -> None:
         """Shut down an own pool without waiting (after an interrupt)."""
+        self._shutdown(wait=False)
+
+    def _shutdown(self, wait: bool) -> None:
         if self._own_pool and self.executor is not None:
-            self.executor.shutdown(wait=False, cancel_futures=True)
+            self.executor.shutdown(wait=wait, cancel_futures=True)
             self.executor = None
+        for pool in self._pinned:
+            pool.shutdown(wait=wait, cancel_futures=True)
+        self._pinned = []
 
     def __enter__(self) -> Evaluator:
         return self
@@ -295,11 +313,16 @@ class Evaluator:
         return out
 
     def _fitness(self, rows: Sequence[np.ndarray]) -> float:
-        total = rows[0] + rows[1] if len(rows) > 1 else rows[0]
-        for r in rows[2:]:
-            total += r
+        # Eq. 8 in one pass over the residual (einsum's loops: no temporaries, no
+        # BLAS); equal to edm_sym.simulate.fitness to rounding.
+        res = self.target - rows[0]
+        for r in rows[1:]:
+            res -= r
+        w = self._weights
         with np.errstate(over="ignore", invalid="ignore"):
-            f = fitness(self.target - total, self._weights)
+            sq = (np.einsum("i,i", res, res) * w if np.isscalar(w)
+                  else np.einsum("i,i,i", w, res, res))
+            f = float(np.sqrt(sq / res.shape[0]))
         return f if np.isfinite(f) else float("inf")
 
     def simulate_rows(self, table: np.ndarray) -> list[np.ndarray]:
@@ -342,16 +365,38 @@ class Evaluator:
         return out
 
     def _fill(self, table: np.ndarray, slots: list[int]) -> None:
-        if len(table) < self.MIN_PARALLEL_ROWS or self.executor is None:
+        if len(table) < self.MIN_PARALLEL_ROWS or not self._pinned:
             fill_slots(self._token, table, slots)
             return
-        parts = self._chunks(table)
-        bounds = np.cumsum([0] + [len(p) for p in parts])
-        futures = [self.executor.submit(fill_slots, self._token, part,
-                                        slots[bounds[c]:bounds[c + 1]])
-                   for c, part in enumerate(parts)]
+        parts = self._route(table)
+        futures = [self._pinned[w].submit(fill_slots, self._token, table[idx],
+                                          [slots[i] for i in idx])
+                   for w, idx in enumerate(parts) if idx]
         for f in futures:
             f.result()
+
+    def _route(self, table: np.ndarray) -> list[list[int]]:
+        """Rows per worker: to the worker that computed their longest known prefix.
+
+        A row goes where its prefix most likely sits in a prefix cache, unless
+        that worker already has its share of the batch (then to the least
+        loaded one). Routing changes only speed, never a result.
+        """
+        n = (table.shape[1] - 1) // 2
+        cap = -(-len(table) * 5 // (4 * self.workers))  # a quarter over an even share
+        parts: list[list[int]] = [[] for _ in range(self.workers)]
+        for r, line in enumerate(table):
+            keys = [prefix_key(line, n, k) for k in range(1, n)]
+            owner = next((self._owner[k] for k in reversed(keys) if k in self._owner), None)
+            if owner is None or len(parts[owner]) >= cap:
+                owner = min(range(self.workers), key=lambda w: len(parts[w]))
+            parts[owner].append(r)
+            for k in keys:
+                self._owner[k] = owner
+                self._owner.move_to_end(k)
+        while len(self._owner) > 200_000:
+            self._owner.popitem(last=False)
+        return parts
 
     def _chunks(self, table: np.ndarray) -> list[np.ndarray]:
         count = min(len(table), 2 * self.workers)

@@ -10,6 +10,7 @@ row's output is a pure function of its genes, whatever any cache holds.
 
 from __future__ import annotations
 
+import math
 import os
 import pickle
 import signal
@@ -22,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from edm_sym.abstraction.cache import RowCache
-from edm_sym.elements import REGISTRY, Element, ParamRange
+from edm_sym.elements import BY_NAME, REGISTRY, Element, ParamRange
 from edm_sym.simulate import simulate_element_fast
 
 #: Codes of the elements that use their parameter (others ignore p).
@@ -77,39 +78,71 @@ class SimContext:
 
 @dataclass
 class Worker:
-    """A process's state for one run: context, decoder, prefix cache, shared rows."""
+    """A process's state for one run: context, decoder, prefix cache, shared rows.
+
+    ``trig`` holds sin and cos of each input signal: a sine element reading an
+    input directly (the paper's position-dependent friction) then costs two
+    multiply-adds instead of a sine per sample.
+    """
 
     ctx: SimContext
     decoder: dict
     prefixes: RowCache
     store: np.ndarray | None = field(default=None)
+    trig: dict = field(default_factory=dict)
+
+    def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """sin and cos of input ``k`` (computed once)."""
+        hit = self.trig.get(k)
+        if hit is None:
+            x = self.ctx.inputs[k]
+            hit = self.trig[k] = (np.sin(x), np.cos(x))
+        return hit
+
+
+_SIN_PHASE = BY_NAME["sin_phase"].code
+_SIN_AMP = BY_NAME["sin_amp"].code
+
+
+def _first_element(worker: Worker, k: int, code: int, a: float | None) -> np.ndarray | None:
+    """A row's first element on input ``k`` from cached sines, or None to simulate it."""
+    if code == _SIN_AMP:
+        return a * worker.sin_cos(k)[0]  # the reference's a * sin(x), bit for bit
+    if code == _SIN_PHASE:
+        s, c = worker.sin_cos(k)
+        return s * math.cos(a) + c * math.sin(a)  # sin(x + a), equal to rounding
+    return None
 
 
 _WORKERS: OrderedDict[str, Worker] = OrderedDict()
+_LOCK = threading.Lock()  # executors may run tasks in threads (dask, thread pools)
 
 
 def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = None,
                store: np.ndarray | None = None) -> Worker:
     """This process's :class:`Worker` of run ``token`` (made from ``ctx`` or ``blob``)."""
-    hit = _WORKERS.get(token)
-    if hit is not None:
-        _WORKERS.move_to_end(token)
+    with _LOCK:
+        hit = _WORKERS.get(token)
+        if hit is not None:
+            _WORKERS.move_to_end(token)
+            return hit
+        if ctx is None:
+            ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
+        hit = Worker(ctx, ctx.decoder(), RowCache(ctx.prefix_bytes), store)
+        _WORKERS[token] = hit
+        while len(_WORKERS) > 8:
+            _WORKERS.popitem(last=False)
         return hit
-    if ctx is None:
-        ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-    hit = Worker(ctx, ctx.decoder(), RowCache(ctx.prefix_bytes), store)
-    _WORKERS[token] = hit
-    while len(_WORKERS) > 8:
-        _WORKERS.popitem(last=False)
-    return hit
 
 
 def forget(token: str) -> None:
     """Drop this process's state of run ``token``."""
-    _WORKERS.pop(token, None)
+    with _LOCK:
+        _WORKERS.pop(token, None)
 
 
-def _prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
+def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
+    """Key of the first ``k`` elements of a gene-table line (the row key of that prefix)."""
     return line[:1 + k].tobytes() + line[1 + n:1 + n + k].tobytes()
 
 
@@ -137,18 +170,20 @@ def simulate_table(worker: Worker, table: np.ndarray) -> list[np.ndarray]:
     for line in table:
         y, start = None, 0
         for k in range(n - 1, 0, -1):
-            y = cache.get(_prefix_key(line, n, k))
+            y = cache.get(prefix_key(line, n, k))
             if y is not None:
                 start = k
                 break
         if y is None:
             y = ctx.inputs[int(line[0])]
         for i in range(start, n):
-            cls, rng = decoder[int(line[1 + i])]
+            code = int(line[1 + i])
+            cls, rng = decoder[code]
             a = rng.decode(float(line[1 + n + i])) if rng is not None else None
-            prev, y = y, simulate_element_fast(cls, y, a, ctx.ts)
+            first = _first_element(worker, int(line[0]), code, a) if i == 0 else None
+            prev, y = y, (simulate_element_fast(cls, y, a, ctx.ts) if first is None else first)
             if i < n - 1 and y is not prev:
-                cache.put(_prefix_key(line, n, i + 1), y)
+                cache.put(prefix_key(line, n, i + 1), y)
         out.append(y)
     return out
 
