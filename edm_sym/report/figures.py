@@ -215,6 +215,7 @@ def contributions(labels: Sequence[str], rms: Sequence[float], cumulative_rmse: 
     ticks = (["none"] if baseline is not None else []) + [f"+{lab}" for lab in labels]
     a2.plot(xs, ys, marker="o", color="C0")
     a2.set_xticks(xs, ticks)
+    a2.set_ylim(bottom=0.0)
     a2.set_ylabel("RMSE [N m]")
     fig.tight_layout()
     return _save(fig, path)
