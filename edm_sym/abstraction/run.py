@@ -156,7 +156,8 @@ class _Runner:
         if progress:
             from tqdm import tqdm
 
-            self.bar = tqdm(unit="gen", file=sys.stderr, dynamic_ncols=True, leave=True)
+            self.bar = tqdm(unit="gen", file=sys.stderr, dynamic_ncols=True, leave=True,
+                            bar_format="{desc} [{elapsed}]")
 
     # -- commit -------------------------------------------------------------
     def _commit(self, current: StepState | None, finished: FinishedStep | None = None) -> None:
@@ -173,10 +174,9 @@ class _Runner:
         if self.bar is not None:
             step = self.cfg.steps[cur.step]
             rate = self.evaluator.stats.individuals / elapsed if elapsed > 0 else 0.0
-            self.bar.set_description(f"step {cur.step + 1}/{len(self.cfg.steps)} "
-                                     f"{step.n_elements}x{step.n_rows}", refresh=False)
-            self.bar.set_postfix_str(f"gen {cur.generation} best {best:.6g} {rate:.0f} eval/s",
-                                     refresh=False)
+            self.bar.set_description_str(
+                f"step {cur.step + 1}/{len(self.cfg.steps)} {step.n_elements}x{step.n_rows}"
+                f" | gen {cur.generation} | best {best:.6g} | {rate:.0f} eval/s", refresh=False)
             self.bar.update(1)
         if self.callback is not None:
             info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
