@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from edm_sym.abstraction import GenerationInfo, abstract, parse_config
 from edm_sym.data import DataLog
@@ -151,6 +153,32 @@ def test_resume_after_a_stop_gives_the_uninterrupted_result(
     again = run(log, SMALL, seed=2, workers=2, checkpoint=ckpt, resume=True)
     assert dumps(again) == want
     assert not ckpt.exists()  # a completed run removes its checkpoint
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stop_after=st.integers(1, 14))
+def test_a_stop_at_a_random_generation_resumes_to_the_same_bytes(
+    log: DataLog, tmp_path_factory: pytest.TempPathFactory, stop_after: int
+) -> None:
+    want = _uninterrupted(log)
+    ckpt = tmp_path_factory.mktemp("ck") / "c"
+    count = [0]
+
+    def hook(info: GenerationInfo) -> bool:
+        count[0] += 1
+        return count[0] >= stop_after
+
+    run(log, SMALL, seed=9, workers=1, checkpoint=ckpt, callback=hook)
+    assert dumps(run(log, SMALL, seed=9, workers=1, checkpoint=ckpt, resume=True)) == want
+
+
+_CACHE: dict = {}
+
+
+def _uninterrupted(log: DataLog) -> str:
+    if "r" not in _CACHE:
+        _CACHE["r"] = dumps(run(log, SMALL, seed=9, workers=1))
+    return _CACHE["r"]
 
 
 def test_an_interrupt_returns_the_best_so_far_and_resumes(log: DataLog, tmp_path: Path) -> None:
