@@ -233,7 +233,7 @@ def test_friction_characteristic_flags_a_row_that_never_settles() -> None:
 
 
 def test_term_notes_drop_plain_text_copies_of_expressions() -> None:
-    from edm_sym.report.context import _drop_code
+    from edm_sym.report.rows import _drop_code
 
     assert _drop_code("not odd (0.0032*GAcos(Max(-0.5, omega))); through a filter") == (
         "not odd; through a filter")

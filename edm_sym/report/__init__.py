@@ -7,6 +7,7 @@ figures (``<prefix>_fig_*.pdf``) and, with ``pdf=True``, compiles
 * :mod:`edm_sym.report.runs` -- the compensator (and the LuGre baseline) on the data logs;
 * :mod:`edm_sym.report.blocks` -- a row's simplified expression as a chain of blocks;
 * :mod:`edm_sym.report.diagrams` -- the TikZ pictures' layout and labels;
+* :mod:`edm_sym.report.rows` -- one row's equations, difference equations and physical terms;
 * :mod:`edm_sym.report.context` -- the validated template context;
 * :mod:`edm_sym.report.figures` -- the matplotlib figures;
 * :mod:`edm_sym.report.pdf` -- latexmk, the log, the clean-up.
