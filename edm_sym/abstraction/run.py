@@ -229,20 +229,26 @@ class _Runner:
             pop.ps[:count, :m0, n0:] = 0.0
             zero = _zero_gene(step, self.ranges)
             if zero is not None and m0 < m:
-                # The inherited model with new rows that output 0: never worse than before.
-                pop.codes[0, m0:, 0], pop.ps[0, m0:, 0] = zero
-        fit, extra = self._evaluate(pop, ops)
+                # The inherited model with new rows that output 0 (through ... through,
+                # gain 0): a step starts where the previous one ended.
+                pop.codes[0, m0:], pop.ps[0, m0:] = THROUGH, 0.0
+                pop.codes[0, m0:, -1], pop.ps[0, m0:, -1] = zero
+        # Individual 0 is the seed as it is: the gain fit improves copies of it later.
+        fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
         best = float(np.min(fit))
         return StepState(step=k, generation=0, blocks=0, block_start_best=best, ref_best=best,
                          since_improvement=0, done=False, population=pop, fitness=fit,
                          history=[best], evaluations=p + extra)
 
-    def _evaluate(self, pop: Population, ops: Operators) -> tuple[np.ndarray, int]:
+    def _evaluate(self, pop: Population, ops: Operators, keep_first: bool = False
+                  ) -> tuple[np.ndarray, int]:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
         if not ops.ga.gain_fit:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
         rows: list = []
         fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        if keep_first:
+            rows[0] = None
         idx, cand = gain_fit(pop, rows, fit, len(self.y), self.evaluator.gram, self.ranges,
                              gain_allowed=GAIN in ops.allowed)
         del rows
