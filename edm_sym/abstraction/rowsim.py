@@ -100,18 +100,17 @@ class Worker:
         return hit
 
 
-_SIN_PHASE = BY_NAME["sin_phase"].code
-_SIN_AMP = BY_NAME["sin_amp"].code
+def _sin_amp(s: np.ndarray, c: np.ndarray, a: float) -> np.ndarray:
+    return a * s  # the reference's a * sin(x), bit for bit
 
 
-def _first_element(worker: Worker, k: int, code: int, a: float | None) -> np.ndarray | None:
-    """A row's first element on input ``k`` from cached sines, or None to simulate it."""
-    if code == _SIN_AMP:
-        return a * worker.sin_cos(k)[0]  # the reference's a * sin(x), bit for bit
-    if code == _SIN_PHASE:
-        s, c = worker.sin_cos(k)
-        return s * math.cos(a) + c * math.sin(a)  # sin(x + a), equal to rounding
-    return None
+def _sin_phase(s: np.ndarray, c: np.ndarray, a: float) -> np.ndarray:
+    return s * math.cos(a) + c * math.sin(a)  # sin(x + a), equal to rounding
+
+
+#: Elements that, reading an input directly, are computed from its cached sin and cos
+#: (a speed table by element class; every other element runs its own simulation).
+FROM_INPUT_SINES = {BY_NAME["sin_amp"]: _sin_amp, BY_NAME["sin_phase"]: _sin_phase}
 
 
 _WORKERS: OrderedDict[str, Worker] = OrderedDict()
@@ -180,8 +179,9 @@ def simulate_table(worker: Worker, table: np.ndarray) -> list[np.ndarray]:
             code = int(line[1 + i])
             cls, rng = decoder[code]
             a = rng.decode(float(line[1 + n + i])) if rng is not None else None
-            first = _first_element(worker, int(line[0]), code, a) if i == 0 else None
-            prev, y = y, (simulate_element_fast(cls, y, a, ctx.ts) if first is None else first)
+            fast = FROM_INPUT_SINES.get(cls) if i == 0 else None
+            prev, y = y, (simulate_element_fast(cls, y, a, ctx.ts) if fast is None
+                          else fast(*worker.sin_cos(int(line[0])), a))
             if i < n - 1 and y is not prev:
                 cache.put(prefix_key(line, n, i + 1), y)
         out.append(y)
