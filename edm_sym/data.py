@@ -75,6 +75,14 @@ class DataLog:
                 f"expected a {role} named {name!r}, found only: {have}",
             ) from None
 
+    def window(self, start: int, stop: int | None = None) -> DataLog:
+        """Samples ``start:stop`` as a log of their own (e.g. to hold part of a log out)."""
+        cols = {k: np.ascontiguousarray(v[start:stop]) for k, v in self.columns.items()}
+        if not len(next(iter(cols.values()))):
+            raise DataFormatError(f"{self.source}: rows {start}:{stop}", "expected samples, found none")
+        digest = hashlib.sha256(f"{self.sha256}[{start}:{stop}]".encode()).hexdigest()
+        return DataLog(cols, self.ts, f"{self.source}[{start}:{stop}]", digest, dict(self.scalars))
+
     def stack(self, names: Iterable[str]) -> np.ndarray:
         """The named columns as a (len(names), N) array."""
         return np.vstack([self.column(n, role="input column") for n in names])

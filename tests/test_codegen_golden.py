@@ -6,6 +6,7 @@ Update both only with ``python tests/update_golden.py`` and review the diff.
 from __future__ import annotations
 
 import importlib.util
+import re
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -15,16 +16,19 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 
 
-def _update_golden() -> ModuleType:
-    name = "edm_update_golden"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, REPO / "tests" / "update_golden.py")
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
+def _script(name: str) -> ModuleType:
+    """Import tests/<name>.py (the explicit golden-update scripts) as a module."""
+    key = f"edm_{name}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, REPO / "tests" / f"{name}.py")
+        sys.modules[key] = module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
-    return sys.modules[name]
+    return sys.modules[key]
 
 
-ug = _update_golden()
+ug = _script("update_golden")
+
+
 HINT = "run `python tests/update_golden.py` if the change is intended, and review the diff"
 
 
@@ -46,11 +50,39 @@ def test_golden(case, tmp_path: Path) -> None:  # noqa: ANN001
     assert_same_files(fresh, ug.GOLDEN / case.name, skip=(case.result_file.name,))
 
 
+def _recorded_version(tex: str, package: str) -> str | None:
+    match = re.search(rf"^{re.escape(package)} & ([^ ]+) \\\\$", tex, re.MULTILINE)
+    return match.group(1) if match else None
+
+
 def test_committed_generated_auger_is_up_to_date(tmp_path: Path) -> None:
+    """``edm-export examples/auger/result.json --target all`` reproduces generated/auger/.
+
+    Code is compared byte for byte; the report's .tex byte for byte once the
+    dependency versions it records are blanked (they are the installing
+    machine's); the figures byte for byte when this matplotlib is the one that
+    drew them. The compiled PDF (made with --pdf) is checked by the report tests.
+    """
+    from importlib.metadata import version
+
     from edm_sym.cli import export_main
 
+    normalize = _script("update_golden_report").normalize
     assert export_main([str(ug.EXAMPLE), "--target", "all", "-o", str(tmp_path)]) == 0
-    assert_same_files(list(tmp_path.iterdir()), ug.GENERATED)
+    committed = sorted(p.name for p in ug.GENERATED.iterdir() if p.name != "edm_comp_report.pdf")
+    assert sorted(p.name for p in tmp_path.iterdir()) == committed, f"other files ({HINT})"
+    tex = (ug.GENERATED / "edm_comp_report.tex").read_text()
+    same_matplotlib = _recorded_version(tex, "matplotlib") == version("matplotlib")
+    for name in committed:
+        fresh, old = (tmp_path / name).read_bytes(), (ug.GENERATED / name).read_bytes()
+        if name.endswith(".tex"):
+            assert normalize(fresh.decode()) == normalize(old.decode()), f"{name} differs ({HINT})"
+        elif name.endswith(".pdf"):
+            assert fresh.startswith(b"%PDF") and old.startswith(b"%PDF")
+            if same_matplotlib:
+                assert fresh == old, f"{name} differs ({HINT})"
+        else:
+            assert fresh == old, f"{name} differs from a fresh render ({HINT})"
 
 
 def test_example_result_is_what_its_script_writes() -> None:
