@@ -25,6 +25,7 @@ from sympy.codegen.ast import float32, float64, real
 from sympy.printing.c import C99CodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.printing.helpers import HelperCalls
 
 #: The real types a compensator can be printed in.
 REALS = ("float", "double")
@@ -84,7 +85,7 @@ def c_comment_text(text: str) -> str:
     return re.sub(r"\s", " ", text).rstrip()
 
 
-class EdmC99Printer(C99CodePrinter):
+class EdmC99Printer(HelperCalls, C99CodePrinter):
     """C99 printer for edm_sym expressions in one real type.
 
     Parameters
@@ -168,33 +169,8 @@ class EdmC99Printer(C99CodePrinter):
         return self.literal(float(expr))
 
     # -- the project's functions ----------------------------------------------
-    def _helper_call(self, name: str, args: Iterable[Any]) -> str:
-        self.helpers_used.add(name)
-        return f"{self.prefix}_{name}({', '.join(self._print(a) for a in args)})"
-
-    def _print_sign(self, expr: sp.Expr) -> str:
-        return self._helper_call("sign", expr.args)
-
-    def _print_Sat(self, expr: sp.Expr) -> str:
-        return self._helper_call("sat", expr.args)
-
-    def _print_DeadZone(self, expr: sp.Expr) -> str:
-        return self._helper_call("dead_zone", expr.args)
-
-    def _print_SymLog(self, expr: sp.Expr) -> str:
-        return self._helper_call("sym_log", expr.args)
-
-    def _print_SymPow(self, expr: sp.Expr) -> str:
-        return self._helper_call("sym_pow", expr.args)
-
-    def _print_GTan(self, expr: sp.Expr) -> str:
-        return self._helper_call("tan", expr.args)
-
-    def _print_GAsin(self, expr: sp.Expr) -> str:
-        return self._helper_call("asin", expr.args)
-
-    def _print_GAcos(self, expr: sp.Expr) -> str:
-        return self._helper_call("acos", expr.args)
+    def helper_symbol(self, name: str) -> str:
+        return f"{self.prefix}_{name}"
 
     def _print_Max(self, expr: sp.Expr) -> str:
         # fmax(a, b) equals numpy.maximum for every non-NaN pair.

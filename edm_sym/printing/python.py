@@ -18,6 +18,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.printing.helpers import HelperCalls
 
 # name -> (helpers it calls, parameters, body lines); bodies are ScalarOps'.
 _HELPERS: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
@@ -43,7 +44,7 @@ def py_literal(value: float) -> str:
     return repr(v)
 
 
-class EdmPythonPrinter(PythonCodePrinter):
+class EdmPythonPrinter(HelperCalls, PythonCodePrinter):
     """Python printer for edm_sym expressions using only the ``math`` module.
 
     Attributes
@@ -80,33 +81,8 @@ class EdmPythonPrinter(PythonCodePrinter):
         return py_literal(float(expr))
 
     # -- the project's functions ----------------------------------------------
-    def _helper_call(self, name: str, args: Iterable[Any]) -> str:
-        self.helpers_used.add(name)
-        return f"_{name}({', '.join(self._print(a) for a in args)})"
-
-    def _print_sign(self, expr: sp.Expr) -> str:
-        return self._helper_call("sign", expr.args)
-
-    def _print_Sat(self, expr: sp.Expr) -> str:
-        return self._helper_call("sat", expr.args)
-
-    def _print_DeadZone(self, expr: sp.Expr) -> str:
-        return self._helper_call("dead_zone", expr.args)
-
-    def _print_SymLog(self, expr: sp.Expr) -> str:
-        return self._helper_call("sym_log", expr.args)
-
-    def _print_SymPow(self, expr: sp.Expr) -> str:
-        return self._helper_call("sym_pow", expr.args)
-
-    def _print_GTan(self, expr: sp.Expr) -> str:
-        return self._helper_call("tan", expr.args)
-
-    def _print_GAsin(self, expr: sp.Expr) -> str:
-        return self._helper_call("asin", expr.args)
-
-    def _print_GAcos(self, expr: sp.Expr) -> str:
-        return self._helper_call("acos", expr.args)
+    def helper_symbol(self, name: str) -> str:
+        return f"_{name}"
 
     def _print_Max(self, expr: sp.Expr) -> str:
         return f"max({', '.join(self._print(a) for a in expr.args)})"
