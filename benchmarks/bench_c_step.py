@@ -88,6 +88,22 @@ def best_time(fn, repeat: int) -> float:  # noqa: ANN001
     return best
 
 
+def c_ns_per_sample(result, log: dict[str, np.ndarray], *, cc: str = "gcc",  # noqa: ANN001
+                    repeat: int = 20) -> float:
+    """Export ``result`` as double C, compile it with -O2 and time ``step`` over ``log`` [ns]."""
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        export(result, "c", d, real="double")
+        (d / "harness.c").write_text(HARNESS)
+        n = len(next(iter(log.values())))
+        np.column_stack([log[k] for k in result.inputs]).astype(np.float64).tofile(d / "in.bin")
+        subprocess.run([cc, "-std=c99", "-O2", "-o", str(d / "bench"), str(d / "harness.c"),
+                        str(d / "edm_comp.c"), "-lm"], check=True, cwd=d)
+        out = subprocess.run([str(d / "bench"), str(d / "in.bin"), str(n), str(repeat)],
+                             check=True, capture_output=True, text=True).stdout
+    return float(out.split()[0])
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print ns per sample and ratios."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -100,16 +116,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     result = load_result(args.result)
     log = make_log(result.inputs)
+    c_ns = c_ns_per_sample(result, log, cc=args.cc, repeat=args.repeat)
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        export(result, "all", d, real="double")
-        (d / "harness.c").write_text(HARNESS)
-        np.column_stack([log[k] for k in result.inputs]).astype(np.float64).tofile(d / "in.bin")
-        subprocess.run([args.cc, "-std=c99", "-O2", "-o", str(d / "bench"), str(d / "harness.c"),
-                        str(d / "edm_comp.c"), "-lm"], check=True, cwd=d)
-        out = subprocess.run([str(d / "bench"), str(d / "in.bin"), str(N), str(args.repeat)],
-                             check=True, capture_output=True, text=True).stdout
-        c_ns = float(out.split()[0])
+        export(result, "python", d)
         spec = importlib.util.spec_from_file_location("edm_bench_generated", d / "edm_comp.py")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from edm_sym.abstraction.schedule import GaSettings
 from edm_sym.data import DataLog
 from edm_sym.elements import default_ranges
 from edm_sym.matrix import Compensator
+from edm_sym.result import EdmResult
 from edm_sym.simulate import fitness, plain_loop, simulate
 
 TS = 1e-3
@@ -79,6 +81,31 @@ def bench_batched(log: DataLog, workers: int) -> None:
     print(f"repeated batch  {warm:8.3f} s   (every row from the cache)")
     print(f"plain loop      {plain:12.4g} element-samples/s")
     print(f"ratio batched / plain loop: {batched / plain:.1f}")
+    c_rate = _generated_c_rate(pop, inputs, ranges, x)
+    if c_rate is not None:
+        print(f"generated C     {c_rate:12.4g} element-samples/s (gcc -O2, double, 8 of the matrices)")
+        print(f"ratio generated C / batched: {c_rate / batched:.2f} (aim: within 2)")
+
+
+def _generated_c_rate(pop, inputs, ranges, x) -> float | None:  # noqa: ANN001
+    """Element-samples per second of the generated C of the first 8 matrices (None without gcc)."""
+    import importlib.util
+    import shutil
+
+    if not shutil.which("gcc"):
+        return None
+    spec = importlib.util.spec_from_file_location(
+        "edm_bench_c_step", Path(__file__).with_name("bench_c_step.py"))
+    bench_c = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench_c)
+    n = x.shape[1]
+    log = {name: x[i] for i, name in enumerate(inputs)}
+    ns = []
+    for k in range(8):
+        comp = Compensator(pop.matrix(k, inputs), TS, ranges, n * TS)
+        result = EdmResult(comp, "tau_ext")
+        ns.append(bench_c.c_ns_per_sample(result, log, repeat=5))
+    return 4 * 5 / (1e-9 * float(np.mean(ns)))
 
 
 def _keep(store: dict):  # noqa: ANN202
