@@ -30,6 +30,7 @@ result records its data and LuGre file (``report_inputs``), so a plain
 from __future__ import annotations
 
 import json
+import os
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -234,7 +235,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         print(f"{label:<12} {row['edm']:12.4g} {lug}", file=out)
 
     ex = pipe.export
-    out_dir = (pipe.folder / ex["out_dir"]) if "out_dir" in ex else \
+    out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
         Path("generated") / pipe.folder.name
     written = export(result, _get(f"{name}: export", ex, "target", str, "all"), out_dir,
                      prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
