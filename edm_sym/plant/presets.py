@@ -234,7 +234,7 @@ PRESETS: dict[str, PlantPreset] = {
         velocity_integral=0.0,
         g_velocity=2000.0,
         g_acceleration=1000.0,
-        encoder_counts=2**17,
+        encoder_counts=2**20,
         current_noise=0.02,
     ),
     "ballscrew": PlantPreset(
@@ -263,7 +263,7 @@ PRESETS: dict[str, PlantPreset] = {
         velocity_integral=4000.0,
         g_velocity=2000.0,
         g_acceleration=1000.0,
-        encoder_counts=2**20,
+        encoder_counts=2**23,
         current_noise=0.01,
     ),
     "lugre": PlantPreset(
@@ -289,7 +289,7 @@ PRESETS: dict[str, PlantPreset] = {
         velocity_integral=0.0,
         g_velocity=2000.0,
         g_acceleration=1000.0,
-        encoder_counts=2**17,
+        encoder_counts=2**20,
         current_noise=0.02,
     ),
 }

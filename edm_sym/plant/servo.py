@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
 import numpy as np
@@ -137,6 +137,25 @@ class PlantLog:
         """dict of str to numpy.ndarray: the log columns, in the order of :data:`COLUMNS`."""
         return {name: getattr(self, name) for name in COLUMNS}
 
+    def statistics(self) -> dict[str, dict[str, float]]:
+        """Mean, RMS, minimum and maximum of every log column.
+
+        Returns
+        -------
+        dict
+            ``{column: {"mean": ..., "rms": ..., "min": ..., "max": ...}}`` in
+            the order of :data:`COLUMNS`.
+        """
+        return {
+            name: {
+                "mean": float(np.mean(x)),
+                "rms": float(np.sqrt(np.mean(x * x))),
+                "min": float(np.min(x)),
+                "max": float(np.max(x)),
+            }
+            for name, x in self.columns.items()
+        }
+
     def tracking_error_rms(self) -> float:
         """RMS of ``omega_cmd - omega`` over the log (logged, i.e. measured, omega).
 
@@ -202,12 +221,6 @@ def simulate_plant(
     plant = get_preset(preset)
     command = get_excitation(excitation)
     log = simulate_axis(plant, command, ts=ts, duration=duration, seed=seed, substeps=substeps)
-    return _replace_excitation(log, excitation)
-
-
-def _replace_excitation(log: PlantLog, excitation: str) -> PlantLog:
-    from dataclasses import replace
-
     return replace(log, excitation=excitation)
 
 
