@@ -1,28 +1,47 @@
-"""Pin the plant presets' log statistics: ``python tests/update_plant_stats.py``.
+"""Regenerate tests/data/plant_stats.json, the pinned statistics of every plant log.
 
-The only way tests/data/plant_stats.json changes; review the diff before committing.
+Run by hand only, after a deliberate change of the plant model, and review the diff:
+
+    python tests/update_plant_stats.py
+
+tests/test_plant.py compares against the file and never writes it.
 """
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
+from edm_sym.plant import EXCITATIONS, PRESETS, simulate_plant
 
-from test_plant import STATS, statistics  # noqa: E402
-
-from edm_sym.fileio import write_atomic  # noqa: E402
-from edm_sym.plant import EXCITATIONS, PRESETS, simulate_plant  # noqa: E402
+STATS_FILE = Path(__file__).parent / "data" / "plant_stats.json"
+SEED = 0
 
 
-def main() -> int:
-    doc = {f"{p}/{e}": statistics(simulate_plant(p, e)) for p in sorted(PRESETS) for e in EXCITATIONS}
-    write_atomic(STATS, json.dumps(doc, sort_keys=True, indent=2) + "\n")
-    print(STATS)
-    return 0
+def compute() -> dict[str, object]:
+    """Statistics of each preset x excitation log (seed 0, default options).
+
+    Returns
+    -------
+    dict
+        ``{"seed": 0, "logs": {"<preset>/<excitation>": PlantLog.statistics()}}``.
+    """
+    logs = {}
+    for name in sorted(PRESETS):
+        for excitation in EXCITATIONS:
+            logs[f"{name}/{excitation}"] = simulate_plant(name, excitation, seed=SEED).statistics()
+    return {"seed": SEED, "logs": logs}
+
+
+def main() -> None:
+    """Write the statistics file (sorted keys, full float precision)."""
+    STATS_FILE.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(compute(), indent=1, sort_keys=True) + "\n"
+    tmp = STATS_FILE.with_suffix(".json.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(STATS_FILE)  # never leave a half-written file behind
+    print(f"wrote {STATS_FILE}")
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()
