@@ -6,19 +6,25 @@ import math
 
 import numpy as np
 import pytest
+import sympy as sp
 from conftest import TS, smooth_signal
 
-from edm_sym.elements import element
+from edm_sym.elements import default_ranges, element
 from edm_sym.matrix import Compensator, make_matrix
 from edm_sym.simulate import simulate
 from edm_sym.symbolic import (
+    LTI,
     ClassifyOptions,
+    Delay,
     PhysicalTerm,
+    RowModel,
     contributions,
     decode,
     input_roles,
+    s,
 )
 from edm_sym.symbolic.classify import KINDS
+from edm_sym.symbolic.functions import SymPow
 
 INPUTS = ("theta_w", "theta_uw", "omega", "alpha", "x")
 
@@ -207,6 +213,177 @@ def test_role_defaults_and_validation() -> None:
 def test_every_kind_is_known(coulomb_viscous: Compensator) -> None:
     for row in decode(coulomb_viscous).rows:
         assert all(t.kind in KINDS for t in row.terms)
+
+
+# -- rows the genetic algorithm found on the auger plant ----------------------------
+
+RANGES = default_ranges(TS, 20.0)
+W_REP = 4 * math.pi  # ClassifyOptions().acceleration_frequency
+
+
+def ga_row(inp: str, genes: list[tuple[str, float]], **kw) -> RowModel:
+    """One decoded row; genes are (element name, parameter value), encoded by the ranges."""
+    coded = [(name, RANGES[name].encode(v) if name in RANGES else 0.0) for name, v in genes]
+    comp = Compensator(make_matrix(INPUTS, [(inp, coded)]), TS, {}, 20.0)
+    return decode(comp, systems=False, **kw).rows[0]
+
+
+def assert_same_expr(got: sp.Expr, want: sp.Expr, rtol: float = 1e-9) -> None:
+    """The same expression tree, numbers equal to ``rtol``."""
+    if want.is_Number:
+        assert got.is_Number and abs(float(got) - float(want)) <= rtol * max(1.0, abs(
+            float(want))), (got, want)
+        return
+    assert got.func == want.func and len(got.args) == len(want.args), (got, want)
+    for a, b in zip(got.args, want.args, strict=True):
+        assert_same_expr(a, b, rtol)
+
+
+def test_ga_sine_through_a_lag_is_spatial() -> None:
+    row = ga_row("theta_uw", [("sin_phase", 0.40328794296480153), ("through", 0),
+                              ("lag", 121.14323491198216), ("sin_amp", 0.06645347507252275),
+                              ("through", 0)])
+    q = row.input_symbol
+    a = 121.14323491198216
+    assert_same_expr(row.expr_numeric, 0.06645347507252275 * sp.sin(
+        LTI(sp.sin(q + 0.40328794296480153), (sp.Float(0.1) * s + a) / (s + a))))
+    t = one(row.terms, "spatial")
+    close(t, "cycles_per_revolution", 1.0, "1")
+    close(t, "period", 2 * math.pi, "rad")
+    # The lag's DC gain is 1: 0.0665 sin(sin(q + 0.403)), half peak-to-peak 0.0665 sin(1),
+    # an odd function of sin(q + 0.403), so its fundamental keeps the phase 0.403.
+    assert t.parameters["amplitude"][0] == pytest.approx(0.06645347507252275 * math.sin(1.0),
+                                                         rel=1e-5)
+    assert t.parameters["phase"][0] == pytest.approx(0.40328794296480153, abs=1e-9)
+    assert t.parameters["corner"][0] == pytest.approx(a, rel=1e-9)
+    assert "filtered" in t.description
+
+
+def test_ga_sine_of_a_delayed_sine_is_spatial() -> None:
+    row = ga_row("theta_uw", [("sin_amp", -5.0), ("dead_time", 0.003),
+                              ("sin_phase", -1.5734016809073534),
+                              ("gain", -0.022916475114039159), ("through", 0)])
+    q = row.input_symbol
+    assert_same_expr(row.expr_numeric, -0.022916475114039159 * sp.sin(
+        Delay(-5.0 * sp.sin(q), 0.003) - 1.5734016809073534))
+    t = one(row.terms, "spatial")
+    close(t, "cycles_per_revolution", 1.0, "1")
+    close(t, "delay", 0.003, "s")
+    # -5 sin q - 1.573 sweeps past both +-pi/2: the outer sine reaches +-1.
+    assert t.parameters["amplitude"][0] == pytest.approx(0.022916475114039159, rel=1e-4)
+    # cos(5 sin q) = J0(5) + 2 J2(5) cos 2q + 2 J4(5) cos 4q + ...: J4(5) = 0.391 dominates.
+    close(t, "dominant_cycles", 4.0, "1")
+    assert t.parameters["dominant_amplitude"][0] == pytest.approx(
+        0.022916475114039159 * 2 * 0.3912323604, rel=1e-3)
+    assert "delayed" in t.description
+
+
+@pytest.mark.parametrize("a_range", [1000.0, 100.0])
+def test_ga_delayed_power_of_high_passed_acceleration(a_range: float) -> None:
+    c, a, p = -8.4115104597159984e-5, 2.02949733251458, 0.93724133457915504
+    row = ga_row("alpha", [("hpf", a), ("power", p), ("gain", c), ("dead_time", 0.005),
+                           ("through", 0)],
+                 classify=ClassifyOptions(acceleration_range=a_range))
+    x = row.input_symbol
+    assert_same_expr(row.expr_numeric, Delay(c * SymPow(LTI(x, s / (s + a)), p), 0.005))
+    t = one(row.terms, "acceleration")
+    # The high pass at 4 pi rad/s: |G| = w / sqrt(w^2 + a^2). The least-squares line
+    # through c sgn(x) |G x|^p over [-A, A] has the slope c |G|^p 3 A^(p-1) / (p + 2).
+    g = W_REP / math.hypot(W_REP, a)
+    expected = c * g ** p * 3 * a_range ** (p - 1) / (p + 2)
+    assert t.parameters["inertia"][0] == pytest.approx(expected, rel=0.01)
+    assert t.parameters["inertia"][1] == "kg m^2"
+    assert t.parameters["linearity_r2"][0] > 0.99
+    close(t, "delay", 0.005, "s")
+    assert t.parameters["corner"][0] == pytest.approx(a)
+    assert t.parameters["band_low"][0] == pytest.approx(a, rel=0.05)
+    assert "band_high" not in t.parameters
+    assert t.description.startswith("acceleration-dependent term")
+
+
+def test_ga_band_passed_acceleration() -> None:
+    # alpha -> high pass -> notch -> gain: s^3 and s in the numerator, a cubic below.
+    g, a1, a2 = 0.00035592640513115725, 601.0146164046411, 433.47251062996236
+    row = ga_row("alpha", [("hpf", a1), ("notch", a2), ("gain", g), ("through", 0),
+                           ("through", 0)])
+    num = g * s ** 3 + 66.878008260586455 * s
+    den = s ** 3 + 1034.4871270346034 * s ** 2 + 448421.73217006639 * s + 112929695.29987873
+    assert_same_expr(row.expr_numeric, LTI(row.input_symbol, num / den), rtol=1e-7)
+    t = one(row.terms, "acceleration")
+    jw = 1j * W_REP
+    G = g * jw / (jw + a1) * (jw ** 2 + a2 ** 2) / (jw ** 2 + a2 * jw + a2 ** 2)  # noqa: N806
+    assert G.real > 0
+    assert t.parameters["inertia"][0] == pytest.approx(abs(G), rel=1e-6)
+    assert t.parameters["filter_phase"][0] == pytest.approx(np.angle(G), rel=1e-6)
+    close(t, "frequency", W_REP, "rad/s")
+    # Its pass band lies above the hpf and the notch; there the inertia is the gain.
+    assert 601 < t.parameters["band_low"][0] < 2000
+    assert t.parameters["inertia_in_band"][0] == pytest.approx(g, rel=0.01)
+    assert "derivative" in t.description  # 87 deg of phase at 4 pi rad/s
+
+
+def test_sign_of_high_passed_acceleration_is_nonlinear_acceleration() -> None:
+    # 0.2 sgn(hpf(alpha)): the line through 0.2 sgn(x) over [-A, A] has the slope
+    # 0.2 * 3 / (2 A) and R^2 = 3/4.
+    t = one(terms_of([("hpf", enc("hpf", 1.0)), ("sign", 0), ("gain", enc("gain", 0.2))],
+                     inp="alpha"), "acceleration")
+    assert t.parameters["inertia"][0] == pytest.approx(0.2 * 1.5 / 1000.0, rel=0.01)
+    assert t.parameters["linearity_r2"][0] == pytest.approx(0.75, abs=0.01)
+    close(t, "peak", 0.2, "N m")
+    assert t.description.startswith("nonlinear acceleration-dependent term")
+
+
+def test_velocity_nonlinearity_then_derivative_is_acceleration() -> None:
+    # 0.3 d/dt tanh(0.01 omega) = 0.3 * 0.01 (1 - tanh^2) alpha: at 100 rad/s^2 and
+    # 4 pi rad/s the velocity swings +-8 rad/s, where tanh(0.08) is still nearly linear.
+    genes = [("tanh", enc("tanh", 0.01)), ("derivative", enc("derivative", 0.3))]
+    t = one(terms_of(genes, classify=ClassifyOptions(acceleration_range=100.0)),
+            "acceleration")
+    assert t.parameters["inertia"][0] == pytest.approx(0.3 * 0.01, rel=0.01)
+    assert "corner" not in t.parameters
+    # Over +-1000 rad/s^2 the velocity reaches +-80 rad/s and tanh bends: a smaller slope.
+    t = one(terms_of(genes), "acceleration")
+    assert 0.5 * 0.3 * 0.01 < t.parameters["inertia"][0] < 0.95 * 0.3 * 0.01
+
+
+def test_wrapped_angle_rows_are_spatial_by_construction() -> None:
+    # 0.05 tanh(2 theta_w): one revolution rises from 0 to 0.05, then jumps back.
+    row = ga_row("theta_w", [("gain", 1.0), ("tanh", 2.0), ("gain", 0.05)])
+    t = one(row.terms, "spatial")
+    close(t, "cycles_per_revolution", 1.0, "1")
+    assert t.parameters["amplitude"][0] == pytest.approx(0.025, rel=1e-6)
+    assert t.parameters["wrap_jump"][0] == pytest.approx(-0.05, rel=1e-6)
+    assert "jumps" in t.description
+    # Linear in the wrapped angle: a sawtooth, sum of -2 c sin(k q) / k.
+    t = one(terms_of([("gain", enc("gain", 0.4))], inp="theta_w"), "spatial")
+    assert t.parameters["amplitude"][0] == pytest.approx(0.4 * math.pi, rel=1e-6)
+    assert t.parameters["fundamental_amplitude"][0] == pytest.approx(0.8, rel=1e-3)
+    assert abs(abs(t.parameters["phase"][0]) - math.pi) < 1e-3  # c q = c pi - 2 c sin q - ...
+    # A saw with four teeth per revolution: four cycles.
+    t = one(terms_of([("gain", enc("gain", 4.0)), ("sin_phase", enc("sin_phase", 0.0)),
+                      ("asin", 0), ("gain", enc("gain", 0.1))], inp="theta_w"), "spatial")
+    close(t, "cycles_per_revolution", 4.0, "1")
+    assert t.parameters["amplitude"][0] == pytest.approx(0.1 * math.pi / 2, rel=1e-5)
+
+
+def test_periodicity_of_the_unwrapped_angle_needs_whole_harmonics() -> None:
+    genes = [("gain", enc("gain", 2.003)), ("sin_phase", enc("sin_phase", 0.2)),
+             ("lag", enc("lag", 30.0)), ("sin_amp", enc("sin_amp", 0.1))]
+    close(one(terms_of(genes, inp="theta_uw"), "spatial"), "cycles_per_revolution", 2.0, "1")
+    t = one(terms_of(genes, inp="theta_uw", classify=ClassifyOptions(harmonic_tolerance=1e-4)),
+            "unclassified")
+    assert "angle input" in t.description
+    # Not periodic at all: a function of the angle itself.
+    one(terms_of([("tanh", enc("tanh", 2.0)), ("lag", enc("lag", 30.0)),
+                  ("sin_amp", enc("sin_amp", 0.1))], inp="theta_uw"), "unclassified")
+
+
+def test_classify_options_are_validated() -> None:
+    for name in ("acceleration_frequency", "acceleration_range", "harmonic_tolerance"):
+        with pytest.raises(ValueError, match=name):
+            ClassifyOptions(**{name: 0.0})
+    with pytest.raises(ValueError, match="below 0.5"):
+        ClassifyOptions(harmonic_tolerance=0.5)
 
 
 # -- contributions ---------------------------------------------------------------

@@ -23,10 +23,27 @@ pattern                   term                                         parameter
 odd hump in v             Stribeck-like                                peak, velocities
 ========================  ===========================================  ============
 
-A term that fits none of these is ``"unclassified"`` with the reason.
 ``LTI(f(v), G)`` with a finite ``G(0)`` is classified as ``G(0) f(v)``, the
 filter noted; an odd velocity function that fits ``Fc sign(v) + D v`` over the
 velocity range to 0.1 % gives those two terms (noted as fitted).
+
+A term no exact pattern fits is measured on its *static characteristic*
+(:mod:`edm_sym.symbolic.characteristic`), which makes the classification hold
+for the nested rows the genetic algorithm finds:
+
+* position-dependent (``spatial``): any non-constant term of the wrapped angle,
+  and a term of the unwrapped angle whose every occurrence of the angle sits in
+  ``sin/cos/tan(k q + c)`` with whole multiples ``k`` of a common fundamental
+  (``harmonic_tolerance``); filters count with their DC gain, delays as
+  identity; amplitude (half peak-to-peak), period, cycles per revolution and
+  the fundamental's phase come from one period of that characteristic;
+* acceleration-dependent: a term whose input reaches acceleration (or, through
+  a band pass, beyond) along every path; filters count with their gain at
+  ``acceleration_frequency``, and the equivalent inertia is the least-squares
+  slope over ``+-acceleration_range`` (R^2 reported; below 0.95 the term is
+  called nonlinear), with the filters' phase and pass band.
+
+A term that fits none of these is ``"unclassified"`` with the reason.
 """
 
 from __future__ import annotations
@@ -38,8 +55,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
+from edm_sym.symbolic.characteristic import (
+    corners,
+    describe_operators,
+    measure_acceleration,
+    measure_periodic,
+    s_power,
+    tf_coefficients,
+)
 from edm_sym.symbolic.functions import NUMPY_FUNCTIONS, Sat
-from edm_sym.symbolic.operators import LTI, Delay, Relay, s
+from edm_sym.symbolic.operators import LTI, Delay, Relay
 from edm_sym.symbolic.simplify import fold_constants
 
 #: The kinds of physical term.
@@ -83,16 +108,35 @@ class ClassifyOptions:
     velocity_range : float, default 10.0
         [rad/s] The velocities over which shapes are judged (Stribeck-like
         humps, Coulomb + viscous fits).
+    acceleration_frequency : float, default 4 pi (2 Hz)
+        [rad/s] The representative frequency of a filtered acceleration-dependent
+        term that fits no exact pattern: its transfer functions count with their
+        gain here (about the geometric middle of a 0.2 - 20 Hz excitation).
+    acceleration_range : float, default 1000.0
+        [rad/s^2] The accelerations, ``[-range, range]``, over which such a
+        term's static characteristic is fitted by a line (its slope is the
+        equivalent inertia).
+    harmonic_tolerance : float, default 0.01
+        A term of the unwrapped angle whose angle enters only through
+        ``sin/cos/tan(k q + c)`` is periodic when every ``k`` is within this of
+        a whole multiple of a common fundamental.
     """
 
     coulomb_velocity: float = 0.1
     velocity_range: float = 10.0
+    acceleration_frequency: float = 4 * math.pi
+    acceleration_range: float = 1000.0
+    harmonic_tolerance: float = 0.01
 
     def __post_init__(self) -> None:
-        for name in ("coulomb_velocity", "velocity_range"):
+        for name in ("coulomb_velocity", "velocity_range", "acceleration_frequency",
+                     "acceleration_range", "harmonic_tolerance"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}: expected a positive number, found {v!r}")
+        if self.harmonic_tolerance >= 0.5:
+            raise ValueError("harmonic_tolerance: expected a number below 0.5, found "
+                             f"{self.harmonic_tolerance!r}")
 
 
 @dataclass(frozen=True)
@@ -106,19 +150,11 @@ class _Leaf:
 
 def _tf_split(G: sp.Expr) -> tuple[int, float, tuple[float, ...]] | None:  # noqa: N803
     """``G = s^k H`` -> (k, H(0), |poles of H|); None when G is not numeric."""
-    num, den = sp.fraction(sp.together(G))
-    try:
-        n = np.array([float(c) for c in sp.Poly(num, s).all_coeffs()])
-        d = np.array([float(c) for c in sp.Poly(den, s).all_coeffs()])
-    except (TypeError, sp.PolynomialError):
+    tf = tf_coefficients(G)
+    if tf is None:
         return None
-    if not (np.all(np.isfinite(n)) and np.all(np.isfinite(d)) and n.any() and d.any()):
-        return None
-    kn = len(n) - len(np.trim_zeros(n, "b"))
-    kd = len(d) - len(np.trim_zeros(d, "b"))
-    n, d = np.trim_zeros(n, "b"), np.trim_zeros(d, "b")
-    corners = tuple(sorted(float(abs(p)) for p in np.roots(d)))
-    return kn - kd, float(n[-1] / d[-1]), corners
+    n, d = (np.trim_zeros(c, "b") for c in tf)
+    return s_power(tf), float(n[-1] / d[-1]), corners((n, d))
 
 
 def _leaf(e: sp.Expr, u: sp.Symbol, role: str | None) -> _Leaf | None:
@@ -207,7 +243,10 @@ def classify_expression(
     opts = options or ClassifyOptions()
     out: list[PhysicalTerm] = []
     for term in sp.Add.make_args(expr):
-        out += _classify_term(term, u, role, opts)
+        found = _classify_term(term, u, role, opts)
+        if role is not None and len(found) == 1 and found[0].kind == "unclassified":
+            found = _measured(term, u, role, opts) or found
+        out += found
     return tuple(out)
 
 
@@ -451,6 +490,75 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
         return out
     return [_unclassified(term, f"an odd function of velocity ({term}) that is neither "
                           "Coulomb, viscous nor Stribeck-like over the velocity range" + note)]
+
+
+_INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}
+
+
+def _measured(term: sp.Expr, u: sp.Symbol, role: str,
+              opts: ClassifyOptions) -> list[PhysicalTerm] | None:
+    """A term no exact pattern fits, classified from its static characteristic."""
+    if role in ("angle", "angle_wrapped"):
+        p = measure_periodic(term, u, role == "angle_wrapped", opts.harmonic_tolerance)
+        if p is not None:
+            params, note = describe_operators(p.form, "DC gains")
+            period = 2 * math.pi / p.cycles
+            more = ""
+            if abs(p.dominant_cycles - p.cycles) > 1e-9:
+                params["dominant_cycles"] = (p.dominant_cycles, "1")
+                params["dominant_amplitude"] = (p.dominant_amplitude, "N m")
+                more = (f"; strongest harmonic {p.dominant_cycles:.6g} cycles/rev, "
+                        f"{p.dominant_amplitude:.4g} N m")
+            if p.jump:
+                params["wrap_jump"] = (p.jump, "N m")
+                more += f"; jumps by {p.jump:.4g} N m at each wrap of the angle"
+            return [PhysicalTerm("spatial", {
+                "amplitude": (p.amplitude, "N m"), "period": (period, "rad"),
+                "cycles_per_revolution": (p.cycles, "1"), "phase": (p.phase, "rad"),
+                "fundamental_amplitude": (p.fundamental_amplitude, "N m"), **params},
+                f"position-dependent friction, periodic: amplitude {p.amplitude:.6g} N m "
+                f"(half peak-to-peak), {p.cycles:.6g} cycles/rev (period {period:.6g} rad), "
+                f"fundamental {p.fundamental_amplitude:.4g} N m at phase {p.phase:.4g} rad"
+                f"{more}{note}", term)]
+    if role not in _INDEX:
+        return None
+    w, a_range = opts.acceleration_frequency, opts.acceleration_range
+    a = measure_acceleration(term, u, _INDEX[role], w, a_range)
+    if a is None:
+        return None
+    params, note = describe_operators(a.form, f"filter gains at {w:.4g} rad/s")
+    params = {"inertia": (a.inertia, "kg m^2"), "linearity_r2": (a.r2, "1"), **params}
+    what = "acceleration-dependent term" if a.r2 >= _LINEAR_R2 else (
+        "nonlinear acceleration-dependent term")
+    text = (f"{what}: equivalent inertia {a.inertia:.6g} kg m^2 (least-squares slope over "
+            f"+-{a_range:g} rad/s^2, R^2 {a.r2:.3f})")
+    if a.r2 < _LINEAR_R2:
+        params["peak"] = (a.peak, "N m")
+        text += f"; at most {a.peak:.4g} N m over that range"
+    if a.form.filters:
+        params["frequency"] = (w, "rad/s")
+        params["filter_phase"] = (a.phase, "rad")
+        text += f"; at {w:.4g} rad/s the filters shift it by {math.degrees(a.phase):.3g} deg"
+        if abs(math.cos(a.phase)) < math.sqrt(0.5):
+            text += " (there it acts mostly as a derivative or integral of the acceleration)"
+    if a.band is not None:
+        _, lo, hi = a.band
+        if lo is not None:
+            params["band_low"] = (lo, "rad/s")
+        if hi is not None:
+            params["band_high"] = (hi, "rad/s")
+        text += "; pass band " + (f"{lo:.4g} - {hi:.4g} rad/s" if lo is not None and hi is not None
+                                  else f"above {lo:.4g} rad/s" if lo is not None
+                                  else f"below {hi:.4g} rad/s")
+        if (lo is not None and w < lo or hi is not None and w > hi) and math.isfinite(
+                a.inertia_in_band):
+            params["inertia_in_band"] = (a.inertia_in_band, "kg m^2")
+            text += f", where the inertia is {a.inertia_in_band:.6g} kg m^2"
+    return [PhysicalTerm("acceleration", params, text + note, term)]
+
+
+#: A line fit at least this good (R^2) is a plain acceleration-dependent term.
+_LINEAR_R2 = 0.95
 
 
 def _offset(term: sp.Expr) -> PhysicalTerm:
