@@ -66,12 +66,12 @@ def reference(comp, log: dict, n: int | None = None) -> np.ndarray:  # noqa: ANN
 def test_module_has_the_contract_api(tmp_path: Path) -> None:
     result = load_result(cg.EXAMPLE)
     module = generated(result, tmp_path)
-    assert module.INPUTS == ("theta_w", "theta_uw", "omega")
-    assert module.SAMPLE_TIME == 1e-3
-    assert module.NUM_ROWS == 4
+    assert module.INPUTS == result.inputs
+    assert module.SAMPLE_TIME == result.sample_time == 1e-3
+    assert module.NUM_ROWS == result.matrix.n_rows
     assert module.SHA256 == result.sha256
     comp = module.Compensator()
-    u = (1.0, 2.0, 0.5)
+    u = (1.0, 2.0, 0.5, -3.0)[: len(module.INPUTS)]
     first = comp.step(u)
     assert isinstance(first, float)
     assert len(comp.step_rows(u)) == module.NUM_ROWS

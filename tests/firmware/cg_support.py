@@ -36,16 +36,19 @@ M4 = ["-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard"]
 
 # -- data ---------------------------------------------------------------------
 def make_log(n: int = N_SAMPLES, ts: float = TS, seed: int = 0) -> dict[str, np.ndarray]:
-    """A smooth, deterministic servo-like log: ``theta_w``, ``theta_uw``, ``omega`` (+ ``t``)."""
+    """A smooth, deterministic servo-like log: ``theta_w``, ``theta_uw``, ``omega``, ``alpha`` (+ ``t``)."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * ts
     phases = rng.uniform(0, 2 * np.pi, 3)
     omega = (2.0 * np.sin(2 * np.pi * 0.25 * t + phases[0])
              + 0.6 * np.sin(2 * np.pi * 1.7 * t + phases[1])
              + 0.15 * np.sin(2 * np.pi * 9.3 * t + phases[2]))
+    alpha = (2.0 * 2 * np.pi * 0.25 * np.cos(2 * np.pi * 0.25 * t + phases[0])
+             + 0.6 * 2 * np.pi * 1.7 * np.cos(2 * np.pi * 1.7 * t + phases[1])
+             + 0.15 * 2 * np.pi * 9.3 * np.cos(2 * np.pi * 9.3 * t + phases[2]))
     theta_uw = np.cumsum(omega) * ts
     theta_w = np.mod(theta_uw, 2 * np.pi)
-    return {"t": t, "theta_w": theta_w, "theta_uw": theta_uw, "omega": omega}
+    return {"t": t, "theta_w": theta_w, "theta_uw": theta_uw, "omega": omega, "alpha": alpha}
 
 
 def input_matrix(log: Mapping[str, np.ndarray], inputs: Sequence[str] = INPUTS) -> np.ndarray:
