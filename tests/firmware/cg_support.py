@@ -22,6 +22,8 @@ from edm_sym.result import EdmResult
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 EXAMPLE = REPO / "examples" / "auger" / "result.json"
+#: A hand-written 4x4 result with known content (tests/make_handwritten_result.py).
+HANDWRITTEN = REPO / "tests" / "data" / "handwritten_result.json"
 
 TS = 1e-3
 N_SAMPLES = 20_000

@@ -1,6 +1,7 @@
-"""Write examples/auger/result.json: a hand-written 4x4 compensator for an auger axis.
+"""Write tests/data/handwritten_result.json: a hand-written 4x4 compensator for an auger axis.
 
-A stand-in until a genetic-algorithm result replaces it. Each row models one
+A fixture with known content (the shipped example is a genetic-algorithm result
+and may change). Each row models one
 physical disturbance of the reaction torque observer's estimate ``tau_ext``:
 
 1. Coulomb friction:      omega -> sign -> gain (0.95 N m) -> through -> through
@@ -8,7 +9,7 @@ physical disturbance of the reaction torque observer's estimate ``tau_ext``:
 3. acceleration-dependent: omega -> derivative (1 s) -> lpf (100 rad/s) -> gain (0.002 kg m^2)
 4. spatial (cogging):     theta_w -> gain (2 cycles/rev) -> sin_phase (0.3 rad) -> sin_amp (0.05 N m)
 
-Run from anywhere: ``python examples/auger/make_handwritten.py``.
+Run from anywhere: ``python tests/make_handwritten_result.py``.
 """
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ def build() -> EdmResult:
 
 
 def main() -> None:
-    """Write result.json beside this script."""
-    path = save_result(build(), Path(__file__).resolve().parent / "result.json")
+    """Write tests/data/handwritten_result.json."""
+    path = save_result(build(), Path(__file__).resolve().parent / "data" / "handwritten_result.json")
     print(path)
 
 
