@@ -407,3 +407,23 @@ def test_contributions_add_rows_one_by_one(coulomb_viscous: Compensator) -> None
     assert "rmse" in c.table()
     with pytest.raises(ValueError, match="samples"):
         contributions(coulomb_viscous, data, target[:10])
+
+
+# -- velocity terms measured on their static characteristic (eq. 14's shape) --------
+def test_relay_of_a_log_of_velocity_is_coulomb() -> None:
+    """What the GA found on the auger axis: omega -> log -> hysteresis -> gain -> lpf."""
+    genes = [("log", enc("log", 0.01)), ("hysteresis", enc("hysteresis", 0.05)),
+             ("gain", enc("gain", 0.96)), ("lpf", enc("lpf", 150.0))]
+    t = one(terms_of(genes), "coulomb")
+    level, unit = t.parameters["level"]
+    assert unit == "N m" and abs(level - 0.96) < 0.01 * 0.96
+
+
+def test_dead_zone_gain_of_velocity_is_viscous() -> None:
+    """omega -> dead zone (0.2 rad/s) -> gain: viscous friction with a dead band."""
+    genes = [("dead_zone", enc("dead_zone", 0.2)), ("power_gain", enc("power_gain", 0.004))]
+    terms = terms_of(genes)
+    coef, unit = one(terms, "viscous").parameters["coefficient"]
+    # least squares of 0.004 * dz(v, 0.2) by c sgn(v) + b v over +-10 rad/s: b close to 0.004
+    assert unit == "N m s/rad" and abs(coef - 0.004) < 0.05 * 0.004
+    assert not [t for t in terms if t.kind in ("coulomb", "unclassified")]

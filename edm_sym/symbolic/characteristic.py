@@ -622,3 +622,62 @@ def measure_acceleration(term: sp.Expr, u: sp.Symbol, index: int, w: float,
         at_peak = _slope(term, u, index, band[0], a_range)
         in_band = at_peak[0] if at_peak is not None else math.nan
     return AccelerationFit(inertia, r2, peak, phase, band, in_band, form)
+
+
+@dataclass(frozen=True)
+class VelocityFit:
+    """A term of velocity measured by the fit ``c sgn(v) + b v + d`` (the paper's eq. 14 form).
+
+    Attributes
+    ----------
+    coulomb, viscous, offset : float
+        c [N m], b [N m s/rad] and d [N m] of the least-squares fit.
+    r2 : float
+        The fit's coefficient of determination.
+    peak : float
+        The largest magnitude of the characteristic over the range [N m].
+    jump : float
+        ``y(v_c) - y(-v_c)`` at the Coulomb threshold velocity ``v_c`` [N m].
+    form : StaticForm
+    """
+
+    coulomb: float
+    viscous: float
+    offset: float
+    r2: float
+    peak: float
+    jump: float
+    form: StaticForm
+
+
+def measure_velocity(term: sp.Expr, u: sp.Symbol, v_range: float,
+                     v_coulomb: float) -> VelocityFit | None:
+    """Fit the static characteristic of a velocity term by ``c sgn(v) + b v + d``.
+
+    Filters count with their DC gain, delays as identity and relays as ``sign``;
+    the velocity sweeps +-``v_range``; ``v_coulomb`` is where the jump of a
+    Coulomb part is measured.
+
+    Returns
+    -------
+    VelocityFit or None
+        None unless the input stays a velocity along every path (no derivative
+        or integral), or when the characteristic is constant or not finite.
+    """
+    form = static_form(term, u, 1, _dc_gain)
+    if form is None or form.index != 1:
+        return None
+    v = np.linspace(-v_range, v_range, RANGE_SAMPLES)
+    v = v[v != 0.0]  # sgn(0) is a convention, not a friction value
+    y = evaluate(form.expr, u, v)
+    if y is None or flat(y):
+        return None
+    design = np.column_stack([np.sign(v), v, np.ones_like(v)])
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    resid = y - design @ coef
+    total = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(np.sum(resid**2)) / total if total > 0 else 1.0
+    edge = evaluate(form.expr, u, np.array([-v_coulomb, v_coulomb]))
+    jump = float(edge[1] - edge[0]) if edge is not None else math.nan
+    return VelocityFit(float(coef[0]), float(coef[1]), float(coef[2]), r2,
+                       float(np.max(np.abs(y))), jump, form)

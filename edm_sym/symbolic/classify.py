@@ -60,6 +60,7 @@ from edm_sym.symbolic.characteristic import (
     describe_operators,
     measure_acceleration,
     measure_periodic,
+    measure_velocity,
     s_power,
     tf_coefficients,
 )
@@ -520,6 +521,10 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
                 f"(half peak-to-peak), {p.cycles:.6g} cycles/rev (period {period:.6g} rad), "
                 f"fundamental {p.fundamental_amplitude:.4g} N m at phase {p.phase:.4g} rad"
                 f"{more}{note}", term)]
+    if role == "velocity":
+        found = _measured_velocity(term, u, opts)
+        if found:
+            return found
     if role not in _INDEX:
         return None
     w, a_range = opts.acceleration_frequency, opts.acceleration_range
@@ -555,6 +560,41 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
             params["inertia_in_band"] = (a.inertia_in_band, "kg m^2")
             text += f", where the inertia is {a.inertia_in_band:.6g} kg m^2"
     return [PhysicalTerm("acceleration", params, text + note, term)]
+
+
+#: A part of a measured velocity term counts when it makes this share of its peak.
+_SIGNIFICANT = 0.05
+
+
+def _measured_velocity(term: sp.Expr, u: sp.Symbol,
+                       opts: ClassifyOptions) -> list[PhysicalTerm] | None:
+    """A velocity term whose characteristic is Coulomb + viscous (+ offset), eq. 14's shape."""
+    v_range = opts.velocity_range
+    fit = measure_velocity(term, u, v_range, opts.coulomb_velocity)
+    if fit is None or fit.r2 < _LINEAR_R2:
+        return None
+    # As for the exact patterns, a Coulomb part must switch within +-coulomb_velocity;
+    # a term that is mostly a gentle step stays unclassified (a smooth saturation),
+    # a small gentle part beside a viscous slope is left out.
+    coulomb = abs(fit.coulomb) >= _SIGNIFICANT * fit.peak
+    if coulomb and abs(fit.jump) < 0.9 * 2 * abs(fit.coulomb):
+        if abs(fit.coulomb) >= 0.5 * fit.peak:
+            return None
+        coulomb = False
+    params, note = describe_operators(fit.form, "DC gains")
+    how = (f" (fit of its static characteristic over +-{v_range:g} rad/s, R^2 {fit.r2:.3f}"
+           f"{note})")
+    out = []
+    if coulomb:
+        out.append(PhysicalTerm("coulomb", {"level": (fit.coulomb, "N m"), **params},
+                                f"Coulomb friction: {fit.coulomb:.6g} N m{how}", term))
+    if abs(fit.viscous) * v_range >= _SIGNIFICANT * fit.peak:
+        out.append(PhysicalTerm("viscous", {"coefficient": (fit.viscous, "N m s/rad"), **params},
+                                f"viscous friction: {fit.viscous:.6g} N m s/rad{how}", term))
+    if abs(fit.offset) >= _SIGNIFICANT * fit.peak:
+        out.append(PhysicalTerm("offset", {"level": (fit.offset, "N m")},
+                                f"constant offset: {fit.offset:.6g} N m{how}", term))
+    return out or None
 
 
 #: A line fit at least this good (R^2) is a plain acceleration-dependent term.
