@@ -94,7 +94,7 @@ def test_module_imports_only_the_standard_library(tmp_path: Path) -> None:
 def test_example_matches_the_simulator(tmp_path: Path) -> None:
     result = load_result(cg.EXAMPLE)
     got = run_rows(generated(result, tmp_path), LOG)
-    assert got.shape == (cg.N_SAMPLES, 5)
+    assert got.shape == (cg.N_SAMPLES, result.matrix.n_rows + 1)
     assert cg.max_abs(got, reference(result.compensator, LOG)) <= 1e-9
     module = load_module(tmp_path / "edm_comp.py")
     assert np.max(np.abs(np.array(module.simulate(LOG)) - got[:, -1])) == 0.0

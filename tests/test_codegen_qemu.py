@@ -42,7 +42,6 @@ pytestmark = [
 ]
 FIRMWARE = cg.HERE
 LOG = cg.make_log()
-X = cg.input_matrix(LOG)
 
 
 def _kinds():  # noqa: ANN202
@@ -81,7 +80,8 @@ def test_cortex_m4f_under_qemu_matches_host_float(case: str, tmp_path: Path,
     result = CASES[case]()
     export(result, "c", tmp_path, real="float")
     figures = build_m4(tmp_path)
-    X.astype(np.float32).tofile(tmp_path / "input.bin")
+    x = cg.input_matrix(LOG, result.inputs)  # the harness reads NUM_INPUTS columns
+    x.astype(np.float32).tofile(tmp_path / "input.bin")
     out = cg.run(["qemu-system-arm", "-M", "mps2-an386", "-nographic", "-semihosting-config",
                   "enable=on,target=native", "-kernel", "harness.elf"], cwd=tmp_path, timeout=300)
     assert f"harness: {cg.N_SAMPLES} samples" in out
@@ -90,7 +90,7 @@ def test_cortex_m4f_under_qemu_matches_host_float(case: str, tmp_path: Path,
 
     host_dir = tmp_path / "host"
     export(result, "c", host_dir, real="float")
-    host = cg.build_and_run_host("gcc", host_dir, ["edm_comp"], X)["edm_comp"]
+    host = cg.build_and_run_host("gcc", host_dir, ["edm_comp"], x)["edm_comp"]
     sim = simulate(result, LOG)
     rms = float(np.sqrt(np.mean(sim.total ** 2)))
     assert m4.shape == host.shape == (cg.N_SAMPLES, n_cols)

@@ -28,6 +28,8 @@ HANDWRITTEN = REPO / "tests" / "data" / "handwritten_result.json"
 TS = 1e-3
 N_SAMPLES = 20_000
 INPUTS = ("theta_w", "theta_uw", "omega")
+#: Columns of the harness's input file: every case's inputs are a prefix of these.
+ALL_INPUTS = ("theta_w", "theta_uw", "omega", "alpha")
 
 #: The warnings the generated C must compile cleanly under.
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion",
@@ -53,7 +55,7 @@ def make_log(n: int = N_SAMPLES, ts: float = TS, seed: int = 0) -> dict[str, np.
     return {"t": t, "theta_w": theta_w, "theta_uw": theta_uw, "omega": omega, "alpha": alpha}
 
 
-def input_matrix(log: Mapping[str, np.ndarray], inputs: Sequence[str] = INPUTS) -> np.ndarray:
+def input_matrix(log: Mapping[str, np.ndarray], inputs: Sequence[str] = ALL_INPUTS) -> np.ndarray:
     """(N, n_inputs) float64 array of the input columns, C order (one sample per row)."""
     return np.ascontiguousarray(np.column_stack([log[k] for k in inputs]), dtype=np.float64)
 
