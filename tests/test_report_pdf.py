@@ -27,6 +27,7 @@ pytestmark = [
 #: The widest overfull box accepted [pt].
 OVERFULL_LIMIT = 10.0
 #: The largest accepted report PDF [bytes].
+REPO = Path(__file__).resolve().parents[1]
 PDF_LIMIT = 2_000_000
 
 
@@ -128,3 +129,24 @@ def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None
     with pytest.raises(LatexError, match=r"x\.tex: LaTeX failed: ! Undefined control sequence"):
         compile_pdf(tex)
     assert (tmp_path / "x.log").is_file() and not (tmp_path / "x.pdf").exists()
+
+
+def test_shipped_example_report_compiles_and_names_the_four_terms(tmp_path: Path) -> None:
+    """examples/auger/result.json with the logs and LuGre file it records (report_inputs)."""
+    from edm_sym.render import report_inputs
+
+    result = edm_sym.load_result(REPO / "examples" / "auger" / "result.json")
+    files = write_report(result, tmp_path, **report_inputs(result))
+    pdf, log = compile_pdf(files[0], keep_aux=True)
+    _check_log(log)
+    assert pdf.stat().st_size < PDF_LIMIT
+    text = _pdftext(pdf)
+    model = edm_sym.decode(result)
+    kinds = {term.kind for row in model.rows for term in row.terms}
+    # the four physical laws of the paper's section IV-C, in the model and in the report
+    assert {"coulomb", "viscous", "acceleration", "spatial"} <= kinds
+    for kind in kinds:
+        assert KIND_TITLES[kind] in text, kind
+    for info in model.params:
+        assert _as_printed(info.value) in text, info.symbol
+    assert "LuGre" in text

@@ -25,7 +25,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 GOLDEN = REPO / "tests" / "golden" / "report"
-EXAMPLE = REPO / "examples" / "auger" / "result.json"
+EXAMPLE = REPO / "tests" / "data" / "handwritten_result.json"  # known content
 INPUTS = ("theta_w", "theta_uw", "omega")
 TS = 1e-3
 
@@ -90,7 +90,7 @@ def write_lugre(path: Path, data: Path) -> Path:
 
 
 def example_result():  # noqa: ANN201
-    """The shipped example, examples/auger/result.json."""
+    """The hand-written auger fixture (tests/data/handwritten_result.json): known content."""
     from edm_sym.result import load_result
 
     return load_result(EXAMPLE)
