@@ -12,8 +12,9 @@ generator state).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -214,3 +215,71 @@ def rank(fitness: np.ndarray, keys: Sequence[bytes]) -> np.ndarray:
             dup[k] = True
         seen.add(keys[k])
     return np.lexsort((np.arange(len(keys)), fitness, dup))
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Where a GA run stands for its stopping rule (G_max blocks, ``continue``, ``patience``).
+
+    Parameters
+    ----------
+    generation : int
+        Generations done (0: the initial population).
+    blocks : int
+        Blocks of ``generations`` (G_max) generations done.
+    block_start_best : float
+        Best fitness when the current block started.
+    ref_best : float
+        Best fitness at the last improvement that counted for ``patience``.
+    since_improvement : int
+        Generations since that improvement.
+    done : bool
+        Whether the rule says stop.
+    """
+
+    generation: int = 0
+    blocks: int = 0
+    block_start_best: float = math.inf
+    ref_best: float = math.inf
+    since_improvement: int = 0
+    done: bool = False
+
+    @staticmethod
+    def start(best: float) -> Progress:
+        """The progress after the initial population, whose best fitness is ``best``."""
+        return Progress(block_start_best=best, ref_best=best)
+
+    def after(self, ga: GaSettings, best: float) -> Progress:
+        """The progress after one more generation whose best fitness is ``best``.
+
+        Parameters
+        ----------
+        ga : GaSettings
+            ``generations``, ``continue_mode``, ``max_blocks``, ``patience``
+            and ``min_improvement`` are read.
+        best : float
+            Best fitness after the generation (never above the previous best:
+            the elites are kept).
+
+        Returns
+        -------
+        Progress
+            The new state; ``done`` once ``patience`` generations passed
+            without a relative improvement of ``min_improvement``, or after a
+            block of G_max generations when ``continue`` says so.
+        """
+        gen = self.generation + 1
+        ref, since = self.ref_best, self.since_improvement + 1
+        if best < ref * (1.0 - ga.min_improvement):
+            ref, since = best, 0
+        blocks, block_start = self.blocks, self.block_start_best
+        done = bool(ga.patience and since >= ga.patience)
+        if gen % ga.generations == 0:
+            blocks += 1
+            improved = best < block_start * (1.0 - ga.min_improvement)
+            block_start = best
+            if (ga.continue_mode == "no" or blocks >= ga.max_blocks
+                    or (ga.continue_mode == "improving" and not improved)):
+                done = True
+        return replace(self, generation=gen, blocks=blocks, block_start_best=block_start,
+                       ref_best=ref, since_improvement=since, done=done)

@@ -35,7 +35,7 @@ from edm_sym.abstraction.checkpoint import (
     save_checkpoint,
 )
 from edm_sym.abstraction.evaluator import EvalStats, Evaluator
-from edm_sym.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
+from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.abstraction.polish import GAIN, gain_fit
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.data import DataLog
@@ -273,22 +273,12 @@ class _Runner:
         new_pop = Population.concat([ranked.take(np.arange(ga.elites)), kids])
         new_fit = np.concatenate([rfit[:ga.elites], kfit])
         best = float(np.min(new_fit))
-        gen = cur.generation + 1
-        ref, since = cur.ref_best, cur.since_improvement + 1
-        if best < ref * (1.0 - ga.min_improvement):
-            ref, since = best, 0
-        blocks, block_start = cur.blocks, cur.block_start_best
-        done = bool(ga.patience and since >= ga.patience)
-        if gen % ga.generations == 0:
-            blocks += 1
-            improved = best < block_start * (1.0 - ga.min_improvement)
-            block_start = best
-            if (ga.continue_mode == "no" or blocks >= ga.max_blocks
-                    or (ga.continue_mode == "improving" and not improved)):
-                done = True
-        return StepState(step=cur.step, generation=gen, blocks=blocks,
-                         block_start_best=block_start, ref_best=ref, since_improvement=since,
-                         done=done, population=new_pop, fitness=new_fit,
+        prog = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
+                        cur.since_improvement).after(ga, best)
+        return StepState(step=cur.step, generation=prog.generation, blocks=prog.blocks,
+                         block_start_best=prog.block_start_best, ref_best=prog.ref_best,
+                         since_improvement=prog.since_improvement,
+                         done=prog.done, population=new_pop, fitness=new_fit,
                          history=[*cur.history, best],
                          evaluations=cur.evaluations + len(kids) + extra)
 
