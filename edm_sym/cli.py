@@ -246,6 +246,8 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     save_lugre(args.output, res, target=args.target, velocity=args.velocity,
                data_sha256=data.sha256, seed=args.seed)
     print(f"wrote {args.output}")
+    for name, score in (res.comparison or {}).items():
+        print(f"{name} fitness {score.fitness:.10g} ({score.evaluations} evaluations)")
     print(f"rmse {res.rmse:.10g}")
     return 0
 

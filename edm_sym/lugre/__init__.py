@@ -6,7 +6,9 @@ of eq. 8, and the LUGRE.json file. See ``docs/lugre.md``.
 """
 
 from edm_sym.lugre.fileformat import load_lugre, lugre_schema, parse_lugre, save_lugre
+from edm_sym.lugre.ga import LUGRE_GA, identify_ga  # importing it registers "ga"
 from edm_sym.lugre.identify import (
+    BOTH,
     METHODS,
     LuGreProblem,
     MethodOutcome,
@@ -21,9 +23,11 @@ from edm_sym.lugre.model import (
     steady_state,
     weighted_rmse,
 )
-from edm_sym.lugre.result import LuGreProvenance, LuGreResult
+from edm_sym.lugre.result import LuGreProvenance, LuGreResult, MethodScore
 
 __all__ = [
+    "BOTH",
+    "LUGRE_GA",
     "METHODS",
     "PARAMETER_NAMES",
     "LuGreParams",
@@ -31,6 +35,8 @@ __all__ = [
     "LuGreProvenance",
     "LuGreResult",
     "MethodOutcome",
+    "MethodScore",
+    "identify_ga",
     "identify_lugre",
     "load_lugre",
     "lugre_schema",

@@ -2,7 +2,9 @@
 
 The file is ``{"format": "edm-lugre", "version": 1, "parameters": {...},
 "target": ..., "velocity": ..., "sample_time": ..., "method": ...,
-"fitness": ..., "evaluations": ..., "provenance": {...}}`` with keys sorted,
+"fitness": ..., "evaluations": ..., "provenance": {...}}`` (and, when several
+methods were run, ``"comparison": {method: {"fitness": ..., "evaluations":
+...}}``) with keys sorted,
 validated against ``lugre.schema.json`` (shipped next to this module). Every
 defect is reported as a :class:`~edm_sym.errors.ResultFormatError` naming the
 file and the field, e.g. ``lugre.json: parameters.sigma0: expected a positive
@@ -25,7 +27,7 @@ import jsonschema
 from edm_sym.errors import ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.lugre.model import PARAMETER_NAMES, LuGreParams
-from edm_sym.lugre.result import LuGreProvenance, LuGreResult
+from edm_sym.lugre.result import LuGreProvenance, LuGreResult, MethodScore
 
 __all__ = ["FORMAT", "VERSION", "load_lugre", "lugre_schema", "parse_lugre", "save_lugre"]
 
@@ -100,6 +102,8 @@ def _describe(error: jsonschema.ValidationError) -> tuple[list[Any], str]:
         return path, f"expected a positive number, found {_show(found)}"
     if kind == "minimum" and rule == 0:
         return path, f"expected a non-negative number, found {_show(found)}"
+    if kind == "minProperties" and rule == 1:
+        return path, f"expected a non-empty object, found {_show(found)}"
     if kind == "minLength":
         return path, f"expected a non-empty string, found {_show(found)}"
     if kind == "pattern" and path and path[-1] == "data_sha256":
@@ -181,20 +185,28 @@ def parse_lugre(document: Any, source: str = "LUGRE.json") -> LuGreResult:
         name, _, problem = str(exc).partition(": ")
         raise ResultFormatError(f"{source}: parameters.{name}", problem) from None
     prov = document["provenance"]
-    return LuGreResult(
-        params=params,
-        method=document["method"],
-        rmse=document["fitness"],
-        evaluations=int(document["evaluations"]),
-        sample_time=document["sample_time"],
-        target_name=document["target"],
-        velocity_name=document["velocity"],
-        provenance=LuGreProvenance(
-            seed=int(prov["seed"]),
-            package_version=prov["package_version"],
-            data_sha256=prov["data_sha256"],
-        ),
-    )
+    comparison = document.get("comparison")
+    try:
+        return LuGreResult(
+            params=params,
+            method=document["method"],
+            rmse=document["fitness"],
+            evaluations=int(document["evaluations"]),
+            sample_time=document["sample_time"],
+            target_name=document["target"],
+            velocity_name=document["velocity"],
+            provenance=LuGreProvenance(
+                seed=int(prov["seed"]),
+                package_version=prov["package_version"],
+                data_sha256=prov["data_sha256"],
+            ),
+            comparison=None
+            if comparison is None
+            else {name: MethodScore(s["fitness"], s["evaluations"]) for name, s in comparison.items()},
+        )
+    except ValueError as exc:  # the cross-field checks of the comparison
+        name, _, problem = str(exc).partition(": ")
+        raise ResultFormatError(f"{source}: {name}", problem) from None
 
 
 def load_lugre(path: str | os.PathLike) -> LuGreResult:
@@ -280,6 +292,11 @@ def lugre_document(
             "data_sha256": data_sha256.lower() if isinstance(data_sha256, str) else data_sha256,
         },
     }
+    if result.comparison is not None:
+        document["comparison"] = {
+            name: {"fitness": score.fitness, "evaluations": score.evaluations}
+            for name, score in result.comparison.items()
+        }
     try:
         parse_lugre(document, "LUGRE.json")
     except ResultFormatError as exc:

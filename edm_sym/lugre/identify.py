@@ -1,8 +1,10 @@
 """Identification of the LuGre model on a free-motion log (fitness: eq. 8).
 
-Methods are looked up in :data:`METHODS` (name -> function); a new one (the
-project's genetic algorithm, ``"ga"``) registers itself with
-:func:`register_method` and receives a :class:`LuGreProblem`.
+Methods are looked up in :data:`METHODS` (name -> function); a new one (like
+the project's genetic algorithm, ``"ga"`` in :mod:`edm_sym.lugre.ga`)
+registers itself with :func:`register_method` and receives a
+:class:`LuGreProblem`. ``method="both"`` runs the methods of :data:`BOTH` and
+returns the better result, with every method's score in its ``comparison``.
 
 The ``"scipy"`` method uses variable projection: the friction torque is linear
 in ``(tau_c, sigma1, sigma2)`` once the bristle trajectory is fixed, and that
@@ -41,9 +43,10 @@ from edm_sym.lugre.model import (
     simulate_lugre,
     weighted_rmse,
 )
-from edm_sym.lugre.result import LuGreResult
+from edm_sym.lugre.result import LuGreResult, MethodScore
 
 __all__ = [
+    "BOTH",
     "METHODS",
     "IdentifyMethod",
     "LuGreProblem",
@@ -137,6 +140,9 @@ IdentifyMethod = Callable[..., MethodOutcome]
 
 #: Registered identification methods, by name.
 METHODS: dict[str, IdentifyMethod] = {}
+
+#: The methods ``method="both"`` runs, in this order; the first wins a tie.
+BOTH: tuple[str, ...] = ("scipy", "ga")
 
 
 def register_method(name: str) -> Callable[[IdentifyMethod], IdentifyMethod]:
@@ -368,12 +374,17 @@ def identify_lugre(
     ts : float
         Sample time [s].
     method : str, optional
-        Name of a registered method (see :data:`METHODS`); default ``"scipy"``.
+        Name of a registered method (see :data:`METHODS`), default
+        ``"scipy"``; or ``"both"``: run each method of :data:`BOTH` and return
+        the one with the lower fitness (the first on a tie), with every
+        method's fitness and evaluations in ``comparison``.
     seed : int, optional
         Random seed; equal seeds give equal parameters (without a time limit).
     time_limit : float or None, optional
         Wall time in seconds after which the search stops and returns the
-        best parameters found so far.
+        best parameters found so far. With ``"both"``, method k of n stops at
+        (k + 1) / n of it, so a method that ends early leaves its time to the
+        next.
     weights : array_like or None, optional
         Weighting function Lambda of eq. 8 per sample (default all ones).
 
@@ -381,7 +392,8 @@ def identify_lugre(
     -------
     LuGreResult
         Parameters, method, weighted fitness (eq. 8) on the data, number of
-        evaluations and sample time.
+        evaluations and sample time (with ``"both"``: the better method's, and
+        ``comparison`` set).
 
     Raises
     ------
@@ -391,8 +403,9 @@ def identify_lugre(
         (a ValueError) If a data series is malformed (length, NaN, all-zero
         velocity, negative weights).
     """
-    if method not in METHODS:
-        raise ConfigError("method", f"unknown method {method!r} (known: {', '.join(sorted(METHODS))})")
+    if method not in METHODS and method != "both":
+        known = ", ".join(sorted([*METHODS, "both"]))
+        raise ConfigError("method", f"unknown method {method!r} (known: {known})")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise ConfigError("seed", f"expected an integer, found {seed!r}")
     if time_limit is not None and not (
@@ -412,13 +425,21 @@ def identify_lugre(
     w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
     if np.any(w < 0.0) or not np.any(w > 0.0):
         raise DataFormatError("weights", "expected non-negative values, not all zero")
-    deadline = None if time_limit is None else time.monotonic() + float(time_limit)
-    problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline)
-    outcome = METHODS[method](problem, seed=int(seed))
+    names = BOTH if method == "both" else (method,)
+    start = time.monotonic()
+    found: dict[str, tuple[LuGreParams, MethodScore]] = {}
+    for k, name in enumerate(names):
+        deadline = None if time_limit is None else start + float(time_limit) * (k + 1) / len(names)
+        problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline)
+        outcome = METHODS[name](problem, seed=int(seed))
+        found[name] = (outcome.params, MethodScore(problem.fitness(outcome.params), outcome.evaluations))
+    best = min(names, key=lambda name: found[name][1].fitness)  # min keeps the first on a tie
+    params, score = found[best]
     return LuGreResult(
-        params=outcome.params,
-        method=method,
-        rmse=problem.fitness(outcome.params),
-        evaluations=outcome.evaluations,
+        params=params,
+        method=best,
+        rmse=score.fitness,
+        evaluations=score.evaluations,
         sample_time=ts_f,
+        comparison={name: found[name][1] for name in names} if method == "both" else None,
     )
