@@ -529,20 +529,26 @@ def leaf_paths(doc, prefix=()):
         yield (*prefix, key)
 
 
+def write_corrupted(doc: dict, where: tuple, data, tmp_path: Path) -> Path:  # noqa: ANN001
+    """Replace (with a drawn JSON value) or delete ``doc[where]``; write it as lugre.json."""
+    node = doc
+    for key in where[:-1]:
+        node = node[key]
+    if data.draw(st.booleans()):
+        node[where[-1]] = data.draw(JSON_VALUES)
+    else:
+        del node[where[-1]]
+    path = tmp_path / "lugre.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_any_corruption_loads_cleanly_or_is_refused_clearly(tmp_path, data):
     doc = valid_document(tmp_path)
     path_in_doc = data.draw(st.sampled_from(sorted(leaf_paths(doc))))
-    node = doc
-    for key in path_in_doc[:-1]:
-        node = node[key]
-    if data.draw(st.booleans()):
-        node[path_in_doc[-1]] = data.draw(JSON_VALUES)
-    else:
-        del node[path_in_doc[-1]]
-    path = tmp_path / "lugre.json"
-    path.write_text(json.dumps(doc))
+    path = write_corrupted(doc, path_in_doc, data, tmp_path)
     try:
         loaded = load_lugre(path)
     except ResultFormatError as exc:

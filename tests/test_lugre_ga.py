@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_lugre import COMPLIANT, SHA, STIFF, TS, paper_profile, synthetic
+from test_lugre import COMPLIANT, SHA, STIFF, TS, paper_profile, synthetic, write_corrupted
 
 import edm_sym.lugre as lugre
 from edm_sym.cli import main
@@ -365,15 +365,7 @@ def comparison_paths(doc: dict) -> list[tuple[str, ...]]:
 def test_any_comparison_corruption_loads_cleanly_or_is_refused_clearly(tmp_path, data):
     doc = compared_document(tmp_path)
     where = data.draw(st.sampled_from(comparison_paths(doc)))
-    node = doc
-    for key in where[:-1]:
-        node = node[key]
-    if data.draw(st.booleans()):
-        node[where[-1]] = data.draw(JSON_VALUES)
-    else:
-        del node[where[-1]]
-    path = tmp_path / "lugre.json"
-    path.write_text(json.dumps(doc))
+    path = write_corrupted(doc, where, data, tmp_path)
     try:
         loaded = load_lugre(path)
     except ResultFormatError as exc:

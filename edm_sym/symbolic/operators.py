@@ -26,7 +26,19 @@ import sympy as sp
 s = sp.Symbol("s")
 
 
-class LTI(sp.Function):
+class _Operator(sp.Function):
+    """An operator on a signal: its first argument is the input expression."""
+
+    def _eval_is_real(self) -> bool | None:
+        return self.args[0].is_real
+
+    @property
+    def signal(self) -> sp.Expr:
+        """The input expression."""
+        return self.args[0]
+
+
+class LTI(_Operator):
     """``LTI(x, G)``: the signal ``x`` through the transfer function ``G(s)``, from rest.
 
     ``G`` free of ``s`` is a plain gain, so ``LTI(x, c)`` evaluates to ``c x``.
@@ -42,14 +54,6 @@ class LTI(sp.Function):
             return G * x
         return None
 
-    def _eval_is_real(self) -> bool | None:
-        return self.args[0].is_real
-
-    @property
-    def signal(self) -> sp.Expr:
-        """The input expression."""
-        return self.args[0]
-
     @property
     def transfer_function(self) -> sp.Expr:
         """``G(s)``."""
@@ -61,7 +65,7 @@ class LTI(sp.Function):
                 rf"\left[{printer._print(x)}\right]")
 
 
-class Delay(sp.Function):
+class Delay(_Operator):
     """``Delay(x, T)``: ``x`` delayed by ``T`` seconds, the buffer starting at zero."""
 
     nargs = 2
@@ -71,14 +75,6 @@ class Delay(sp.Function):
         if x.is_zero or T.is_zero:
             return x
         return None
-
-    def _eval_is_real(self) -> bool | None:
-        return self.args[0].is_real
-
-    @property
-    def signal(self) -> sp.Expr:
-        """The input expression."""
-        return self.args[0]
 
     @property
     def time(self) -> sp.Expr:
@@ -90,7 +86,7 @@ class Delay(sp.Function):
         return rf"\left[{printer._print(x)}\right]_{{t - {printer._print(T)}}}"
 
 
-class Relay(sp.Function):
+class Relay(_Operator):
     """``Relay(x, a)``: +1 once ``x >= a``, -1 once ``x <= -a``, else held; starts at 0."""
 
     nargs = 2
@@ -102,12 +98,7 @@ class Relay(sp.Function):
         return None
 
     def _eval_is_real(self) -> bool:
-        return True
-
-    @property
-    def signal(self) -> sp.Expr:
-        """The input expression."""
-        return self.args[0]
+        return True  # +-1 or 0, whatever the input
 
     @property
     def threshold(self) -> sp.Expr:
