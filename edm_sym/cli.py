@@ -121,7 +121,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json")
     p.add_argument("--ts", type=_positive_float)
     p.set_defaults(func=_cmd_lugre)
+
+    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
+    p.set_defaults(func=_cmd_doctor)
     return parser
+
+
+def _cmd_doctor(args: argparse.Namespace) -> int:
+    from edm_sym.doctor import checks, report
+
+    print(report(checks()))
+    return 0
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
