@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -159,11 +160,23 @@ def schema() -> dict[str, Any]:
     return json.loads(text)
 
 
+_PLAIN_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
+
+
 def format_path(parts: Sequence[Any]) -> str:
-    """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``."""
+    """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``.
+
+    A key that is not a plain name (a space, a newline, a quote ...) is shown
+    JSON-quoted in brackets, ``parameters["a\\nb"]``, so the path stays one line.
+    """
     out = ""
     for part in parts:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not _PLAIN_KEY.fullmatch(str(part)):
+            out += f"[{json.dumps(str(part))}]"
+        else:
+            out += f".{part}" if out else str(part)
     return out or "(top level)"
 
 

@@ -28,6 +28,7 @@ from edm_sym.errors import ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.lugre.model import PARAMETER_NAMES, LuGreParams
 from edm_sym.lugre.result import LuGreProvenance, LuGreResult, MethodScore
+from edm_sym.result import format_path
 
 __all__ = ["FORMAT", "VERSION", "load_lugre", "lugre_schema", "parse_lugre", "save_lugre"]
 
@@ -77,10 +78,7 @@ def _show(value: Any) -> str:
 
 
 def _dotted(path: list[Any]) -> str:
-    out = ""
-    for part in path:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out
+    return format_path(path)
 
 
 def _describe(error: jsonschema.ValidationError) -> tuple[list[Any], str]:

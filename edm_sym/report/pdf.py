@@ -46,7 +46,7 @@ LATEX_PACKAGES: dict[str, str] = {
 LATEX_APT = ("latexmk", *sorted(set(LATEX_PACKAGES.values())))
 
 #: How to get latexmk and the LaTeX packages the report uses.
-INSTALL_HINT = ("install TeX Live with latexmk, e.g. 'sudo apt-get install --no-install-recommends "
+INSTALL_HINT = ("install TeX Live with latexmk, e.g. 'sudo apt-get install "
                 + " ".join(LATEX_APT) + "' (Debian/Ubuntu) or "
                 "'tlmgr install latexmk lm adjustbox fvextra pgf'; 'edm doctor' lists what is missing")
 
