@@ -1,6 +1,6 @@
 """edm_sym: Element Description Method compensators for reaction torque observers.
 
-The public API (CONTRACT.md section 7)::
+The public API (docs/api.md#python-api)::
 
     import edm_sym
     result = edm_sym.load_result("result.json")

@@ -1,4 +1,4 @@
-"""Command line: ``edm`` and ``edm-export`` (CONTRACT.md section 2).
+"""Command line: ``edm`` and ``edm-export`` (docs/cli.md).
 
 Exit status: 0 done; 1 the work itself failed; 2 bad input or usage. Bad input
 prints one line naming the file and field, row or column, with what was
@@ -25,7 +25,7 @@ class UsageError(EdmError):
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2, as the contract asks
+    def error(self, message: str) -> None:  # one line, exit 2: docs/cli.md#exit-status
         raise UsageError(f"{self.prog}: {message}")
 
 

@@ -1,4 +1,4 @@
-"""Data logs: CSV, .npz and MATLAB .mat (CONTRACT.md section 3).
+"""Data logs: CSV, .npz and MATLAB .mat (docs/cli.md#data-files).
 
 A log is a set of equally long numeric columns with a uniform sample time.
 Every defect (missing file or column, empty file, non-numeric cell, NaN or

@@ -1,4 +1,4 @@
-"""result.json: the abstraction result (CONTRACT.md section 3).
+"""result.json: the abstraction result (docs/result-format.md).
 
 Loading validates against the JSON Schema shipped in the package, then checks
 what a schema cannot (known element codes, names matching codes, shapes

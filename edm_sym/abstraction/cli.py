@@ -1,4 +1,4 @@
-"""``edm abstract``: the command-line side of the abstraction (CONTRACT.md section 2).
+"""``edm abstract``: the command-line side of the abstraction (docs/cli.md#edm-abstract).
 
 Bad input (config, columns, options) raises :class:`~edm_sym.errors.ConfigError`
 or :class:`~edm_sym.errors.DataFormatError`, which ``edm`` prints as one line
