@@ -127,14 +127,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_lugre)
 
     p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
+    p.add_argument("--json", action="store_true",
+                   help="print a JSON list of {kind, name, apt, purpose, found, location} instead")
     p.set_defaults(func=_cmd_doctor)
     return parser
 
 
 def _cmd_doctor(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
     from edm_sym.doctor import checks, report
 
-    print(report(checks()))
+    found = checks()
+    if args.json:
+        print(json.dumps([dict(asdict(c), found=c.found) for c in found], indent=2, sort_keys=True))
+    else:
+        print(report(found))
     return 0
 
 

@@ -121,3 +121,16 @@ def test_doctor_reports_what_this_machine_has(capsys: pytest.CaptureFixture) -> 
     for cmd, _, _ in TOOLS:
         line = next(ln for ln in out if re.match(rf"\S+\s+tool\s+{re.escape(cmd)}\s", ln))
         assert line.startswith("found" if shutil.which(cmd) else "missing")
+
+
+def test_doctor_json_lists_every_check(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                       capsys: pytest.CaptureFixture) -> None:
+    import json
+
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert main(["doctor", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert {(d["kind"], d["name"]) for d in doc} == (
+        {("tool", cmd) for cmd, _, _ in TOOLS} | {("latex", n) for n in LATEX_PACKAGES})
+    assert all(d["found"] is False and d["location"] is None for d in doc)
+    assert {d["name"]: d["apt"] for d in doc if d["kind"] == "latex"} == LATEX_PACKAGES
