@@ -226,9 +226,46 @@ def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:
         raise DataFormatError(name, f"expected an .npz archive, found unreadable data ({exc})") from None
 
 
+#: The signature of an HDF5 file; MATLAB v7.3 files carry it after a 512-byte header.
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+#: MATLAB classes of numeric arrays (others, such as char, cell or struct, are skipped).
+_MATLAB_NUMERIC = {"double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+                   "int64", "uint64", "logical"}
+
+
+def _is_mat73(raw: bytes) -> bool:
+    return raw[512:520] == _HDF5_SIGNATURE or raw[:8] == _HDF5_SIGNATURE
+
+
+def _load_mat73(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    """Top-level numeric arrays of a MATLAB v7.3 (HDF5) file, in MATLAB's orientation."""
+    try:
+        import h5py
+    except ImportError:
+        raise DataFormatError(name, "expected a MATLAB file scipy can read, found a v7.3 (HDF5) file; "
+                              "install the extra 'edm_sym[mat73]' (h5py) to read it") from None
+    out: dict[str, np.ndarray] = {}
+    try:
+        with h5py.File(io.BytesIO(raw), "r") as f:
+            for key in f:
+                obj = f[key]
+                cls = obj.attrs.get("MATLAB_class", b"double") if isinstance(obj, h5py.Dataset) else b""
+                cls = cls.decode() if isinstance(cls, bytes) else str(cls)
+                if key.startswith("#") or cls not in _MATLAB_NUMERIC:
+                    continue
+                # MATLAB writes column-major: an N x 1 column is stored as 1 x N.
+                out[key] = np.asarray(obj[()]).T
+    except (OSError, ValueError) as exc:
+        raise DataFormatError(name, f"expected a MATLAB v7.3 (HDF5) file, found unreadable data ({exc})") \
+            from None
+    return out
+
+
 def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
     from scipy import io as sio
 
+    if _is_mat73(raw):
+        return _load_mat73(name, raw)
     try:
         doc = sio.loadmat(io.BytesIO(raw))
     except Exception as exc:  # scipy raises several types for a bad file

@@ -143,3 +143,49 @@ def test_a_log_without_time_and_without_a_model_still_needs_ts(tmp_path: Path) -
     p.write_text("omega\n1\n2\n")
     with pytest.raises(DataFormatError, match=r"no_t.csv: column 't'.*--ts"):
         load_data(p)
+
+
+# -- MATLAB v7.3 (HDF5) -----------------------------------------------------------
+
+def _write_mat73(path: Path, arrays: dict[str, np.ndarray]) -> Path:
+    """A MATLAB v7.3-style file: a 512-byte MATLAB header, then HDF5 with column-major arrays."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(path, "w", userblock_size=512) as f:
+        for key, value in arrays.items():
+            arr = np.atleast_2d(np.asarray(value, dtype=float))
+            if arr.shape[0] == 1 and np.ndim(value) == 1:
+                arr = arr.T  # a MATLAB column vector, N x 1
+            ds = f.create_dataset(key, data=arr.T)  # stored transposed, as MATLAB does
+            ds.attrs["MATLAB_class"] = np.bytes_("double")
+        text = f.create_dataset("name", data=np.frombuffer(b"emps", dtype=np.uint8)[None, :].astype("<u2"))
+        text.attrs["MATLAB_class"] = np.bytes_("char")
+    header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 ."
+    with open(path, "r+b") as fh:
+        fh.write(header.ljust(116, b" ") + b"\0" * 8 + b"\x00\x02IM")
+    return path
+
+
+def test_a_matlab_v73_log_is_read_like_an_older_mat(tmp_path: Path) -> None:
+    t = np.arange(200) * TS
+    qm = np.sin(2 * np.pi * t)
+    path = _write_mat73(tmp_path / "log73.mat", {"t": t, "qm": qm, "gtau": 35.15065})
+    log = load_data(path)
+    assert set(log.columns) == {"t", "qm"}  # the char array "name" is skipped
+    np.testing.assert_array_equal(log.columns["qm"], qm)
+    assert log.ts == pytest.approx(TS) and log.scalars == {"gtau": pytest.approx(35.15065)}
+
+
+def test_a_v73_log_without_h5py_names_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import builtins
+
+    path = _write_mat73(tmp_path / "log73.mat", {"t": np.arange(10) * TS})
+    real_import = builtins.__import__
+
+    def no_h5py(name, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        if name == "h5py":
+            raise ImportError("no h5py")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_h5py)
+    with pytest.raises(DataFormatError, match=r"log73.mat.*v7.3.*edm_sym\[mat73\]"):
+        load_data(path)
