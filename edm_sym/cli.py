@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from edm_sym.errors import EdmError, ResultFormatError, ToolMissingError
+from edm_sym.fileio import check_outputs
 
 
 class UsageError(EdmError):
@@ -155,6 +156,9 @@ def _cmd_export(args: argparse.Namespace) -> int:
     except ImportError:
         raise ToolMissingError("edm export: code generation is not available in this build") from None
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
+    inputs = [args.result, args.data, args.eval_data, args.lugre]
+    check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
+                  option="-o" if args.out_dir else "output folder")
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
                      data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
     for path in written:
@@ -162,10 +166,20 @@ def _cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _export_names(args: argparse.Namespace) -> list[str]:
+    """The files an export writes into its folder (the report's figures aside)."""
+    names = {"c": [f"{args.prefix}.h", f"{args.prefix}.c"], "python": [f"{args.prefix}.py"],
+             "latex": [f"{args.prefix}_report.tex"] + ([f"{args.prefix}_report.pdf"] if args.pdf else [])}
+    targets = list(names) if args.target == "all" else [args.target]
+    return [n for t in targets for n in names[t]]
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.data import load_data, write_csv
 
     model_path = Path(args.model)
+    out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
+    check_outputs([out], [args.model, args.data])
     # The model is validated completely before the data is read.
     if _model_kind(model_path) == "edm-lugre":
         from edm_sym.lugre import load_lugre, simulate_lugre
@@ -192,7 +206,6 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
         rmse = float((cols["residual"] ** 2).mean() ** 0.5)
-    out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
     write_csv(out, cols)
     print(f"wrote {out}")
     print(f"rmse {rmse:.10g}" if rmse is not None else f"rmse nan (no column {target!r} in DATA)")
@@ -243,8 +256,9 @@ def _cmd_plant(args: argparse.Namespace) -> int:
     if args.preset not in PRESETS:
         raise UsageError(f"edm plant: --preset: expected one of {', '.join(sorted(PRESETS))}, "
                          f"found {args.preset!r}")
-    log = simulate_plant(args.preset, args.excitation, seed=args.seed)
     out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
+    check_outputs([out])
+    log = simulate_plant(args.preset, args.excitation, seed=args.seed)
     write_csv(out, log.columns)
     print(f"wrote {out}")
     return 0
@@ -266,6 +280,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
     except ValueError:
         gain = args.force_gain
     opts = ObserverOptions(args.position, args.force, args.nominal_inertia, gain, args.cutoff)
+    check_outputs([args.output], [args.data])
     view = observer_view(load_data(args.data, ts=args.ts), opts)
     write_csv(args.output, view.columns)
     print(f"wrote {args.output}")
@@ -276,6 +291,7 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.data import load_data
     from edm_sym.lugre import identify_lugre, save_lugre
 
+    check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[args.target, args.velocity])
     res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
                          method=args.method, seed=args.seed, time_limit=args.time_limit)
@@ -293,16 +309,45 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
         from edm_sym.abstraction import run_cli
     except ImportError:
         raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
+    out = Path(args.output)
+    # The checkpoint beside the output is written and, at the end, deleted: never an input.
+    check_outputs([out, out.with_name(out.name + ".checkpoint")], [args.data, args.config] if args.config
+                  else [args.data])
     return run_cli(args)
+
+
+#: Exit statuses of every command (docs/cli.md#exit-status).
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+#: Where a bug is reported (exit 1 says so).
+REPORT_BUG = "this is a bug of edm_sym: please report it with the output of EDM_DEBUG=1"
+
+
+def _raise_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
 def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
         print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
-    with warnings.catch_warnings():
-        warnings.showwarning = one_line
-        return _dispatch(argv, parser)
+    import signal
+
+    # SIGTERM (a job scheduler, `kill`) ends a command like Ctrl-C: cleanly, exit 130.
+    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line
+            return _dispatch(argv, parser)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _files_named(argv: Sequence[str] | None) -> str:
+    """The command's arguments that name existing files, for a message that has no file of its own."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    files = [a for a in args if not a.startswith("-") and Path(a).is_file()]
+    return ", ".join(files) or "input"
 
 
 def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
@@ -312,22 +357,34 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
     except (EdmError, ValueError) as exc:
         if isinstance(exc, ToolMissingError):
             print(f"{parser.prog}: {exc}", file=sys.stderr)
-            return 1
+            return EXIT_FAILED
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
         # ValueError here comes from validation inside the library: bad input.
         line = " ".join(str(exc).split())
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print(f"{parser.prog}: interrupted", file=sys.stderr)
-        return 1
+        return EXIT_INTERRUPTED
+    except RecursionError:
+        print(f"{parser.prog}: {_files_named(argv)}: expected a document nested at most a few hundred "
+              "levels deep, found deeper nesting", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except MemoryError:
+        print(f"{parser.prog}: {_files_named(argv)}: the work does not fit in this machine's memory; "
+              "use a shorter log or smaller sizes", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # a file the command could not read or write
+        where = exc.filename if exc.filename else _files_named(argv)
+        print(f"{parser.prog}: {where}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:  # the work itself failed: one line, exit 1
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
-        print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())}",
-              file=sys.stderr)
-        return 1
+        print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              f"({REPORT_BUG})", file=sys.stderr)
+        return EXIT_FAILED
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -41,8 +41,8 @@ def run_cli(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        0 when done (also at the time limit), 1 when interrupted (the best
-        result so far is written anyway).
+        0 when done (also at the time limit), 130 when interrupted (the best
+        result so far is written anyway, and the checkpoint kept).
     """
     from edm_sym.abstraction.run import abstract
     from edm_sym.abstraction.schedule import default_config, load_config
@@ -83,4 +83,4 @@ def run_cli(args: argparse.Namespace) -> int:
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}")
-    return 1 if reason == "interrupted" else 0
+    return 130 if reason == "interrupted" else 0
