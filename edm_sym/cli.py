@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import traceback
@@ -30,14 +31,33 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
-def _positive_float(text: str) -> float:
+def _shown(text: str) -> str:
+    """An option's value for a message: quoted, and cut when it is very long."""
+    return repr(text) if len(text) <= 40 else f"{text[:20]!r}... ({len(text)} characters)"
+
+
+def _finite_float(text: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, found {text}")
+        raise argparse.ArgumentTypeError(f"expected a number, found {_shown(text)}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, found {_shown(text)}")
     return v
+
+
+def _positive_float(text: str) -> float:
+    v = _finite_float(text)
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, found {_shown(text)}")
+    return v
+
+
+def _seed(text: str) -> int:
+    """A random seed: an integer in [0, 2**32), which numpy's generators take."""
+    if not (text.isascii() and text.isdigit() and len(text) <= 10 and int(text) < 2**32):
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0 and < {2**32}, found {_shown(text)}")
+    return int(text)
 
 
 def _add_export_args(p: argparse.ArgumentParser) -> None:
@@ -68,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", required=True, metavar="COL")
     p.add_argument("--inputs", required=True, metavar="COL[,COL...]")
     p.add_argument("--config", metavar="FILE.toml")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_seed, default=0)
     p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
     p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json")
     p.add_argument("--ts", type=_positive_float)
@@ -94,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"])
     p.add_argument("-o", "--output", metavar="DATA.csv",
                    help="output CSV (default: <preset>_<excitation>.csv)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_seed, default=0)
     p.set_defaults(func=_cmd_plant)
 
     p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
@@ -110,7 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", required=True, metavar="COL")
     p.add_argument("--force-gain", default="1", metavar="NUM|NAME",
                    help="number, or name of a scalar stored in DATA (e.g. gtau)")
-    p.add_argument("--nominal-inertia", required=True, type=float, metavar="M_N")
+    p.add_argument("--nominal-inertia", required=True, type=_finite_float, metavar="M_N")
     p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ")
     p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv")
     p.add_argument("--ts", type=_positive_float)
@@ -120,7 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("data", metavar="DATA")
     p.add_argument("--target", required=True, metavar="COL")
     p.add_argument("--velocity", required=True, metavar="COL")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_seed, default=0)
     p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
     p.add_argument("--method", default="scipy")
     p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json")

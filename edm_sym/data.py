@@ -184,6 +184,14 @@ def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
     except UnicodeDecodeError:
         raise DataFormatError(name, "expected UTF-8 text, found binary data") from None
     reader = csv.reader(io.StringIO(text))
+    try:
+        return _parse_csv(name, reader)
+    except csv.Error as exc:  # an unterminated quote, a cell beyond the csv module's size limit
+        raise DataFormatError(f"{name}: row {reader.line_num}",
+                              f"expected CSV cells of numbers, found unreadable text ({exc})") from None
+
+
+def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
     header = next(reader, None)
     if not header or not any(h.strip() for h in header):
         raise DataFormatError(f"{name}: row 1", "expected a header row of column names, found none")

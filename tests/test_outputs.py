@@ -148,3 +148,33 @@ def test_every_exit_status_is_documented() -> None:
     for code in (cli.EXIT_OK, cli.EXIT_FAILED, cli.EXIT_BAD_INPUT, cli.EXIT_INTERRUPTED):
         assert f"`{code}`" in doc or f"| {code} " in doc, code
     assert cli.EXIT_INTERRUPTED == 128 + 2  # the shell's status for SIGINT
+
+
+# -- bad values named, never a crash -------------------------------------------------
+
+def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
+    huge = tmp_path / "huge.csv"
+    huge.write_text("t,omega\n0," + "1" * 200_000 + "\n0.001,1\n")
+    short = tmp_path / "short.csv"
+    short.write_text("t,q,f\n0,0,0\n0.001,0,0\n")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("cache_mb = inf\n")
+    cases = [
+        (["simulate", str(files["result"]), str(huge), "-o", str(tmp_path / "a.csv")], "huge.csv: row 2"),
+        (["observe", str(short), "--position", "q", "--force", "f", "--nominal-inertia", "1e-3",
+          "-o", str(tmp_path / "b.csv")], "short.csv: column 'q'"),
+        (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+          "--nominal-inertia", "1e-3", "--force-gain", "inf", "-o", str(tmp_path / "c.csv")], "force_gain"),
+        (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+          "--nominal-inertia", "nan", "-o", str(tmp_path / "d.csv")], "--nominal-inertia"),
+        (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
+          "--seed", "9" * 5000, "-o", str(tmp_path / "e.json")], "(5000 characters)"),
+        (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
+          "--config", str(cfg), "-o", str(tmp_path / "f.json")], "c.toml: cache_mb"),
+    ]
+    for argv, where in cases:
+        assert main(argv) == 2, argv
+        err = _one_line(capsys)
+        assert where in err and len(err) < 400, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml", "huge.csv", "log.csv", "r.json",
+                                                           "short.csv"]

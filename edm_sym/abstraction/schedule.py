@@ -399,8 +399,8 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     cache_mb = 256.0
     if "cache_mb" in doc:
         v = doc["cache_mb"]
-        if isinstance(v, bool) or not isinstance(v, int | float) or not v > 0:
-            raise ConfigError(f"{f}cache_mb", f"expected a number > 0, found {_found(v)}")
+        if isinstance(v, bool) or not isinstance(v, int | float) or not 0 < v < 1e6:
+            raise ConfigError(f"{f}cache_mb", f"expected a number > 0 and < 1e6 (MB), found {_found(v)}")
         cache_mb = float(v)
     ga = GaSettings()
     if "ga" in doc:
