@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from edm_sym.errors import EdmError, ResultFormatError, ToolMissingError
+from edm_sym.errors import TOO_DEEP, EdmError, ResultFormatError, ToolMissingError
 from edm_sym.fileio import check_outputs
 
 
@@ -388,8 +388,7 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         print(f"{parser.prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except RecursionError:
-        print(f"{parser.prog}: {_files_named(argv)}: expected a document nested at most a few hundred "
-              "levels deep, found deeper nesting", file=sys.stderr)
+        print(f"{parser.prog}: {_files_named(argv)}: {TOO_DEEP}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except MemoryError:
         print(f"{parser.prog}: {_files_named(argv)}: the work does not fit in this machine's memory; "

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.data import DataLog, is_plant_spec, load_data
-from edm_sym.errors import ConfigError
+from edm_sym.errors import TOO_DEEP, ConfigError
 from edm_sym.fileio import write_atomic
 
 if sys.version_info >= (3, 11):
@@ -101,8 +101,12 @@ def load_pipeline(path: str | Path) -> Pipeline:
         doc = tomllib.loads(path.read_text("utf-8"))
     except OSError as exc:
         raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "expected UTF-8 TOML text, found binary data") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ConfigError(str(path), TOO_DEEP) from None
     name = path.name
     for section, table in doc.items():
         if section not in SECTIONS:

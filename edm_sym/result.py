@@ -22,7 +22,7 @@ from typing import Any
 import jsonschema
 
 from edm_sym.elements import REGISTRY, ParamRange
-from edm_sym.errors import ResultFormatError
+from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
 
@@ -336,6 +336,8 @@ def load_result(path: str | Path) -> EdmResult:
         doc = json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
     except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
         raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ResultFormatError(str(path), TOO_DEEP) from None
     res = parse_result(doc, path.name)
     return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))
 

@@ -21,7 +21,7 @@ from typing import Any
 
 from edm_sym.abstraction.weighting import Weighting, parse_weighting
 from edm_sym.elements import BY_NAME, ParamRange, default_ranges
-from edm_sym.errors import ConfigError
+from edm_sym.errors import TOO_DEEP, ConfigError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -543,4 +543,6 @@ def load_config(path: str | Path) -> AbstractionConfig:
         raise ConfigError(path.name, "expected UTF-8 TOML text, found binary data") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path.name, f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ConfigError(path.name, TOO_DEEP) from None
     return parse_config(doc, path.name)
