@@ -190,7 +190,8 @@ def test_array_names_and_feature_names(log: pd.DataFrame) -> None:
 
 @pytest.mark.parametrize("ts", [None, 0.0, -1e-3, float("nan"), "1e-3", True])
 def test_fit_needs_a_sample_time(ts: object, log: pd.DataFrame) -> None:
-    with pytest.raises(ValueError, match=r"sample_time: expected .* > 0\), found .*EDMRegressor\(sample_time=1e-3\)"):
+    hint = r"sample_time: expected .* > 0\), found .*; hint: EDMRegressor\(sample_time=1e-3\)"
+    with pytest.raises(ValueError, match=hint):
         EDMRegressor(sample_time=ts, config=TINY_CONFIG).fit(log[["omega"]], log["tau_ext"])
 
 
