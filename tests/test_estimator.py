@@ -67,12 +67,19 @@ def test_import_edm_sym_does_not_import_sklearn() -> None:
 
 def test_missing_sklearn_names_the_extra() -> None:
     code = ("import sys; sys.modules['sklearn'] = None\n"
+            "from edm_sym import *\n"
             "import edm_sym\n"
+            "assert 'EDMRegressor' not in edm_sym.__all__\n"
             "try:\n    edm_sym.EDMRegressor\n"
             "except ImportError as exc:\n    print(exc)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "edm_sym[sklearn]" in out.stdout
     assert "scikit-learn" in out.stdout
+
+
+def test_api_doc_names_the_estimator() -> None:
+    api = (Path(__file__).parents[1] / "docs" / "api.md").read_text("utf-8")
+    assert "| `EDMRegressor` |" in api.split("## Python API", 1)[1]
 
 
 def test_unknown_attribute_is_still_an_attribute_error() -> None:
