@@ -146,6 +146,20 @@ def test_same_seed_same_result(fitted: EDMRegressor, log: pd.DataFrame, tmp_path
     assert a == b
 
 
+def test_time_limit_reaches_the_abstraction(log: pd.DataFrame) -> None:
+    est = EDMRegressor(sample_time=TS, config=TINY_CONFIG, time_limit=0.0)
+    est.fit(log[["omega", "alpha"]], log["tau_ext"])
+    assert est.result_.provenance["stop_reason"] == "time_limit"
+    assert est.result_.steps[0].generations < 20
+
+
+@pytest.mark.slow
+def test_workers_do_not_change_the_result(fitted: EDMRegressor, log: pd.DataFrame) -> None:
+    pooled = clone(fitted).set_params(workers=2).fit(log[["omega", "alpha"]], log["tau_ext"])
+    assert pooled.result_.compensator == fitted.result_.compensator
+    assert pooled.result_.fitness == fitted.result_.fitness
+
+
 def test_config_from_a_toml_file(log: pd.DataFrame) -> None:
     X, y = log[["omega", "alpha"]], log["tau_ext"]
     from_file = EDMRegressor(sample_time=TS, config=str(TINY_FILE), seed=1).fit(X, y)
