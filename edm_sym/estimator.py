@@ -238,19 +238,24 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
 
         return latex(self.sympy())
 
-    def describe(self, **options: Any) -> Any:
-        """The compensator explained in words, by ``edm_sym.describe``.
+    def describe(self, X: Any = None, y: Any = None, **options: Any) -> Any:
+        """What the compensator found, row by row, by ``edm_sym.describe``.
 
         Parameters
         ----------
+        X, y : optional
+            A log (features as for :meth:`predict`, and its target) to measure
+            each row's contribution on; without them ``edm_sym.describe`` uses
+            what the result records (nothing, for a result of :meth:`fit`).
         **options
-            Passed to ``edm_sym.describe`` (``roles`` is this estimator's
-            unless given).
+            Passed to ``edm_sym.describe``; ``roles`` is this estimator's
+            unless given.
 
         Returns
         -------
         Any
-            What ``edm_sym.describe`` returns.
+            What ``edm_sym.describe`` returns (a ``Description``: ``.table()``,
+            ``.to_json()``).
 
         Raises
         ------
@@ -265,12 +270,13 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             raise NotImplementedError(
                 "EDMRegressor.describe: this version of edm_sym has no edm_sym.describe; "
                 "use .sympy() or edm_sym.decode(est.result_) and its rows' terms instead")
-        try:
-            takes_roles = "roles" in inspect.signature(describe).parameters
-        except (TypeError, ValueError):
-            takes_roles = False
-        if takes_roles and self.roles is not None:
+        if _accepts(describe, "roles") and self.roles is not None:
             options.setdefault("roles", self.roles)
+        if X is not None or y is not None:
+            if X is None or y is None:
+                raise ValueError("EDMRegressor.describe: expected both X and y (a log to measure the "
+                                 "rows on) or neither, found only one")
+            options["data"] = self._log(X, y, source="<EDMRegressor.describe>")
         return describe(self.result_, **options)
 
     def to_c(self, out_dir: str | os.PathLike[str], **options: Any) -> list[Path]:
@@ -343,6 +349,17 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             raise ValueError(f"EDMRegressor.predict: X's columns: expected {want} (the features of fit, "
                              f"in that order), found {have}")
 
+    def _log(self, X: Any, y: Any, *, source: str) -> DataLog:
+        """``X`` (the features of fit) and ``y`` (the target) as a log at the result's sample time."""
+        self._check_names(X)
+        X, y = check_X_y(X, y, dtype=np.float64, y_numeric=True)
+        if X.shape[1] != self.n_features_in_:
+            raise ValueError(f"X has {X.shape[1]} features, but {type(self).__name__} is expecting "
+                             f"{self.n_features_in_} features as input.")
+        columns = {name: X[:, j] for j, name in enumerate(self.feature_names_in_)}
+        columns[self.result_.target] = y
+        return DataLog(columns, self.result_.sample_time, source=source)
+
     def _model(self) -> Any:
         """The decoded model of ``result_`` (decoded once per result and roles)."""
         from edm_sym import decode
@@ -354,6 +371,15 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         model = decode(self.result_, roles=self.roles, systems=False)
         self._decoded = (self.result_, self.roles, model)
         return model
+
+
+def _accepts(func: Any, name: str) -> bool:
+    """True when ``func`` takes a keyword argument ``name`` (by name or through ``**kwargs``)."""
+    try:
+        params = inspect.signature(func).parameters.values()
+    except (TypeError, ValueError):
+        return False
+    return any(p.name == name or p.kind is inspect.Parameter.VAR_KEYWORD for p in params)
 
 
 def _names_of(X: Any, given: Sequence[str] | None) -> list[str] | None:

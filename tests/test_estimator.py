@@ -262,18 +262,27 @@ def test_roles_reach_the_decoder(fitted: EDMRegressor) -> None:
     assert fitted._model().roles["omega"] == "velocity"
 
 
-def test_describe_calls_edm_sym_describe(fitted: EDMRegressor, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_describe_calls_edm_sym_describe(fitted: EDMRegressor, log: pd.DataFrame,
+                                         monkeypatch: pytest.MonkeyPatch) -> None:
     seen = {}
 
-    def describe(result, *, roles=None):  # noqa: ANN001, ANN202
-        seen.update(result=result, roles=roles)
+    def describe(result, data=None, **options):  # noqa: ANN001, ANN202  (the shape of edm_sym.describe)
+        seen.update(result=result, data=data, **options)
         return "described"
 
     monkeypatch.setattr(edm_sym, "describe", describe, raising=False)
     est = clone(fitted).set_params(roles={"alpha": "acceleration"})
-    est.result_ = fitted.result_
+    est.result_, est.n_features_in_, est.feature_names_in_ = (
+        fitted.result_, fitted.n_features_in_, fitted.feature_names_in_)
     assert est.describe() == "described"
-    assert seen == {"result": fitted.result_, "roles": {"alpha": "acceleration"}}
+    assert seen == {"result": fitted.result_, "data": None, "roles": {"alpha": "acceleration"}}
+    assert est.describe(log[["omega", "alpha"]], log["tau_ext"], roles=None) == "described"
+    data = seen["data"]
+    assert seen["roles"] is None
+    assert isinstance(data, DataLog) and data.ts == TS and list(data.columns) == ["omega", "alpha", "tau_ext"]
+    np.testing.assert_array_equal(data.column("tau_ext"), log["tau_ext"].to_numpy())
+    with pytest.raises(ValueError, match="expected both X and y"):
+        est.describe(log[["omega", "alpha"]])
     monkeypatch.delattr(edm_sym, "describe")
     with pytest.raises(NotImplementedError, match="no edm_sym.describe"):
         est.describe()
