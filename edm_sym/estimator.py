@@ -206,13 +206,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             ``edm_sym.simulate(result_, X).total`` [N m].
         """
         check_is_fitted(self, "result_")
-        self._check_names(X)
-        X = check_array(X, dtype=np.float64)
-        if X.shape[1] != self.n_features_in_:
-            raise ValueError(f"X has {X.shape[1]} features, but {type(self).__name__} is expecting "
-                             f"{self.n_features_in_} features as input.")
-        columns = {name: X[:, j] for j, name in enumerate(self.feature_names_in_)}
-        return simulate(self.result_, columns).total
+        return simulate(self.result_, self._columns(check_array(X, dtype=np.float64), X)).total
 
     # --- the fitted model in other forms ---
 
@@ -339,24 +333,22 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         raise ConfigError("EDMRegressor.config", "expected a TOML file name, an AbstractionConfig or "
                           f"None, found {type(cfg).__name__}")
 
-    def _check_names(self, X: Any) -> None:
+    def _columns(self, checked: np.ndarray, X: Any) -> dict[str, np.ndarray]:
+        """The features of fit by name, from ``checked`` (``X`` as a float array) and ``X``'s names."""
         names = _get_feature_names(X)
-        if names is None:
-            return
-        have = list(names)
         want = list(self.feature_names_in_)
-        if have != want:
-            raise ValueError(f"EDMRegressor.predict: X's columns: expected {want} (the features of fit, "
-                             f"in that order), found {have}")
+        if names is not None and list(names) != want:
+            raise ValueError(f"EDMRegressor: X's columns: expected {want} (the features of fit, "
+                             f"in that order), found {list(names)}")
+        if checked.shape[1] != self.n_features_in_:
+            raise ValueError(f"X has {checked.shape[1]} features, but {type(self).__name__} is expecting "
+                             f"{self.n_features_in_} features as input.")
+        return {name: checked[:, j] for j, name in enumerate(want)}
 
     def _log(self, X: Any, y: Any, *, source: str) -> DataLog:
         """``X`` (the features of fit) and ``y`` (the target) as a log at the result's sample time."""
-        self._check_names(X)
-        X, y = check_X_y(X, y, dtype=np.float64, y_numeric=True)
-        if X.shape[1] != self.n_features_in_:
-            raise ValueError(f"X has {X.shape[1]} features, but {type(self).__name__} is expecting "
-                             f"{self.n_features_in_} features as input.")
-        columns = {name: X[:, j] for j, name in enumerate(self.feature_names_in_)}
+        checked, y = check_X_y(X, y, dtype=np.float64, y_numeric=True)
+        columns = self._columns(checked, X)
         columns[self.result_.target] = y
         return DataLog(columns, self.result_.sample_time, source=source)
 
