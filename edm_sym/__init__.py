@@ -8,6 +8,10 @@ The public API (docs/api.md#python-api)::
     sim = edm_sym.simulate(result, data)      # sim.rows (m, N), sim.total (N,)
     model = edm_sym.decode(result)            # sympy + python-control per row
     edm_sym.export(result, "c", "out/")
+
+``edm_sym.EDMRegressor`` (docs/estimator.md) needs the optional extra
+``edm_sym[sklearn]``; it is imported on first access, so ``import edm_sym``
+never imports scikit-learn.
 """
 
 from __future__ import annotations
@@ -99,3 +103,21 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
     from edm_sym.render import export as _export  # jinja2 is imported only here
 
     return _export(result, target, out_dir, **options)
+
+
+#: Names resolved on first access, so that their optional dependencies load only then.
+_LAZY = {"EDMRegressor": "edm_sym.estimator"}
+
+
+def __getattr__(name: str) -> Any:
+    """``edm_sym.EDMRegressor``: imported from :mod:`edm_sym.estimator` (needs scikit-learn) when used."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'edm_sym' has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
