@@ -277,3 +277,15 @@ def test_cli_bad_input_exits_2_with_one_line(case: str, tmp_path: Path, capsys) 
 def _write_text(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
+
+
+def test_docs_show_the_shape_and_every_flag() -> None:
+    import re
+
+    text = (ROOT / "docs" / "describe.md").read_text()
+    example = json.loads(re.search(r"```json\n(\{.*?)```", text, re.S).group(1))
+    jsonschema.validate(example, _describe_schema())
+    for code in {**ROW_FLAGS, **TERM_FLAGS}:
+        assert f"| `{code}` |" in text
+    for kind in KINDS:
+        assert f"`{kind}`" in text
