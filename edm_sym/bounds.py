@@ -128,3 +128,22 @@ def complexity(comp: Compensator) -> int:
                 continue
             total += 1 + int(gene.element.state_size(comp.value(gene), ts))
     return total
+
+
+def bound_summary(comp: Compensator, *, margin: float = BOUND_MARGIN) -> list[str]:
+    """One line per parameter at its range bound, for a command's closing summary.
+
+    Parameters
+    ----------
+    comp : Compensator
+    margin : float, default 0.01
+        As for :func:`bound_flags`.
+
+    Returns
+    -------
+    list of str
+        Empty when no parameter is at a bound.
+    """
+    return [f"parameter at its range bound: {f.message()}; its value is a limit of the "
+            "search, not an estimate (widen the range in the config)"
+            for f in bound_flags(comp, margin=margin)]

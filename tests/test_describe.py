@@ -289,3 +289,48 @@ def test_docs_show_the_shape_and_every_flag() -> None:
         assert f"| `{code}` |" in text
     for kind in KINDS:
         assert f"`{kind}`" in text
+
+
+def test_abstract_closing_summary_flags_parameters_at_bounds(
+    tmp_path: Path, capsys, monkeypatch  # noqa: ANN001
+) -> None:
+    import dataclasses
+
+    import edm_sym.abstraction.run as run_module
+    from edm_sym.data import write_csv
+
+    doc = _doc()
+    doc["matrix"]["rows"][2]["elements"][1]["p"] = 1.0  # the lpf's corner at its top
+    found = dataclasses.replace(edm_sym.result.parse_result(doc), fitness=0.5)
+    monkeypatch.setattr(run_module, "abstract", lambda *a, **k: found)
+    n = 50
+    t = np.arange(n) * 1e-3
+    data = write_csv(tmp_path / "log.csv", {"t": t, "theta_w": t, "theta_uw": t, "omega": t,
+                                            "tau_ext": t})
+    out = tmp_path / "res.json"
+    assert main(["abstract", str(data), "--target", "tau_ext", "--inputs",
+                 "theta_w,theta_uw,omega", "-o", str(out), "--quiet", "--workers", "1"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.splitlines() == [f"wrote {out}", "fitness 0.5"]
+    warn = [ln for ln in captured.err.splitlines() if "range bound" in ln]
+    assert len(warn) == 1 and "row 3 element 2 (lpf" in warn[0] and "high bound" in warn[0]
+    assert f"edm describe {out}" in captured.err
+    assert json.loads(out.read_text())["parameters_at_bound"][0]["name"] == "lpf"
+
+
+def test_abstract_closing_summary_is_quiet_without_bounds(
+    tmp_path: Path, capsys, monkeypatch  # noqa: ANN001
+) -> None:
+    import dataclasses
+
+    import edm_sym.abstraction.run as run_module
+    from edm_sym.data import write_csv
+
+    found = dataclasses.replace(load_result(HANDWRITTEN), fitness=0.5)
+    monkeypatch.setattr(run_module, "abstract", lambda *a, **k: found)
+    t = np.arange(50) * 1e-3
+    data = write_csv(tmp_path / "log.csv", {"t": t, "theta_w": t, "theta_uw": t, "omega": t,
+                                            "tau_ext": t})
+    assert main(["abstract", str(data), "--target", "tau_ext", "--inputs",
+                 "theta_w,theta_uw,omega", "-o", str(tmp_path / "r.json"), "--quiet"]) == 0
+    assert "range bound" not in capsys.readouterr().err
