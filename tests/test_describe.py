@@ -334,3 +334,23 @@ def test_abstract_closing_summary_is_quiet_without_bounds(
     assert main(["abstract", str(data), "--target", "tau_ext", "--inputs",
                  "theta_w,theta_uw,omega", "-o", str(tmp_path / "r.json"), "--quiet"]) == 0
     assert "range bound" not in capsys.readouterr().err
+
+
+def test_report_names_rows_honestly_and_shows_their_flags(tmp_path: Path) -> None:
+    import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
+
+    from edm_sym.report import write_report
+
+    doc = _set(_doc(), 0, 1, "gain", -0.00064)
+    doc["matrix"]["rows"][2]["elements"][1]["p"] = 1.0
+    result = load_result(_write(doc, tmp_path / "r.json"))
+    data = ugr.write_log(tmp_path / "log.csv", ugr.log_columns(result, "abstraction", n=2000))
+    tex = write_report(result, tmp_path / "out", data=data)[0].read_text()
+    overview = [ln for ln in tex.splitlines() if ln.startswith(r"1 & \ref{sec:row1}")]
+    assert len(overview) == 1 and "negligible" in overview[0] and "Coulomb" not in overview[0]
+    assert r"\subsection[Row 1: omega, negligible]" in tex
+    assert r"\subsection[Row 3: omega, unclassified term]" in tex
+    assert r"\textbf{negligible}: contributes" in tex and r"\textbf{at bound}: row 3 element 2" in tex
+    (fact,) = [ln.replace(r"\allowbreak{}", "") for ln in tex.splitlines()
+               if ln.startswith("Parameters at a range bound &")]
+    assert "row 3 element 2 (lpf" in fact and "high bound" in fact
