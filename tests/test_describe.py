@@ -354,3 +354,28 @@ def test_report_names_rows_honestly_and_shows_their_flags(tmp_path: Path) -> Non
     (fact,) = [ln.replace(r"\allowbreak{}", "") for ln in tex.splitlines()
                if ln.startswith("Parameters at a range bound &")]
     assert "row 3 element 2 (lpf" in fact and "high bound" in fact
+
+
+def test_recorded_data_that_cannot_be_used_is_a_warning(tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    doc = _doc()
+    doc["report_inputs"] = {"data": "moved_away.csv"}
+    path = _write(doc, tmp_path / "r.json")
+    with pytest.warns(UserWarning, match="moved_away.csv"):
+        desc = edm_sym.describe(path)
+    assert desc.fitness["data"] is None and "moved_away.csv" in desc.table()
+    assert main(["describe", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["fitness"]["data"] is None
+    assert err.count("\n") == 1 and err.startswith("edm: warning:")
+
+
+def test_recorded_data_is_the_default(tmp_path: Path, log: DataLog) -> None:
+    from edm_sym.data import write_csv
+
+    write_csv(tmp_path / "log.csv", {"t": np.arange(len(log)) * log.ts, **log.columns})
+    doc = _doc()
+    doc["report_inputs"] = {"data": "log.csv"}
+    desc = edm_sym.describe(_write(doc, tmp_path / "r.json")).to_json()
+    assert desc["fitness"]["data"]["source"].endswith("log.csv")
+    assert desc["rows"][0]["contribution"] == pytest.approx(
+        edm_sym.describe(HANDWRITTEN, log).to_json()["rows"][0]["contribution"], rel=1e-6)

@@ -296,7 +296,11 @@ def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,
 
 
 def judged_json(row: JudgedRow) -> list[dict[str, Any]]:
-    """The ``terms`` list of ``edm describe --json`` for one judged row."""
+    """The ``terms`` list of ``edm describe --json`` for one judged row.
+
+    A parameter that is not finite (an open pass band's gain) is ``null``.
+    """
     return [{"kind": jt.term.kind,
-             "parameters": {k: [float(v), unit] for k, (v, unit) in jt.term.parameters.items()},
+             "parameters": {k: [float(v) if math.isfinite(v) else None, unit]
+                            for k, (v, unit) in jt.term.parameters.items()},
              "flags": [f.to_json() for f in jt.flags]} for jt in row.terms]
