@@ -67,7 +67,7 @@ def _percent(text: str) -> float:
 def _add_describe_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("result", metavar="RESULT.json", help="result file to describe")
     p.add_argument("--data", metavar="DATA", help="log to measure the contributions on "
-                   "(default: the data the result records)")
+                   "(default: the evaluation, else the abstraction log the result records)")
     p.add_argument("--json", action="store_true", help="print the stable JSON of docs/describe.md")
     p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
                    help="a row below this share of the target's RMS is negligible (default 1)")

@@ -182,8 +182,13 @@ def _recorded(result: EdmResult, doc: Mapping[str, Any], key: str) -> Any:
 
 
 def recorded_data(result: EdmResult) -> str | Path | None:
-    """The data log a result records (``report_inputs.data``), resolved, or None."""
-    spec = (getattr(result, "report_inputs", None) or {}).get("data")
+    """The data log a result records, resolved, or None.
+
+    The evaluation log (``report_inputs.eval_data``: data the search did not
+    fit) when there is one, else the abstraction log (``report_inputs.data``).
+    """
+    stored = getattr(result, "report_inputs", None) or {}
+    spec = stored.get("eval_data", stored.get("data"))
     if spec is None:
         return None
     if is_plant_spec(spec):
@@ -222,8 +227,8 @@ def describe(
     data : DataLog, path-like or str, optional
         The log the contributions are measured on (a file or a
         ``plant:PRESET/EXCITATION`` spec). Default: the data the result records
-        (``report_inputs.data``); without any, nothing is measured and every
-        row is flagged ``unmeasured``.
+        (:func:`recorded_data`: its evaluation log, else its abstraction log);
+        without any, nothing is measured and every row is flagged ``unmeasured``.
     ts : float, optional
         Sample time of a log without a time column.
     options : SignificanceOptions, optional

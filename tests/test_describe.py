@@ -379,3 +379,16 @@ def test_recorded_data_is_the_default(tmp_path: Path, log: DataLog) -> None:
     assert desc["fitness"]["data"]["source"].endswith("log.csv")
     assert desc["rows"][0]["contribution"] == pytest.approx(
         edm_sym.describe(HANDWRITTEN, log).to_json()["rows"][0]["contribution"], rel=1e-6)
+
+
+def test_recorded_evaluation_log_is_preferred(tmp_path: Path, log: DataLog) -> None:
+    from edm_sym.data import write_csv
+
+    cols = {"t": np.arange(len(log)) * log.ts, **log.columns}
+    write_csv(tmp_path / "fit.csv", cols)
+    write_csv(tmp_path / "held_out.csv", {**cols, "tau_ext": 2 * cols["tau_ext"]})
+    doc = _doc()
+    doc["report_inputs"] = {"data": "fit.csv", "eval_data": "held_out.csv"}
+    desc = edm_sym.describe(_write(doc, tmp_path / "r.json")).to_json()
+    assert desc["fitness"]["data"]["source"].endswith("held_out.csv")
+    assert desc["fitness"]["data"]["rmse"][0] > 0.1
