@@ -392,3 +392,46 @@ def test_recorded_evaluation_log_is_preferred(tmp_path: Path, log: DataLog) -> N
     desc = edm_sym.describe(_write(doc, tmp_path / "r.json")).to_json()
     assert desc["fitness"]["data"]["source"].endswith("held_out.csv")
     assert desc["fitness"]["data"]["rmse"][0] > 0.1
+
+
+@pytest.fixture(scope="module")
+def random_log() -> DataLog:
+    n, ts = 600, 1e-3
+    omega = 3 * smooth_signal(n, ts, seed=21)
+    theta = np.cumsum(omega) * ts
+    cols = {"theta_w": np.mod(theta, 2 * np.pi), "omega": omega,
+            "alpha": np.gradient(omega, ts), "tau_ext": smooth_signal(n, ts, seed=22)}
+    return DataLog(cols, ts, "random")
+
+
+def test_any_valid_matrix_describes_to_the_documented_shape(random_log: DataLog) -> None:
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from edm_sym.elements import REGISTRY
+    from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
+    from edm_sym.result import EdmResult
+
+    inputs = ("theta_w", "omega", "alpha")
+    schema = _describe_schema()
+
+    @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(st.data())
+    def check(data: st.DataObject) -> None:
+        n, m = data.draw(st.integers(1, 4)), data.draw(st.integers(1, 3))
+        rows = tuple(Row(data.draw(st.integers(0, 2)),
+                         tuple(Gene(data.draw(st.sampled_from(sorted(REGISTRY))),
+                                    data.draw(st.floats(0.0, 1.0))) for _ in range(n)))
+                     for _ in range(m))
+        comp = Compensator(ElementMatrix(inputs, rows), 1e-3, {}, 0.6)
+        result = EdmResult(comp, "tau_ext", (), {"seed": None, "package_version": "t",
+                                                 "data_sha256": None})
+        desc = edm_sym.describe(result, random_log).to_json()
+        jsonschema.validate(desc, schema)
+        json.dumps(desc, allow_nan=False)
+        for row in desc["rows"]:
+            if row["contribution"] < 0.01:  # below the threshold: never named as physics
+                assert row["terms"] == []
+                assert row["flags"][0]["code"] == "negligible"
+
+    check()
