@@ -60,7 +60,7 @@ class BoundFlag:
         """One line: where, what, and the bound."""
         return (f"row {self.row + 1} element {self.col + 1} ({self.element}, {self.meaning}) "
                 f"= {self.value:.6g} {self.unit} is at its {self.side} bound "
-                f"{self.bound:.6g} (p = {self.p:.4g})")
+                f"{self.bound:.6g} {self.unit} (p = {self.p:.4g})")
 
     def to_json(self) -> dict[str, Any]:
         """The entry of result.json's ``parameters_at_bound`` (row and element 1-based)."""
