@@ -6,6 +6,7 @@ The public API (docs/api.md#python-api)::
     result = edm_sym.load_result("result.json")
     data = edm_sym.load_data("log.csv")
     sim = edm_sym.simulate(result, data)      # sim.rows (m, N), sim.total (N,)
+    print(edm_sym.describe(result, data).table())  # terms, contributions, flags
     model = edm_sym.decode(result)            # sympy + python-control per row
     edm_sym.export(result, "c", "out/")
 
@@ -52,6 +53,7 @@ __all__ = [
     "Simulation",
     "__version__",
     "decode",
+    "describe",
     "export",
     "load_data",
     "load_result",
@@ -78,6 +80,30 @@ def decode(result: EdmResult | Compensator, **options: Any) -> Any:
     from edm_sym.symbolic import decode as _decode  # sympy is imported only here
 
     return _decode(result, **options)
+
+
+def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -> Any:
+    """What a model found, row by row: physical terms, contribution, flags (``edm describe``).
+
+    Parameters
+    ----------
+    result : EdmResult or path-like
+        The result (a path is loaded).
+    data : DataLog, path-like or str, optional
+        The log the contributions are measured on; default: the data the
+        result records (``report_inputs.data``), else none.
+    **options
+        ``ts``, ``options`` (a ``SignificanceOptions``), ``roles``; see
+        :func:`edm_sym.description.describe`.
+
+    Returns
+    -------
+    edm_sym.description.Description
+        ``.table()`` for people, ``.to_json()`` for the shape of docs/describe.md.
+    """
+    from edm_sym.description import describe as _describe  # sympy is imported only here
+
+    return _describe(result, data, **options)
 
 
 def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) -> list[Path]:

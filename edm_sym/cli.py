@@ -75,6 +75,37 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=_cmd_export)
 
 
+def _percent(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a percentage, found {text!r}") from None
+    if not 0 <= v < 100:
+        raise argparse.ArgumentTypeError(f"expected a percentage in [0, 100), found {text}")
+    return v
+
+
+def _add_describe_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("result", metavar="RESULT.json", help="result file to describe")
+    p.add_argument("--data", metavar="DATA", help="log to measure the contributions on "
+                   "(default: the evaluation, else the abstraction log the result records)")
+    p.add_argument("--json", action="store_true", help="print the stable JSON of docs/describe.md")
+    p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
+                   help="a row below this share of the target's RMS is negligible (default 1)")
+    p.add_argument("--ts", type=_positive_float, help="sample time of a log without a 't' column")
+    p.set_defaults(func=_cmd_describe)
+
+
+def _cmd_describe(args: argparse.Namespace) -> int:
+    from edm_sym.description import describe
+    from edm_sym.symbolic.significance import SignificanceOptions
+
+    desc = describe(args.result, data=args.data, ts=args.ts,
+                    options=SignificanceOptions(threshold=args.threshold / 100))
+    print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``edm`` argument parser with all its subcommands."""
     parser = _Parser(prog="edm", description="Element Description Method compensators for "
@@ -96,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     p.set_defaults(func=_cmd_abstract)
+
+    _add_describe_args(sub.add_parser(
+        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
 
     p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")

@@ -21,6 +21,7 @@ from typing import Any
 
 import jsonschema
 
+from edm_sym.bounds import bound_flags
 from edm_sym.elements import REGISTRY, ParamRange
 from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
@@ -108,7 +109,17 @@ class EdmResult:
             "steps": [_step_to_json(s) for s in self.steps],
             "provenance": dict(self.provenance),
             **({"report_inputs": dict(self.report_inputs)} if self.report_inputs else {}),
+            **_bounds_block(comp),
         }
+
+
+def _bounds_block(comp: Compensator) -> dict[str, Any]:
+    """``parameters_at_bound``, derived from the matrix (written only when not empty).
+
+    Loading ignores the key: it is recomputed from the matrix, so it cannot go stale.
+    """
+    flags = bound_flags(comp)
+    return {"parameters_at_bound": [f.to_json() for f in flags]} if flags else {}
 
 
 def matrix_to_json(matrix: ElementMatrix) -> dict[str, Any]:

@@ -14,8 +14,12 @@ import argparse
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from edm_sym.errors import ConfigError
+
+if TYPE_CHECKING:
+    from edm_sym.result import EdmResult
 
 
 def checkpoint_path(output: str | Path) -> Path:
@@ -26,6 +30,17 @@ def checkpoint_path(output: str | Path) -> Path:
 
 def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
+
+
+def _warn_bounds(result: EdmResult, output: Path) -> None:
+    """The closing summary's flags: parameters at their range bounds (docs/describe.md)."""
+    from edm_sym.bounds import bound_summary
+
+    lines = bound_summary(result.compensator)
+    for line in lines:
+        print(f"edm abstract: warning: {line}", file=sys.stderr)
+    if lines:
+        print(f"edm abstract: see `edm describe {output}` for every row's flags", file=sys.stderr)
 
 
 def run_cli(args: argparse.Namespace) -> int:
@@ -83,4 +98,5 @@ def run_cli(args: argparse.Namespace) -> int:
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}")
+    _warn_bounds(result, output)
     return 130 if reason == "interrupted" else 0
