@@ -74,6 +74,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--validation-share", type=float, metavar="SHARE",
+                   help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
+    p.add_argument("--validate", metavar="FILE",
+                   help="a second log held out as a whole (the GA fits all of DATA)")
     p.set_defaults(func=_cmd_abstract)
 
     p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")

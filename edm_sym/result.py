@@ -62,6 +62,10 @@ class EdmResult:
         Optional ``data``, ``eval_data`` (paths relative to the result's
         folder, or ``plant:...`` specs) and ``lugre`` (a LUGRE.json path):
         what the report shows when ``edm-export`` is given no such options.
+    validation : mapping
+        What was held out from the GA and the exported model's training and
+        validation scores (see :mod:`edm_sym.abstraction.validation`); empty
+        in results written before held-out validation existed.
     sha256 : str or None
         The sha256 of the file it was loaded from.
     """
@@ -74,6 +78,7 @@ class EdmResult:
     sha256: str | None = None
     source: str | None = None
     report_inputs: Mapping[str, str] = field(default_factory=dict)
+    validation: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def matrix(self) -> ElementMatrix:
@@ -107,6 +112,7 @@ class EdmResult:
             "steps": [_step_to_json(s) for s in self.steps],
             "provenance": dict(self.provenance),
             **({"report_inputs": dict(self.report_inputs)} if self.report_inputs else {}),
+            **({"validation": dict(self.validation)} if self.validation else {}),
         }
 
 
@@ -195,9 +201,11 @@ def _schema_error(name: str, doc: Any) -> ResultFormatError | None:
         where = format_path([*path, missing[0]] if missing else path)
         return ResultFormatError(f"{name}: {where}", "expected this field, found it missing")
     if err.validator == "anyOf":
+        what = ("a sha256 hex digest" if path and str(path[-1]).endswith("sha256")
+                else "an object with fitness, rmse and samples")
         return ResultFormatError(
             f"{name}: {format_path(path)}",
-            f"expected null or a sha256 hex digest, found {json.dumps(err.instance)[:60]}",
+            f"expected null or {what}, found {json.dumps(err.instance)[:60]}",
         )
     found = json.dumps(err.instance)
     found = found if len(found) <= 60 else found[:57] + "..."
@@ -293,7 +301,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
         raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
     comp = Compensator(matrix, float(doc["sample_time"]), ranges, float(doc["record_length"]))
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
-                     report_inputs=dict(doc.get("report_inputs", {})))
+                     report_inputs=dict(doc.get("report_inputs", {})),
+                     validation=dict(doc.get("validation", {})))
 
 
 def load_result(path: str | Path) -> EdmResult:
