@@ -15,7 +15,7 @@ from edm_sym.abstraction.ga import Operators
 from edm_sym.data import DataLog
 from edm_sym.elements import BY_NAME, default_ranges
 from edm_sym.matrix import Compensator, Gene
-from edm_sym.result import dumps, load_result, save_result
+from edm_sym.result import dumps, load_result, matrix_to_json, save_result
 from edm_sym.simulate import fitness, simulate, simulate_row
 
 TS = 1e-3
@@ -332,7 +332,12 @@ def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: 
     k = back.validation["held_out"]["rows"][0]
     ref = fitness((log.columns["tau_ext"] - simulate(back, log).total)[:k])
     assert back.fitness == pytest.approx(ref, rel=1e-14)
-    assert back.matrix == res.steps[-1].matrix
+    # The exported matrix is the selected member of the pruned front; without
+    # pruning it is the last step's best.
+    par = back.parsimony
+    assert matrix_to_json(back.matrix) == par["front"][par["selected"] - 1]["matrix"]
+    plain = run(log, {**doc, "parsimony": {"prune": False}}, seed=7, workers=1)
+    assert plain.matrix == res.steps[-1].matrix and not plain.parsimony
 
 
 def test_the_progress_bar_shows_step_generation_best_and_rate(

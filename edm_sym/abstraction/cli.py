@@ -37,7 +37,8 @@ def run_cli(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
-        ``workers``, ``validation_share``, ``validate``.
+        ``workers``, ``validation_share``, ``validate``, ``select``,
+        ``prune_tolerance``, ``no_prune``.
 
     Returns
     -------
@@ -70,6 +71,7 @@ def run_cli(args: argparse.Namespace) -> int:
             config = replace(config, validation=ValidationSettings(share, config.validation.unit))
         except ConfigError as exc:
             raise ConfigError("--validation-share", exc.problem) from None
+    config = _parsimony_options(config, args)
     data = load_data(args.data, ts=args.ts)
     data.column(args.target, role="target column")
     data.stack(inputs)
@@ -87,7 +89,7 @@ def run_cli(args: argparse.Namespace) -> int:
         result = abstract(data, target=args.target, inputs=inputs, config=config,
                           seed=args.seed, time_limit=args.time_limit, progress=progress,
                           checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                          validate=validate)
+                          validate=validate, select=getattr(args, "select", None))
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)
@@ -98,10 +100,32 @@ def run_cli(args: argparse.Namespace) -> int:
     elif reason == "time_limit":
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
-    print(f"fitness {result.fitness:.10g}")
+    print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")
     for line in summary_lines(result.validation):
         print(line)
+    par = result.parsimony
+    if par:
+        member = par["front"][par["selected"] - 1]
+        print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
+              f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
     return 1 if reason == "interrupted" else 0
+
+
+def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
+    from edm_sym.abstraction.selection import ParsimonySettings, check_select
+
+    par = config.parsimony
+    tol = getattr(args, "prune_tolerance", None)
+    if tol is not None:
+        try:
+            par = ParsimonySettings(par.prune, tol, par.select)
+        except ConfigError as exc:
+            raise ConfigError("--prune-tolerance", exc.problem) from None
+    if getattr(args, "no_prune", False):
+        par = ParsimonySettings(False, par.tolerance, par.select)
+    if getattr(args, "select", None) is not None:
+        check_select(args.select, "--select")
+    return replace(config, parsimony=par)
 
 
 def summary_lines(validation: dict) -> list[str]:

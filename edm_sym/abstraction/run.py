@@ -37,6 +37,7 @@ from edm_sym.abstraction.checkpoint import (
 from edm_sym.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.abstraction.polish import GAIN, gain_fit
+from edm_sym.abstraction.prune import apply_parsimony
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.abstraction.validation import Scorer, plan_holdout
 from edm_sym.data import DataLog
@@ -317,6 +318,7 @@ def abstract(
     callback: Callable[[GenerationInfo], bool | None] | None = None,
     validate: DataLog | None = None,
     validation_share: float | None = None,
+    select: str | None = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -356,6 +358,11 @@ def abstract(
         Share of ``data`` held out at its end, in [0, 0.9]; None: the
         config's ``[validation] share`` (default 0.2). See
         :mod:`edm_sym.abstraction.validation`.
+    select : str, optional
+        Which member of the complexity-vs-fitness front is exported:
+        ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
+        config's ``[parsimony]`` rule (default: the simplest member within
+        its tolerance, 1 %). See :mod:`edm_sym.abstraction.prune`.
 
     Returns
     -------
@@ -438,12 +445,15 @@ def abstract(
                                 evaluations=r.evaluations, weighting=r.weighting))
     comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting)
+    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select)
+    final = scorer.report(comp)
+    fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance = {"seed": int(seed), "package_version": __version__,
                   "data_sha256": data.sha256, "stop_reason": reason}
     if reason == "completed" and checkpoint is not None and checkpoint.exists():
         checkpoint.unlink()
-    return EdmResult(comp, target, tuple(steps), provenance, steps[-1].fitness,
-                     validation=scorer.report(comp))
+    return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
+                     parsimony=parsimony)
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

@@ -254,6 +254,11 @@ class Scorer:
             total = total + self.row_output(comp, part, row)
         return total
 
+    def weights(self, part: str) -> np.ndarray | float:
+        """Lambda on the scored samples of ``part`` (a float when constant)."""
+        lam = self._lam[part]
+        return lam[self.parts[part].sl] if isinstance(lam, np.ndarray) else lam
+
     def score(self, comp: Compensator, part: str) -> dict[str, Any]:
         """Eq. 8 (weighted) and the plain RMSE of ``comp`` on the samples of ``part``.
 
@@ -266,8 +271,7 @@ class Scorer:
         """
         p = self.parts[part]
         e = (p.y - self.outputs(comp, part))[p.sl]
-        lam = self._lam[part]
-        lam = lam[p.sl] if isinstance(lam, np.ndarray) else lam
+        lam = self.weights(part)
         with np.errstate(all="ignore"):
             rmse = float(np.sqrt(np.mean(e * e)))
             weighted = (float(np.sqrt(np.mean(np.asarray(lam) * e * e)))
@@ -289,9 +293,7 @@ class Scorer:
     def criterion_name(self) -> str:
         """What :meth:`criterion` measures, as recorded in result.json."""
         part = "validation" if "validation" in self.parts else "training"
-        lam = self._lam[part]
-        p = self.parts[part]
-        lam = lam[p.sl] if isinstance(lam, np.ndarray) else lam
+        lam = self.weights(part)
         kind = "fitness" if np.any(np.asarray(lam) > 0) else "rmse"
         return f"{part}.{kind}"
 
