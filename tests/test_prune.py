@@ -222,3 +222,24 @@ def test_cli_bad_parsimony_options_exit_2_with_one_line(
         assert not (tmp_path / "x").exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(message), err
+
+
+def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path: Path) -> None:
+    from edm_sym.report import write_report
+
+    res = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+                   config=parse_config(TINY, "t.toml"))
+    par = res.parsimony
+    for k in (par["selected"], 1):
+        shown = front_member(res, k)
+        out = tmp_path / f"r{k}"
+        written = write_report(shown, out)
+        tex = (out / "edm_comp_report.tex").read_text()
+        rows = [ln for ln in tex.splitlines() if ln.endswith(r"\\") and ln.count("&") == 7
+                and ln.split("&")[0].strip().isdigit()]
+        assert [int(r.split("&")[0]) for r in rows] == list(range(1, len(par["front"]) + 1))
+        marked = [int(r.split("&")[0]) for r in rows if r"$\leftarrow$" in r]
+        assert marked == [k]
+        assert f"member {k} is exported" in tex
+        assert out / "edm_comp_fig_front.pdf" in written
+        assert "held out from the GA".lower() in tex.lower()
