@@ -257,7 +257,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     comp : Compensator
         The chosen model (``comp`` itself when pruning is off).
     record : dict
-        The ``parsimony`` entry of result.json (empty when pruning is off).
+        The ``parsimony`` entry of result.json (empty when pruning is off or
+        no model has a finite criterion).
     """
     if not settings.prune:
         return comp, {}
@@ -265,6 +266,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     from edm_sym.result import matrix_to_json
 
     front = prune(comp, scorer)
+    if not front:  # no model with a finite criterion: nothing to choose from
+        return comp, {}
     k = select(front, rule)
     unit = scorer.holdout.unit
     members = []

@@ -271,8 +271,8 @@ class AbstractionConfig:
             "ranges": {k: dict(v) for k, v in sorted(self.ranges.items())},
             "initial": [{"input": r.input, "elements": [list(e) for e in r.elements]}
                         for r in self.initial],
+            # The parsimony settings act after the search: a checkpoint does not depend on them.
             "validation": self.validation.to_json(),
-            "parsimony": self.parsimony.to_json(),
         }
 
     def digest(self) -> str:

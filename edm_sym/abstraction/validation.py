@@ -23,6 +23,7 @@ target.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,8 @@ from edm_sym.simulate import simulate_row
 
 #: Largest share of a log that may be held out.
 MAX_SHARE = 0.9
+#: Memory bound of the row outputs a :class:`Scorer` keeps [bytes].
+CACHE_BYTES = 128 * 2**20
 _KEYS = ("share", "unit")
 
 
@@ -234,7 +237,9 @@ class Scorer:
         if holdout.validation is not None:
             self.parts["validation"] = holdout.validation
         self._lam = {k: weighting.weights(p.t, p.y) for k, p in self.parts.items()}
-        self._rows: dict[tuple[str, Any], np.ndarray] = {}
+        self._rows: OrderedDict[tuple[str, Any], np.ndarray] = OrderedDict()
+        longest = max(len(p.y) for p in self.parts.values())
+        self._max_rows = max(16, CACHE_BYTES // (8 * longest))
 
     def row_output(self, comp: Compensator, part: str, row: Row) -> np.ndarray:
         """One row simulated over the whole log of ``part`` (cached by its genes)."""
@@ -245,6 +250,10 @@ class Scorer:
             with np.errstate(all="ignore"):
                 out = simulate_row(comp, row, p.x[row.input])
             self._rows[key] = out
+            if len(self._rows) > self._max_rows:
+                self._rows.popitem(last=False)
+        else:
+            self._rows.move_to_end(key)
         return out
 
     def outputs(self, comp: Compensator, part: str) -> np.ndarray:
