@@ -271,7 +271,7 @@ class AbstractionConfig:
             "ranges": {k: dict(v) for k, v in sorted(self.ranges.items())},
             "initial": [{"input": r.input, "elements": [list(e) for e in r.elements]}
                         for r in self.initial],
-            # The parsimony settings act after the search: a checkpoint does not depend on them.
+            # Not the parsimony settings: they act after the search, a checkpoint needs none.
             "validation": self.validation.to_json(),
         }
 
