@@ -243,3 +243,21 @@ def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path
         assert f"member {k} is exported" in tex
         assert out / "edm_comp_fig_front.pdf" in written
         assert "held out from the GA".lower() in tex.lower()
+
+
+def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Path) -> None:
+    # The parsimony settings act after the search, so they are not part of the run's identity.
+    from edm_sym.result import dumps
+
+    ckpt = tmp_path / "r.json.checkpoint"
+    cfg = parse_config(TINY, "t.toml")
+    stopped = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1, config=cfg,
+                       checkpoint=ckpt, callback=lambda info: info.step == 2)
+    assert stopped.provenance["stop_reason"] == "stopped" and ckpt.exists()
+    other = parse_config({**TINY, "parsimony": {"tolerance": 0.5}}, "t.toml")
+    resumed = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+                       config=other, checkpoint=ckpt, resume=True, select="best")
+    fresh = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+                     config=other, select="best")
+    assert dumps(resumed) == dumps(fresh)
+    assert not ckpt.exists()
