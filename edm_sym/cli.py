@@ -72,6 +72,9 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
     p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
     p.add_argument("--ts", type=_positive_float, help="sample time of logs without a 't' column")
+    p.add_argument("--front-member", type=int, metavar="K",
+                   help="export member K (1-based) of the result's parsimony front instead of "
+                        "the selected one")
     p.set_defaults(func=_cmd_export)
 
 
@@ -126,6 +129,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--validation-share", type=float, metavar="SHARE",
+                   help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
+    p.add_argument("--validate", metavar="FILE",
+                   help="a second log held out as a whole (the GA fits all of DATA)")
+    p.add_argument("--select", metavar="RULE",
+                   help="exported member of the pruned front: best, knee or simplest-within=PCT "
+                        "(default: simplest-within=<tolerance>, 1 %%)")
+    p.add_argument("--prune-tolerance", type=float, metavar="REL",
+                   help="relative worsening a simplification may cost (default 0.01)")
+    p.add_argument("--no-prune", action="store_true",
+                   help="export the search's model as it is (no pruning, no front)")
     p.set_defaults(func=_cmd_abstract)
 
     _add_describe_args(sub.add_parser(
@@ -205,6 +219,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from edm_sym.result import load_result
 
     result = load_result(args.result)
+    if args.front_member is not None:
+        from edm_sym.result import front_member
+
+        result = front_member(result, args.front_member)
     try:
         from edm_sym.render import export
     except ImportError:

@@ -64,6 +64,14 @@ class EdmResult:
         Optional ``data``, ``eval_data`` (paths relative to the result's
         folder, or ``plant:...`` specs) and ``lugre`` (a LUGRE.json path):
         what the report shows when ``edm-export`` is given no such options.
+    validation : mapping
+        What was held out from the GA and the exported model's training and
+        validation scores (see :mod:`edm_sym.abstraction.validation`); empty
+        in results written before held-out validation existed.
+    parsimony : mapping
+        The pruning pass's complexity-vs-fitness front, the selection rule
+        and the selected member (see :mod:`edm_sym.abstraction.prune`);
+        empty when there was none.
     sha256 : str or None
         The sha256 of the file it was loaded from.
     """
@@ -76,6 +84,8 @@ class EdmResult:
     sha256: str | None = None
     source: str | None = None
     report_inputs: Mapping[str, str] = field(default_factory=dict)
+    validation: Mapping[str, Any] = field(default_factory=dict)
+    parsimony: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def matrix(self) -> ElementMatrix:
@@ -110,6 +120,8 @@ class EdmResult:
             "provenance": dict(self.provenance),
             **({"report_inputs": dict(self.report_inputs)} if self.report_inputs else {}),
             **_bounds_block(comp),
+            **({"validation": dict(self.validation)} if self.validation else {}),
+            **({"parsimony": dict(self.parsimony)} if self.parsimony else {}),
         }
 
 
@@ -219,9 +231,11 @@ def _schema_error(name: str, doc: Any) -> ResultFormatError | None:
         where = format_path([*path, missing[0]] if missing else path)
         return ResultFormatError(f"{name}: {where}", "expected this field, found it missing")
     if err.validator == "anyOf":
+        what = ("a sha256 hex digest" if path and str(path[-1]).endswith("sha256")
+                else "an object with fitness, rmse and samples")
         return ResultFormatError(
             f"{name}: {format_path(path)}",
-            f"expected null or a sha256 hex digest, found {json.dumps(err.instance)[:60]}",
+            f"expected null or {what}, found {json.dumps(err.instance)[:60]}",
         )
     found = json.dumps(err.instance)
     found = found if len(found) <= 60 else found[:57] + "..."
@@ -317,7 +331,67 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
         raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
     comp = Compensator(matrix, float(doc["sample_time"]), ranges, float(doc["record_length"]))
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
-                     report_inputs=dict(doc.get("report_inputs", {})))
+                     report_inputs=dict(doc.get("report_inputs", {})),
+                     validation=dict(doc.get("validation", {})),
+                     parsimony=_parsimony_from_json(name, doc, inputs))
+
+
+def _parsimony_from_json(name: str, doc: Mapping[str, Any], inputs: Sequence[str]
+                         ) -> dict[str, Any]:
+    par = doc.get("parsimony")
+    if not par:
+        return {}
+    front = par["front"]
+    for k, member in enumerate(front):
+        _matrix_from_json(name, f"parsimony.front[{k}].matrix", member["matrix"], inputs)
+        if member["member"] != k + 1:
+            raise ResultFormatError(f"{name}: parsimony.front[{k}].member",
+                                    f"expected {k + 1} (members are numbered from 1), "
+                                    f"found {member['member']}")
+    if not 1 <= par["selected"] <= len(front):
+        raise ResultFormatError(f"{name}: parsimony.selected",
+                                f"expected a member number 1-{len(front)}, found {par['selected']}")
+    return dict(par)
+
+
+def front_member(result: EdmResult, k: int) -> EdmResult:
+    """The result with member ``k`` (1-based) of its parsimony front as the model.
+
+    Parameters
+    ----------
+    result : EdmResult
+        A result with a ``parsimony`` front.
+    k : int
+        The member number, as in result.json and the report's table.
+
+    Returns
+    -------
+    EdmResult
+        The same result whose compensator holds that member's matrix, its
+        ``fitness`` the member's training eq. 8 and ``validation`` its scores.
+
+    Raises
+    ------
+    ResultFormatError
+        When the result has no front or no member ``k``.
+    """
+    name = Path(result.source).name if result.source else "result.json"
+    front = result.parsimony.get("front", []) if result.parsimony else []
+    if not front:
+        raise ResultFormatError(f"{name}: parsimony", "expected a front (a result of "
+                                "edm abstract with pruning), found none")
+    if not 1 <= k <= len(front):
+        raise ResultFormatError(f"{name}: parsimony.front",
+                                f"expected a member number 1-{len(front)}, found {k}")
+    member = front[k - 1]
+    matrix = _matrix_from_json(name, f"parsimony.front[{k - 1}].matrix", member["matrix"],
+                               result.inputs)
+    validation = dict(result.validation)
+    if validation:
+        validation.update(training=member["training"], validation=member["validation"])
+    return replace(result, compensator=replace(result.compensator, matrix=matrix),
+                   fitness=member["training"]["fitness"][0], validation=validation,
+                   parsimony={**result.parsimony, "selected": k})
 
 
 def load_result(path: str | Path) -> EdmResult:

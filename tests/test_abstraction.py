@@ -15,7 +15,7 @@ from edm_sym.abstraction.ga import Operators
 from edm_sym.data import DataLog
 from edm_sym.elements import BY_NAME, default_ranges
 from edm_sym.matrix import Compensator, Gene
-from edm_sym.result import dumps, load_result, save_result
+from edm_sym.result import dumps, load_result, matrix_to_json, save_result
 from edm_sym.simulate import fitness, simulate, simulate_row
 
 TS = 1e-3
@@ -301,7 +301,11 @@ def test_windows_weighting_ignores_the_masked_part(log: DataLog) -> None:
     res = run(log, doc, seed=0, workers=1)
     sim = simulate(res, log).total
     lam = (log.columns["t"] < 0.5).astype(float)
-    assert res.fitness == pytest.approx(fitness(log.columns["tau_ext"] - sim, lam), rel=1e-9)
+    # The fitness is eq. 8 over the samples the GA fits (the last 20 % are held out).
+    k = res.validation["held_out"]["rows"][0]
+    assert k == 1600
+    assert res.fitness == pytest.approx(
+        fitness((log.columns["tau_ext"] - sim)[:k], lam[:k]), rel=1e-9)
     assert res.steps[0].weighting == {"constant": 1.0, "windows": [[0.0, 0.5, 1.0]],
                                       "otherwise": 0.0}
 
@@ -324,10 +328,16 @@ def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: 
     ranges["gain"] = ranges["gain"].__class__(-3.0, 3.0, "linear")
     assert dict(back.compensator.ranges) == ranges
     assert back.compensator.record_length == pytest.approx(len(log) * TS)
-    # The recorded fitness is eq. 8 of the reference simulator.
-    ref = fitness(log.columns["tau_ext"] - simulate(back, log).total)
+    # The recorded fitness is eq. 8 of the reference simulator on the training part.
+    k = back.validation["held_out"]["rows"][0]
+    ref = fitness((log.columns["tau_ext"] - simulate(back, log).total)[:k])
     assert back.fitness == pytest.approx(ref, rel=1e-14)
-    assert back.matrix == res.steps[-1].matrix
+    # The exported matrix is the selected member of the pruned front; without
+    # pruning it is the last step's best.
+    par = back.parsimony
+    assert matrix_to_json(back.matrix) == par["front"][par["selected"] - 1]["matrix"]
+    plain = run(log, {**doc, "parsimony": {"prune": False}}, seed=7, workers=1)
+    assert plain.matrix == res.steps[-1].matrix and not plain.parsimony
 
 
 def test_the_progress_bar_shows_step_generation_best_and_rate(

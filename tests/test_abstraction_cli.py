@@ -52,7 +52,17 @@ def test_abstract_writes_the_result_and_prints_fitness_and_path(
     lines = capsys.readouterr().out.splitlines()
     assert rc == 0
     res = load_result(out)
-    assert lines == [f"wrote {out}", f"fitness {res.fitness:.10g}"]
+    tr, va = res.validation["training"], res.validation["validation"]
+    par = res.parsimony
+    assert lines == [f"wrote {out}", f"fitness {res.fitness:.10g}",
+                     "held out: rows 800-1000 of the log (last 20 %)",
+                     f"training: fitness (eq. 8) {tr['fitness'][0]:.6g} N m, "
+                     f"rmse {tr['rmse'][0]:.6g} N m",
+                     f"validation: fitness (eq. 8) {va['fitness'][0]:.6g} N m, "
+                     f"rmse {va['rmse'][0]:.6g} N m",
+                     f"parsimony: complexity {par['search_complexity']} -> "
+                     f"{par['front'][par['selected'] - 1]['complexity']} (front member "
+                     f"{par['selected']} of {len(par['front'])}, simplest-within=1)"]
     assert res.inputs == ("omega", "alpha") and res.target == "tau_ext"
     assert res.provenance["seed"] == 3 and len(res.provenance["data_sha256"]) == 64
     assert not checkpoint_path(out).exists()

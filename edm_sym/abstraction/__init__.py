@@ -24,6 +24,8 @@ from edm_sym.abstraction.schedule import (
     load_config,
     parse_config,
 )
+from edm_sym.abstraction.selection import ParsimonySettings
+from edm_sym.abstraction.validation import ValidationSettings
 from edm_sym.abstraction.weighting import Weighting
 
 __all__ = [
@@ -32,8 +34,10 @@ __all__ = [
     "GaSettings",
     "GenerationInfo",
     "InitialRow",
+    "ParsimonySettings",
     "RowCache",
     "StepConfig",
+    "ValidationSettings",
     "Weighting",
     "abstract",
     "default_config",

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -51,7 +52,8 @@ def run_cli(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
-        ``workers``.
+        ``workers``, ``validation_share``, ``validate``, ``select``,
+        ``prune_tolerance``, ``no_prune``.
 
     Returns
     -------
@@ -61,6 +63,7 @@ def run_cli(args: argparse.Namespace) -> int:
     """
     from edm_sym.abstraction.run import abstract
     from edm_sym.abstraction.schedule import default_config, load_config
+    from edm_sym.abstraction.validation import ValidationSettings
     from edm_sym.data import load_data
     from edm_sym.result import save_result
 
@@ -73,9 +76,23 @@ def run_cli(args: argparse.Namespace) -> int:
         raise ConfigError("--workers", f"expected an integer >= 1, found {args.workers}")
     if args.seed < 0:
         raise ConfigError("--seed", f"expected an integer >= 0, found {args.seed}")
+    share = getattr(args, "validation_share", None)
+    validate_path = getattr(args, "validate", None)
+    if share is not None and validate_path is not None:
+        raise ConfigError("--validation-share", f"expected no share with --validate (the "
+                                                f"second log is held out whole), found {share}")
+    if share is not None:
+        try:
+            config = replace(config, validation=ValidationSettings(share, config.validation.unit))
+        except ConfigError as exc:
+            raise ConfigError("--validation-share", exc.problem) from None
+    config = _parsimony_options(config, args)
     data = load_data(args.data, ts=args.ts)
     data.column(args.target, role="target column")
     data.stack(inputs)
+    validate = None
+    if validate_path is not None:
+        validate = load_data(validate_path, ts=args.ts, require=[args.target, *inputs])
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     if args.resume and not ckpt.exists():
@@ -86,7 +103,8 @@ def run_cli(args: argparse.Namespace) -> int:
     try:
         result = abstract(data, target=args.target, inputs=inputs, config=config,
                           seed=args.seed, time_limit=args.time_limit, progress=progress,
-                          checkpoint=ckpt, resume=args.resume, workers=args.workers)
+                          checkpoint=ckpt, resume=args.resume, workers=args.workers,
+                          validate=validate, select=getattr(args, "select", None))
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)
@@ -97,6 +115,65 @@ def run_cli(args: argparse.Namespace) -> int:
     elif reason == "time_limit":
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
-    print(f"fitness {result.fitness:.10g}")
+    print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")
+    for line in summary_lines(result.validation):
+        print(line)
+    par = result.parsimony
+    if par:
+        member = par["front"][par["selected"] - 1]
+        print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
+              f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
     _warn_bounds(result, output)
     return 130 if reason == "interrupted" else 0
+
+
+def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
+    from edm_sym.abstraction.selection import ParsimonySettings, check_select
+
+    par = config.parsimony
+    tol = getattr(args, "prune_tolerance", None)
+    if tol is not None:
+        try:
+            par = ParsimonySettings(par.prune, tol, par.select)
+        except ConfigError as exc:
+            raise ConfigError("--prune-tolerance", exc.problem) from None
+    if getattr(args, "no_prune", False):
+        par = ParsimonySettings(False, par.tolerance, par.select)
+    if getattr(args, "select", None) is not None:
+        check_select(args.select, "--select")
+    return replace(config, parsimony=par)
+
+
+def summary_lines(validation: dict) -> list[str]:
+    """Closing lines of ``edm abstract``: what was held out and both scores.
+
+    Parameters
+    ----------
+    validation : dict
+        The ``validation`` entry of a result.
+
+    Returns
+    -------
+    list of str
+        E.g. ``held out: rows 800-1000 of the log (last 20 %)`` and one line
+        per part with eq. 8 and the RMSE.
+    """
+    if not validation:
+        return []
+    held = validation["held_out"]
+    if held["kind"] == "segment":
+        out = [f"held out: rows {held['rows'][0]}-{held['rows'][1]} of the log "
+               f"(last {100 * held['share']:g} %)"]
+    elif held["kind"] == "file":
+        out = [f"held out: {held['file']} ({held['samples']} samples)"]
+    else:
+        out = ["held out: nothing (training scores only)"]
+    for part in ("training", "validation"):
+        score = validation.get(part)
+        if score is None:
+            continue
+        (fit, unit), (rmse, _) = score["fitness"], score["rmse"]
+        fit_text = "n/a (Lambda = 0 there)" if fit is None else f"{fit:.6g} {unit}"
+        rmse_text = "inf" if rmse is None else f"{rmse:.6g} {unit}"
+        out.append(f"{part}: fitness (eq. 8) {fit_text}, rmse {rmse_text}")
+    return out

@@ -37,7 +37,9 @@ from edm_sym.abstraction.checkpoint import (
 from edm_sym.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.abstraction.polish import GAIN, gain_fit
+from edm_sym.abstraction.prune import apply_parsimony
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
+from edm_sym.abstraction.validation import Scorer, plan_holdout
 from edm_sym.data import DataLog
 from edm_sym.elements import BY_NAME, ParamRange
 from edm_sym.errors import ConfigError, NumericsWarning
@@ -314,6 +316,9 @@ def abstract(
     resume: bool = False,
     workers: int | None = None,
     callback: Callable[[GenerationInfo], bool | None] | None = None,
+    validate: DataLog | None = None,
+    validation_share: float | None = None,
+    select: str | None = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -347,6 +352,17 @@ def abstract(
     callback : callable, optional
         Called with a :class:`GenerationInfo` after every generation; a true
         return value ends the run there, like a time limit.
+    validate : DataLog, optional
+        A second log held out as a whole (the GA then fits all of ``data``).
+    validation_share : float, optional
+        Share of ``data`` held out at its end, in [0, 0.9]; None: the
+        config's ``[validation] share`` (default 0.2). See
+        :mod:`edm_sym.abstraction.validation`.
+    select : str, optional
+        Which member of the complexity-vs-fitness front is exported:
+        ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
+        config's ``[parsimony]`` rule (default: the simplest member within
+        its tolerance, 1 %). See :mod:`edm_sym.abstraction.prune`.
 
     Returns
     -------
@@ -378,12 +394,17 @@ def abstract(
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
         raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
-    x = data.stack(inputs)
-    y = np.asarray(data.column(target, role="target column"), dtype=float)
+    if validation_share is not None:
+        cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
+    hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
+                        validate=validate)
+    # The GA sees the training samples only (causal rows: they do not depend on later ones).
+    part = hold.training
+    x = np.ascontiguousarray(part.x[:, :hold.n_train])
+    y, t = part.y[:hold.n_train], part.t[:hold.n_train]
     ts = float(data.ts)
-    n = len(y)
+    n = len(data)
     ranges = cfg.resolve_ranges(ts, n * ts)
-    t = np.asarray(data.columns["t"], dtype=float) if "t" in data.columns else np.arange(n) * ts
     human = _human_rows(cfg, inputs, ranges)
     fingerprint = _fingerprint(cfg, target, inputs, int(seed), x, y, ts)
     rng = np.random.default_rng(int(seed))
@@ -423,11 +444,16 @@ def abstract(
                                 history=tuple(r.history), generations=r.generations,
                                 evaluations=r.evaluations, weighting=r.weighting))
     comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
+    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting)
+    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select)
+    final = scorer.report(comp)
+    fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance = {"seed": int(seed), "package_version": __version__,
                   "data_sha256": data.sha256, "stop_reason": reason}
     if reason == "completed" and checkpoint is not None and checkpoint.exists():
         checkpoint.unlink()
-    return EdmResult(comp, target, tuple(steps), provenance, steps[-1].fitness)
+    return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
+                     parsimony=parsimony)
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

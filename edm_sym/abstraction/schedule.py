@@ -19,6 +19,8 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from edm_sym.abstraction.selection import ParsimonySettings, parse_parsimony
+from edm_sym.abstraction.validation import ValidationSettings, parse_validation
 from edm_sym.abstraction.weighting import Weighting, parse_weighting
 from edm_sym.elements import BY_NAME, ParamRange, default_ranges
 from edm_sym.errors import TOO_DEEP, ConfigError
@@ -203,6 +205,10 @@ class AbstractionConfig:
         A human model seeding step 1 (empty: none).
     cache_mb : float
         Memory bound of the row-output cache [MB].
+    validation : ValidationSettings
+        What is held out from the GA (``[validation]``; default: the last 20 %).
+    parsimony : ParsimonySettings
+        The pruning pass after the search and the front's selection rule.
     source : str
         The config file name (for messages).
     """
@@ -212,6 +218,8 @@ class AbstractionConfig:
     initial: tuple[InitialRow, ...] = ()
     cache_mb: float = 256.0
     source: str = "<default config>"
+    validation: ValidationSettings = field(default_factory=ValidationSettings)
+    parsimony: ParsimonySettings = field(default_factory=ParsimonySettings)
 
     def __post_init__(self) -> None:
         steps = tuple(self.steps) or default_steps()
@@ -263,6 +271,8 @@ class AbstractionConfig:
             "ranges": {k: dict(v) for k, v in sorted(self.ranges.items())},
             "initial": [{"input": r.input, "elements": [list(e) for e in r.elements]}
                         for r in self.initial],
+            # Not the parsimony settings: they act after the search, a checkpoint needs none.
+            "validation": self.validation.to_json(),
         }
 
     def digest(self) -> str:
@@ -369,7 +379,8 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
     return replace(base, **kw) if kw else base
 
 
-_TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step")
+_TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
+             "parsimony")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -434,7 +445,10 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     if not steps:
         steps = list(default_steps(ga))
     initial = _parse_initial(f, doc.get("initial"))
-    return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source)
+    validation = parse_validation(f"{f}validation", doc.get("validation", {}))
+    parsimony = parse_parsimony(f"{f}parsimony", doc.get("parsimony", {}))
+    return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
+                             parsimony)
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:

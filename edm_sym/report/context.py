@@ -18,6 +18,7 @@ from typing import Any
 from edm_sym.printing.latex import EdmLatexPrinter
 from edm_sym.report.diagrams import matrix_diagram
 from edm_sym.report.flags import bounds_fact, judge_report_rows, judged_titles
+from edm_sym.report.front import front_context
 from edm_sym.report.rows import (
     KIND_TITLES,
     ROLE_TITLES,
@@ -364,6 +365,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "versions": [{"name": p.text(n), "version": p.text(v)} for n, v in inp.versions],
         "commands": _commands(p, inp),
         "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
+        **front_context(p, result, fig),
     }
     return check_report_context(ctx)
 

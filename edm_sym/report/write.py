@@ -9,6 +9,8 @@ import numpy as np
 
 from edm_sym.report import figures as fg
 from edm_sym.report.context import ReportInputs, package_versions, report_context
+from edm_sym.report.front import FIGURE as FRONT
+from edm_sym.report.front import front_figure
 from edm_sym.report.runs import LogRun, SteadyState, load_log, load_lugre_ref, run_log, steady_state
 
 #: The template of the report (in the templates folder).
@@ -50,6 +52,8 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
         hist = [(f"Step {s.step} ({s.matrix.n_elements}x{s.matrix.n_rows})", s.history)
                 for s in result.steps]
         out["fitness"] = fg.fitness_history(hist, path("fitness"))
+    if getattr(result, "parsimony", None):
+        out[FRONT] = front_figure(result, path(FRONT))
     for r in runs:
         labels = [f"$y_{{{k + 1}}}$" for k in range(len(r.rows))]
         c = r.contributions
@@ -175,6 +179,7 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
 def _figure_keys(result: Any, runs: dict[str, LogRun], steady: SteadyState | None) -> list[str]:
     keys = ["friction"] if steady is not None and steady.rows else []
     keys += ["fitness"] if result.steps else []
+    keys += [FRONT] if getattr(result, "parsimony", None) else []
     for label in runs:
         keys += [f"{k}_{label}" for k in ("contributions", "rows", "time", "zoom")]
     return keys

@@ -1,0 +1,263 @@
+"""Parsimony (issue 13, part 3): pruning, the front, selection, export of a member."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_abstraction import TS, friction_log
+
+from edm_sym.abstraction import abstract, parse_config
+from edm_sym.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
+from edm_sym.abstraction.selection import ParsimonySettings, parse_parsimony, select
+from edm_sym.abstraction.validation import Scorer, ValidationSettings, plan_holdout
+from edm_sym.abstraction.weighting import Weighting
+from edm_sym.cli import export_main, main
+from edm_sym.data import DataLog, write_csv
+from edm_sym.elements import default_ranges
+from edm_sym.errors import ConfigError, ResultFormatError
+from edm_sym.matrix import Compensator, make_matrix
+from edm_sym.result import front_member, load_result, save_result
+from edm_sym.simulate import plain_loop
+
+INPUTS = ("omega", "alpha")
+
+
+@pytest.fixture(scope="module")
+def log() -> DataLog:
+    return friction_log(2.0)[0]  # tau = 1.0 sgn(omega) + 0.01 omega + noise
+
+
+def compensator(rows: list, n_samples: int) -> Compensator:
+    """A matrix from rows of (input, [(element, value a or None), ...])."""
+    ranges = default_ranges(TS, n_samples * TS)
+    enc = [(inp, [(name, 0.0 if a is None else ranges[name].encode(a)) for name, a in genes])
+           for inp, genes in rows]
+    return Compensator(make_matrix(INPUTS, enc), TS, ranges, n_samples * TS)
+
+
+TRUTH = [("omega", [("sign", None), ("gain", 1.0), ("through", None)]),
+         ("omega", [("power_gain", 0.01), ("through", None), ("through", None)])]
+PLANTED = [
+    ("omega", [("sign", None), ("gain", 1.0), ("through", None)]),             # Coulomb
+    ("omega", [("dead_time", 0.02), ("power_gain", 0.01), ("through", None)]),  # viscous, late
+    ("alpha", [("lpf", 100.0), ("gain", 1e-6), ("through", None)]),           # useless
+    ("omega", [("hpf", 10.0), ("gain", 0.3), ("through", None)]),             # these two
+    ("omega", [("hpf", 10.0), ("gain", -0.3), ("through", None)]),            # cancel
+]
+
+
+def scorer(log: DataLog) -> Scorer:
+    hold = plan_holdout(log, target="tau_ext", inputs=INPUTS, settings=ValidationSettings())
+    return Scorer(hold, Weighting())
+
+
+def names(comp: Compensator) -> list[tuple[str, tuple[str, ...]]]:
+    return sorted((comp.matrix.inputs[r.input],
+                   tuple(g.element.name for g in r.genes if g.element.name != "through"))
+                  for r in comp.matrix.rows)
+
+
+def test_complexity_counts_rows_active_elements_and_state() -> None:
+    comp = compensator(PLANTED, 2000)
+    # rows 5; active 2 + 2 + 2 + 2 + 2 = 10; state: dead time 20 samples, lpf 1, hpf 1 + 1.
+    assert complexity(comp, comp.matrix) == 5 + 10 + 20 + 1 + 2
+
+
+def test_planted_useless_rows_cancelling_rows_and_a_delay_are_pruned(log: DataLog) -> None:
+    sc = scorer(log)
+    comp, record = apply_parsimony(compensator(PLANTED, len(log)), sc, ParsimonySettings())
+    truth = sc.criterion(compensator(TRUTH, len(log)))
+    assert names(comp) == [("omega", ("power_gain",)), ("omega", ("sign",))] or names(comp) == [
+        ("omega", ("power_gain",)), ("omega", ("sign", "gain"))]
+    assert sc.criterion(comp) <= 1.01 * truth
+    assert record["search_complexity"] == 38
+    assert record["front"][record["selected"] - 1]["complexity"] <= 5
+
+
+def test_the_front_is_pareto_and_its_numbers_recompute(log: DataLog) -> None:
+    sc = scorer(log)
+    comp0 = compensator(PLANTED, len(log))
+    front = prune(comp0, sc)
+    cx = [m.complexity for m in front]
+    cr = [m.criterion for m in front]
+    assert cx == sorted(set(cx)) and all(a > b for a, b in zip(cr, cr[1:], strict=False))
+    _, record = apply_parsimony(comp0, sc, ParsimonySettings())
+    y = log.columns["tau_ext"]
+    for m, rec in zip(front, record["front"], strict=True):
+        comp = Compensator(m.matrix, TS, comp0.ranges, comp0.record_length)
+        e = y - plain_loop(comp, log).sum(axis=0)
+        assert rec["criterion"][0] == pytest.approx(np.sqrt(np.mean(e[1600:] ** 2)), rel=1e-9)
+        assert rec["training"]["rmse"][0] == pytest.approx(np.sqrt(np.mean(e[:1600] ** 2)),
+                                                           rel=1e-9)
+        assert rec["complexity"] == complexity(comp0, m.matrix)
+
+
+def test_selection_rules() -> None:
+    front = [Member(None, c, f, "") for c, f in ((1, 10.0), (3, 1.0), (5, 0.5), (9, 0.499),
+                                                   (12, 0.45))]
+    assert select(front, "best") == 4
+    assert select(front, "simplest-within=12") == 2      # 0.5 <= 1.12 * 0.45
+    assert select(front, "simplest-within=11") == 3      # 0.499 <= 1.11 * 0.45 < 0.5
+    assert select(front, "simplest-within=10") == 4
+    assert select(front, "simplest-within=200") == 1
+    # knee: ln(10/1)/2 = 1.15 per unit beats every later drop; but 1.0 > 1.5 * 0.45.
+    assert select(front, "knee") == 2
+    assert select([Member(None, 1, 1.0, "")], "knee") == 0
+    with pytest.raises(ConfigError, match="select: expected best, knee or simplest-within=PCT"):
+        select(front, "simplest")
+
+
+def test_pareto_drops_dominated_members() -> None:
+    ms = [Member(None, 4, 1.0, "a"), Member(None, 2, 0.9, "b"), Member(None, 3, 2.0, "c"),
+          Member(None, 2, 0.95, "d"), Member(None, 6, float("inf"), "e")]
+    assert [m.change for m in pareto(ms)] == ["b"]
+
+
+def test_settings_are_checked() -> None:
+    with pytest.raises(ConfigError, match="c.toml: parsimony.tolerance: expected a number"):
+        parse_parsimony("c.toml: parsimony", {"tolerance": -1})
+    with pytest.raises(ConfigError, match="c.toml: parsimony.select: expected best, knee"):
+        parse_parsimony("c.toml: parsimony", {"select": "smallest"})
+    with pytest.raises(ConfigError, match="c.toml: parsimony.level: unknown key"):
+        parse_parsimony("c.toml: parsimony", {"level": 1})
+    assert ParsimonySettings(tolerance=0.05).selection == "simplest-within=5"
+
+
+# -- through abstract() and the command line -------------------------------------------
+
+TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
+        "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 4, "n_elements": 3}]}
+
+
+def test_abstract_exports_the_selected_member_and_is_deterministic(log: DataLog,
+                                                                   tmp_path: Path) -> None:
+    def run(**kw: object) -> object:
+        return abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+                        config=parse_config(TINY, "t.toml"), **kw)
+
+    res = run()
+    par = res.parsimony
+    assert par["select"] == "simplest-within=1"
+    crit = [m["criterion"][0] for m in par["front"]]
+    k = par["selected"] - 1
+    assert crit[k] <= 1.01 * min(crit) and all(c > 1.01 * min(crit) for c in crit[:k])
+    assert res.fitness == par["front"][k]["training"]["fitness"][0]
+    best = run(select="best")
+    assert best.parsimony["selected"] == crit.index(min(crit)) + 1
+    path = save_result(res, tmp_path / "r.json")
+    assert path.read_bytes() == save_result(run(), tmp_path / "again.json").read_bytes()
+    back = load_result(path)
+    one = front_member(back, 1)
+    assert one.matrix.n_rows == par["front"][0]["matrix"]["n_rows"]
+    assert one.fitness == par["front"][0]["training"]["fitness"][0]
+    with pytest.raises(ResultFormatError, match=f"r.json: parsimony.front: expected a member "
+                                                f"number 1-{len(crit)}, found 99"):
+        front_member(back, 99)
+
+
+@pytest.fixture(scope="module")
+def cli_files(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    d = tmp_path_factory.mktemp("p")
+    data = write_csv(d / "log.csv", friction_log(1.0)[0].columns)
+    cfg = d / "cfg.toml"
+    cfg.write_text('[ga]\npopulation = 12\ngenerations = 3\ncontinue = "no"\n\n'
+                   '[[step]]\nn_rows = 3\nn_elements = 3\n')
+    return data, cfg
+
+
+def _abstract(files: tuple[Path, Path], out: Path, *extra: str) -> int:
+    return main(["abstract", str(files[0]), "--target", "tau_ext", "--inputs", "omega,alpha",
+                 "--config", str(files[1]), "-o", str(out), "--workers", "1", "--quiet", *extra])
+
+
+def test_cli_select_and_export_of_a_front_member(cli_files: tuple[Path, Path], tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "r.json"
+    assert _abstract(cli_files, out, "--select", "simplest-within=1000") == 0
+    res = load_result(out)
+    crit = [m["criterion"][0] for m in res.parsimony["front"]]
+    first = next(k for k, c in enumerate(crit, start=1) if c <= 11 * min(crit))
+    assert res.parsimony["selected"] == first and res.parsimony["select"] == "simplest-within=1000"
+    assert _abstract(cli_files, tmp_path / "b.json", "--select", "best") == 0
+    assert load_result(tmp_path / "b.json").parsimony["selected"] == crit.index(min(crit)) + 1
+    assert _abstract(cli_files, tmp_path / "n.json", "--no-prune") == 0
+    assert "parsimony" not in json.loads((tmp_path / "n.json").read_text())
+    capsys.readouterr()
+    n = len(res.parsimony["front"])
+    texts = {}
+    for k in sorted({"1", str(first), str(n)}):
+        d = tmp_path / f"m{k}"
+        assert export_main([str(out), "--target", "python", "-o", str(d), "--front-member", k]) == 0
+        texts[k] = (d / "edm_comp.py").read_text()
+    assert export_main([str(out), "--target", "python", "-o", str(tmp_path / "sel")]) == 0
+    # Without --front-member: the selected member.
+    assert (tmp_path / "sel" / "edm_comp.py").read_text() == texts[str(first)]
+    assert n > 1 and texts[str(n)] != texts["1"]
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["abstract", "--select", "smallest"], "edm: --select: expected best, knee or "
+                                           "simplest-within=PCT, found 'smallest'"),
+    (["abstract", "--prune-tolerance", "2"], "edm: --prune-tolerance: expected a number in "
+                                             "[0, 1], found 2.0"),
+    (["export", "--front-member", "0"], "edm-export: r.json: parsimony.front: expected a member "
+                                        "number 1-"),
+])
+def test_cli_bad_parsimony_options_exit_2_with_one_line(
+    cli_files: tuple[Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture,
+    argv: list[str], message: str,
+) -> None:
+    out = tmp_path / "r.json"
+    if argv[0] == "abstract":
+        assert _abstract(cli_files, out, *argv[1:]) == 2
+        assert not out.exists()
+    else:
+        assert _abstract(cli_files, out) == 0
+        capsys.readouterr()
+        assert export_main([str(out), "--target", "python", "-o", str(tmp_path / "x"),
+                            *argv[1:]]) == 2
+        assert not (tmp_path / "x").exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(message), err
+
+
+def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path: Path) -> None:
+    from edm_sym.report import write_report
+
+    res = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+                   config=parse_config(TINY, "t.toml"))
+    par = res.parsimony
+    for k in (par["selected"], 1):
+        shown = front_member(res, k)
+        out = tmp_path / f"r{k}"
+        written = write_report(shown, out)
+        tex = (out / "edm_comp_report.tex").read_text()
+        rows = [ln for ln in tex.splitlines() if ln.endswith(r"\\") and ln.count("&") == 7
+                and ln.split("&")[0].strip().isdigit()]
+        assert [int(r.split("&")[0]) for r in rows] == list(range(1, len(par["front"]) + 1))
+        marked = [int(r.split("&")[0]) for r in rows if r"$\leftarrow$" in r]
+        assert marked == [k]
+        assert f"member {k} is exported" in tex
+        assert out / "edm_comp_fig_front.pdf" in written
+        assert "held out from the GA".lower() in tex.lower()
+
+
+def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Path) -> None:
+    # The parsimony settings act after the search, so they are not part of the run's identity.
+    from edm_sym.result import dumps
+
+    ckpt = tmp_path / "r.json.checkpoint"
+    cfg = parse_config(TINY, "t.toml")
+    stopped = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1, config=cfg,
+                       checkpoint=ckpt, callback=lambda info: info.step == 2)
+    assert stopped.provenance["stop_reason"] == "stopped" and ckpt.exists()
+    other = parse_config({**TINY, "parsimony": {"tolerance": 0.5}}, "t.toml")
+    resumed = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+                       config=other, checkpoint=ckpt, resume=True, select="best")
+    fresh = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+                     config=other, select="best")
+    assert dumps(resumed) == dumps(fresh)
+    assert not ckpt.exists()

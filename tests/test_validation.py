@@ -1,0 +1,234 @@
+"""Held-out validation (issue 13, part 2): what the GA never fits, and both scores."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_abstraction import TS, friction_log
+
+from edm_sym.abstraction import abstract, parse_config
+from edm_sym.abstraction.validation import ValidationSettings, parse_validation
+from edm_sym.cli import main
+from edm_sym.data import DataLog, write_csv
+from edm_sym.errors import ConfigError
+from edm_sym.result import dumps, load_result, matrix_to_json, parse_result, save_result
+from edm_sym.simulate import plain_loop
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
+        "step": [{"n_rows": 2, "n_elements": 3},
+                 {"n_rows": 3, "n_elements": 3,
+                  "weighting": {"threshold": 0.5, "above": 4.0, "below": 1.0}}]}
+
+
+def run(data: DataLog, doc: dict = TINY, **kw) -> object:
+    kw.setdefault("seed", 2)
+    kw.setdefault("workers", 1)
+    return abstract(data, target="tau_ext", inputs=["omega", "alpha"],
+                    config=parse_config(doc, "test.toml"), **kw)
+
+
+def corrupted(log: DataLog, start: int) -> DataLog:
+    """The same log with its target from ``start`` on replaced by a large unrelated signal."""
+    cols = dict(log.columns)
+    tau = cols["tau_ext"].copy()
+    tau[start:] = 50.0 * np.cos(np.arange(len(tau) - start) * 0.37) + 20.0
+    cols["tau_ext"] = tau
+    return DataLog(cols, log.ts, "corrupted")
+
+
+@pytest.fixture(scope="module")
+def log() -> DataLog:
+    return friction_log(1.5)[0]
+
+
+def test_the_last_fifth_is_held_out_by_default_and_recorded(log: DataLog) -> None:
+    res = run(log)
+    held = res.validation["held_out"]
+    assert held == {"kind": "segment", "end": "last", "share": 0.2, "rows": [1200, 1500],
+                    "t": [pytest.approx(1.2), pytest.approx(1.499)]}
+    assert res.validation["training"]["samples"] == 1200
+    assert res.validation["validation"]["samples"] == 300
+    assert res.validation["training"]["fitness"][1] == "N m"
+    assert res.validation["weighting"] == {"constant": 1.0, "threshold": 0.5, "above": 4.0,
+                                           "below": 1.0}
+
+
+NO_PRUNE = {**TINY, "parsimony": {"prune": False}}
+
+
+def test_the_held_out_segment_never_enters_the_ga(log: DataLog) -> None:
+    # Without the pruning pass, which scores simplifications on the held-out part on purpose.
+    clean = run(log, NO_PRUNE)
+    bad = run(corrupted(log, 1200), NO_PRUNE)
+    # Every step, every history value and the final matrix are the same bytes ...
+    assert [matrix_to_json(s.matrix) for s in bad.steps] == [
+        matrix_to_json(s.matrix) for s in clean.steps]
+    assert [s.history for s in bad.steps] == [s.history for s in clean.steps]
+    assert bad.fitness == clean.fitness
+    assert bad.validation["training"] == clean.validation["training"]
+    # ... but the held-out score sees the corruption.
+    assert bad.validation["validation"]["rmse"][0] > 10 * clean.validation["validation"]["rmse"][0]
+    # Corrupting one sample before the segment changes the fit: the check can fail.
+    assert dumps(run(corrupted(log, 1199), NO_PRUNE)) != dumps(bad)
+
+
+def test_both_scores_match_an_independent_recomputation(log: DataLog) -> None:
+    res = run(log)
+    # The per-sample loop (a firmware-like realisation) over the whole log, from rest.
+    total = plain_loop(res.compensator, log).sum(axis=0)
+    e = log.columns["tau_ext"] - total
+    lam = np.where(np.abs(log.columns["tau_ext"]) >= 0.5, 4.0, 1.0)
+    for part, sl in (("training", slice(0, 1200)), ("validation", slice(1200, None))):
+        score = res.validation[part]
+        assert score["fitness"][0] == pytest.approx(np.sqrt(np.mean(lam[sl] * e[sl] ** 2)),
+                                                    rel=1e-9)
+        assert score["rmse"][0] == pytest.approx(np.sqrt(np.mean(e[sl] ** 2)), rel=1e-9)
+    # The result's fitness is the exported model's training eq. 8 ...
+    assert res.fitness == pytest.approx(res.validation["training"]["fitness"][0], rel=1e-12)
+    # ... which, without pruning, is the last step's, as the GA ranked it.
+    plain = run(log, NO_PRUNE)
+    assert plain.steps[-1].fitness == pytest.approx(plain.fitness, rel=1e-12)
+    assert plain.validation["training"]["fitness"][0] == pytest.approx(plain.fitness, rel=1e-12)
+
+
+def test_a_share_from_the_config_or_the_call(log: DataLog) -> None:
+    res = run(log, {**TINY, "validation": {"share": 0.4, "unit": "N"}})
+    assert res.validation["held_out"]["rows"] == [900, 1500]
+    assert res.validation["training"]["rmse"][1] == "N"
+    res = run(log, {**TINY, "validation": {"share": 0.4}}, validation_share=0.0)
+    assert res.validation["held_out"] == {"kind": "none"}
+    assert res.validation["validation"] is None
+    assert res.validation["training"]["samples"] == 1500
+
+
+def test_a_second_log_is_held_out_whole(log: DataLog, tmp_path: Path) -> None:
+    other, _ = friction_log(1.0, seed=9)
+    path = write_csv(tmp_path / "val.csv", other.columns)
+    from edm_sym.data import load_data
+
+    val = load_data(path)
+    res = run(log, validate=val)
+    held = res.validation["held_out"]
+    assert held == {"kind": "file", "file": "val.csv",
+                    "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), "samples": 1000}
+    assert res.validation["training"]["samples"] == 1500
+    e = val.columns["tau_ext"] - plain_loop(res.compensator, val).sum(axis=0)
+    assert res.validation["validation"]["rmse"][0] == pytest.approx(np.sqrt(np.mean(e**2)),
+                                                                    rel=1e-9)
+
+
+def test_results_round_trip_and_old_files_still_load(log: DataLog, tmp_path: Path) -> None:
+    res = run(log)
+    back = load_result(save_result(res, tmp_path / "r.json"))
+    assert back.validation == res.validation
+    old = load_result(ROOT / "examples/auger/result.json")
+    assert old.validation == {}
+    assert "validation" not in json.loads(dumps(old))
+
+
+@pytest.mark.parametrize(("path", "value", "message"), [
+    (["validation", "training", "rmse"], [1.0], "validation.training.rmse: expected at least 2"),
+    (["validation", "held_out", "kind"], "middle", "validation.held_out.kind: expected one of"),
+    (["validation", "validation"], 3, "validation.validation: expected null or an object"),
+])
+def test_a_bad_validation_entry_is_refused(log: DataLog, path: list, value: object,
+                                           message: str) -> None:
+    doc = json.loads(dumps(run(log)))
+    node = doc
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ValueError, match=message.replace(".", r"\.")):
+        parse_result(doc, "r.json")
+
+
+def test_settings_are_checked() -> None:
+    with pytest.raises(ConfigError, match=r"c.toml: validation.share: expected a number in \[0, 0.9\]"):
+        parse_validation("c.toml: validation", {"share": 0.95})
+    with pytest.raises(ConfigError, match="c.toml: validation.fraction: unknown key"):
+        parse_validation("c.toml: validation", {"fraction": 0.2})
+    assert ValidationSettings().share == 0.2
+    with pytest.raises(ConfigError, match="validation.share: expected a share that leaves"):
+        run(DataLog({"omega": np.ones(3), "alpha": np.zeros(3), "tau_ext": np.ones(3)}, TS),
+            validation_share=0.1)
+
+
+# -- the command line ----------------------------------------------------------------
+
+QUICK = """
+[ga]
+population = 12
+generations = 2
+continue = "no"
+
+[[step]]
+n_rows = 2
+n_elements = 2
+"""
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    d = tmp_path_factory.mktemp("v")
+    data = write_csv(d / "log.csv", friction_log(1.0)[0].columns)
+    other = friction_log(0.5, seed=4)[0].columns
+    val = write_csv(d / "val.csv", other)
+    bad = write_csv(d / "bad.csv", {k: v for k, v in other.items() if k != "alpha"})
+    (d / "cfg.toml").write_text(QUICK)
+    return data, val, bad
+
+
+def _abstract(files: tuple[Path, Path, Path], out: Path, *extra: str) -> int:
+    return main(["abstract", str(files[0]), "--target", "tau_ext", "--inputs", "omega,alpha",
+                 "--config", str(files[0].parent / "cfg.toml"), "-o", str(out),
+                 "--workers", "1", "--quiet", *extra])
+
+
+def test_cli_validation_share_and_validate(files: tuple[Path, Path, Path], tmp_path: Path,
+                                           capsys: pytest.CaptureFixture) -> None:
+    assert _abstract(files, tmp_path / "a.json", "--validation-share", "0.5") == 0
+    assert load_result(tmp_path / "a.json").validation["held_out"]["rows"] == [500, 1000]
+    assert _abstract(files, tmp_path / "b.json", "--validate", str(files[1])) == 0
+    out = capsys.readouterr().out
+    assert "held out: val.csv (500 samples)" in out
+    assert load_result(tmp_path / "b.json").validation["held_out"]["kind"] == "file"
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--validation-share", "1.5"], "edm: --validation-share: expected a number in [0, 0.9], "
+                                    "found 1.5"),
+    (["--validation-share", "0.2", "--validate", "VAL"], "edm: --validation-share: expected no "
+                                                          "share with --validate"),
+    (["--validate", "BAD"], "edm: bad.csv: column 'alpha': expected a column named 'alpha', "
+                            "found only: t, omega, tau_ext"),
+])
+def test_cli_bad_validation_options_exit_2_with_one_line(
+    files: tuple[Path, Path, Path], tmp_path: Path, capsys: pytest.CaptureFixture,
+    extra: list[str], message: str,
+) -> None:
+    extra = [str(files[1]) if a == "VAL" else str(files[2]) if a == "BAD" else a for a in extra]
+    out = tmp_path / "r.json"
+    assert _abstract(files, out, *extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(message), err
+    assert not out.exists()
+
+
+def test_cli_bad_validation_table_names_file_and_key(files: tuple[Path, Path, Path],
+                                                     tmp_path: Path,
+                                                     capsys: pytest.CaptureFixture) -> None:
+    cfg = tmp_path / "v.toml"
+    cfg.write_text(QUICK + '\n[validation]\nshare = "a fifth"\n')
+    out = tmp_path / "r.json"
+    rc = main(["abstract", str(files[0]), "--target", "tau_ext", "--inputs", "omega,alpha",
+               "--config", str(cfg), "-o", str(out), "--workers", "1", "--quiet"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("edm: v.toml: validation.share: expected a number in [0, 0.9], "
+                          "found 'a fifth'")
+    assert not out.exists()
