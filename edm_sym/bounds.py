@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from edm_sym.matrix import Compensator
+from edm_sym.matrix import Compensator, ElementMatrix
 
 #: Default margin to a range bound, in normalised ``p`` (1 %).
 BOUND_MARGIN = 0.01
@@ -107,22 +107,30 @@ def bound_flags(comp: Compensator, *, margin: float = BOUND_MARGIN) -> tuple[Bou
     return tuple(out)
 
 
-def complexity(comp: Compensator) -> int:
-    """Active (non-``through``) elements plus the state size of the discrete realisation.
+def complexity(comp: Compensator, matrix: ElementMatrix | None = None) -> int:
+    """Rows + active (non-``through``) elements + state size of the discrete realisation.
+
+    The one complexity count of the project: ``edm describe``, the report and
+    the parsimony front (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front)
+    all use it.
 
     Parameters
     ----------
     comp : Compensator
+        Its ranges and sample time decode the parameters.
+    matrix : ElementMatrix, optional
+        The matrix to count (default: ``comp.matrix``).
 
     Returns
     -------
     int
         E.g. Coulomb + viscous in two rows, ``sign -> gain`` and ``power_gain``:
-        3 elements, no state, 3. A dead time of 183 samples adds 184.
+        2 rows, 3 elements, no state: 5. A dead time of 183 samples adds 184.
     """
     ts = comp.sample_time
     total = 0
-    for row in comp.matrix.rows:
+    for row in (matrix or comp.matrix).rows:
+        total += 1
         for gene in row.genes:
             if gene.element.name == "through":
                 continue

@@ -93,7 +93,7 @@ class Description:
     def table(self) -> str:
         """The description for people: a summary table, then each row's terms and flags."""
         lines = [f"{self.source}: {len(self.rows)} row(s), complexity {self.complexity} "
-                 "(active elements + state size)"]
+                 "(rows + active elements + state size)"]
         lines += ["fitness: " + _fitness_text(self.fitness)]
         lines += [f"note: {n}" for n in self.notes]
         head = f"{'row':>3}  {'input':<10} {'contribution':>12}  named as"
@@ -172,13 +172,23 @@ def _raw_document(result: EdmResult) -> dict[str, Any]:
     return doc if isinstance(doc, dict) else {}
 
 
-def _recorded(result: EdmResult, doc: Mapping[str, Any], key: str) -> Any:
-    value = getattr(result, key, None)
-    if value is None:
-        value = doc.get(key)
-    if hasattr(value, "to_json"):
-        value = value.to_json()
-    return _plain(value) if isinstance(value, Mapping) else None
+def recorded_fitness(result: EdmResult) -> dict[str, Any]:
+    """The training and validation scores the result records (docs/abstraction.md#held-out-validation).
+
+    ``training`` and ``validation`` are the ``{fitness, rmse, samples}`` scores
+    of result.json's ``validation`` entry, and ``held_out`` says what was held
+    out; a result written without held-out validation has only its training
+    eq. 8 (``{"fitness": [value, "N m"]}``) and ``validation`` null.
+    """
+    val = result.validation if isinstance(result.validation, Mapping) else {}
+    training = val.get("training")
+    if not isinstance(training, Mapping):
+        training = {"fitness": [result.fitness, "N m"]} if result.fitness is not None else None
+    validation = val.get("validation")
+    held = val.get("held_out")
+    return {"training": _plain(training) if training else None,
+            "validation": _plain(validation) if isinstance(validation, Mapping) else None,
+            "held_out": _plain(held) if isinstance(held, Mapping) else None}
 
 
 def recorded_data(result: EdmResult) -> str | Path | None:
@@ -279,12 +289,7 @@ def describe(
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)
                  for row, j in zip(model.rows, judged, strict=True))
-    doc = _raw_document(result)
-    training = _recorded(result, doc, "training")
-    if training is None and result.fitness is not None:
-        training = {"fitness": result.fitness}
-    fitness = {"training": training, "validation": _recorded(result, doc, "validation"),
-               "data": data_fit}
+    fitness = {**recorded_fitness(result), "data": data_fit}
     threshold = getattr(options, "threshold", 0.01) if options is not None else 0.01
     return Description(rows, fitness, complexity(comp), result.source or "<memory>",
                        threshold, tuple(notes))

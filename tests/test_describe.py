@@ -180,11 +180,11 @@ def test_malformed_bound_key_is_refused(tmp_path: Path, capsys) -> None:  # noqa
 
 def test_complexity_counts_active_elements_and_state() -> None:
     res = load_result(HANDWRITTEN)
-    # 9 active elements; the derivative and the low-pass hold one state each.
-    assert complexity(res.compensator) == 9 + 2
+    # 4 rows, 9 active elements; the derivative and the low-pass hold one state each.
+    assert complexity(res.compensator) == 4 + 9 + 2
     doc = _set(_doc(), 0, 2, "dead_time", 0.183)
     res = edm_sym.result.parse_result(doc)
-    assert complexity(res.compensator) == 10 + 2 + 183
+    assert complexity(res.compensator) == 4 + 10 + 2 + 183
     row = edm_sym.describe(res).to_json()["rows"][0]
     assert any(f["code"] == "long_delay" and "183 samples" in f["message"] for f in row["flags"])
 
@@ -198,7 +198,7 @@ def test_json_shape_is_the_documented_one(log: DataLog) -> None:
     assert list(desc["rows"][0]["terms"][0]) == ["kind", "parameters", "flags"]
     assert [r["index"] for r in desc["rows"]] == [1, 2, 3, 4]
     assert desc["rows"][0]["expression"] == "0.95*sign(omega)"
-    assert desc["complexity"] == 11
+    assert desc["complexity"] == 4 + 9 + 2  # rows, active elements, states (docs/describe.md#complexity)
     assert desc["fitness"]["training"] is None and desc["fitness"]["validation"] is None
     assert desc["fitness"]["data"]["rmse"] == [pytest.approx(0.0, abs=1e-9), "N m"]
     # Every flag code and kind the code can produce is in the schema.
@@ -211,15 +211,16 @@ def test_fitness_reads_recorded_training_and_validation(tmp_path: Path) -> None:
     doc = _doc()
     doc["fitness"] = 0.25
     path = _write(doc, tmp_path / "plain.json")
-    assert edm_sym.describe(path).to_json()["fitness"]["training"] == {"fitness": 0.25}
-    doc["validation"] = {"fitness": 0.3, "rmse": [0.05, "N m"]}
-    doc["training"] = {"fitness": 0.25, "rmse": [0.04, "N m"]}
+    fit = edm_sym.describe(path).to_json()["fitness"]
+    assert fit["training"] == {"fitness": [0.25, "N m"]} and fit["validation"] is None
+    held = {"kind": "segment", "end": "last", "share": 0.2, "rows": [800, 1000], "t": [0.8, 0.999]}
+    doc["validation"] = {"held_out": held,
+                         "training": {"fitness": [0.25, "N m"], "rmse": [0.04, "N m"], "samples": 800},
+                         "validation": {"fitness": [0.3, "N m"], "rmse": [0.05, "N m"], "samples": 200}}
     fit = edm_sym.describe(_write(doc, tmp_path / "val.json")).to_json()["fitness"]
-    assert fit["validation"] == {"fitness": 0.3, "rmse": [0.05, "N m"]}
-    assert fit["training"] == {"fitness": 0.25, "rmse": [0.04, "N m"]}
-    doc["validation"] = "not an object"
-    fit = edm_sym.describe(_write(doc, tmp_path / "odd.json")).to_json()["fitness"]
-    assert fit["validation"] is None
+    assert fit["validation"] == {"fitness": [0.3, "N m"], "rmse": [0.05, "N m"], "samples": 200}
+    assert fit["training"] == {"fitness": [0.25, "N m"], "rmse": [0.04, "N m"], "samples": 800}
+    assert fit["held_out"] == held
 
 
 def test_without_data_nothing_is_measured(tmp_path: Path) -> None:
@@ -245,7 +246,7 @@ def test_cli_json_on_the_shipped_example(tmp_path: Path) -> None:
     desc = json.loads(proc.stdout)
     jsonschema.validate(desc, _describe_schema())
     assert desc["fitness"]["data"]["source"] == "plant:auger/abstraction"
-    assert desc["fitness"]["training"] == {"fitness": pytest.approx(2.7153467842454564)}
+    assert desc["fitness"]["training"] == {"fitness": [pytest.approx(2.7153467842454564), "N m"]}
     # Row 1's phase-lead corner sits on its lower bound: flagged, not named as physics.
     assert any(f["code"] == "at_bound" for f in desc["rows"][0]["flags"])
     assert desc["rows"][0]["terms"][0]["kind"] == "unclassified"

@@ -42,23 +42,13 @@ import numpy as np
 from edm_sym.abstraction.polish import scale_position
 from edm_sym.abstraction.selection import ParsimonySettings, check_select, select
 from edm_sym.abstraction.validation import Scorer
+from edm_sym.bounds import complexity
 from edm_sym.elements import BY_NAME
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
 
 THROUGH = BY_NAME["through"].code
 COMPLEXITY = ("rows + active elements (all but through) + state size (values kept between "
               "samples; a delay's length in samples)")
-
-
-def complexity(comp: Compensator, matrix: ElementMatrix) -> int:
-    """Rows + active elements (all but ``through``) + state size of ``matrix``."""
-    total = 0
-    for row in matrix.rows:
-        total += 1
-        for g in row.genes:
-            if g.code != THROUGH:
-                total += 1 + int(g.element.state_size(comp.value(g), comp.sample_time))
-    return total
 
 
 @dataclass(frozen=True)
