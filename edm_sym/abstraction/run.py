@@ -39,14 +39,15 @@ from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, all
 from edm_sym.abstraction.polish import GAIN, gain_fit
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.data import DataLog
-from edm_sym.elements import BY_NAME, ParamRange
+from edm_sym.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.errors import ConfigError, NumericsWarning
 from edm_sym.matrix import Compensator, ElementMatrix
 from edm_sym.result import EdmResult, StepRecord
 from edm_sym.simulate import fitness, simulate_rows
 
-#: Elements whose output is identically 0 at a = 0 (a new row that changes nothing).
-_ZERO_ELEMENTS = ("gain", "sin_amp", "tan_amp")
+#: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
+#: those whose output is a f(x).
+_ZERO_ELEMENTS = tuple(el.name for el in all_elements() if el.scales_output)
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from sympy.codegen.ast import float32, float64, real
 from sympy.printing.c import C99CodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
-from edm_sym.printing.helpers import HelperCalls
+from edm_sym.printing.helpers import HelperCalls, StageLines
 
 #: The real types a compensator can be printed in.
 REALS = ("float", "double")
@@ -85,7 +85,7 @@ def c_comment_text(text: str) -> str:
     return re.sub(r"\s", " ", text).rstrip()
 
 
-class EdmC99Printer(HelperCalls, C99CodePrinter):
+class EdmC99Printer(HelperCalls, StageLines, C99CodePrinter):
     """C99 printer for edm_sym expressions in one real type.
 
     Parameters

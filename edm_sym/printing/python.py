@@ -18,7 +18,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
-from edm_sym.printing.helpers import HelperCalls
+from edm_sym.printing.helpers import HelperCalls, StageLines
 
 # name -> (helpers it calls, parameters, body lines); bodies are ScalarOps'.
 _HELPERS: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
@@ -44,7 +44,7 @@ def py_literal(value: float) -> str:
     return repr(v)
 
 
-class EdmPythonPrinter(HelperCalls, PythonCodePrinter):
+class EdmPythonPrinter(HelperCalls, StageLines, PythonCodePrinter):
     """Python printer for edm_sym expressions using only the ``math`` module.
 
     Attributes
