@@ -129,7 +129,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
     result = load_result(args.result)
     try:
-        from edm_sym.render import export
+        from edm_sym.exporting import export
     except ImportError:
         raise ToolMissingError("edm export: code generation is not available in this build") from None
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
@@ -254,7 +254,7 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
 
 def _cmd_abstract(args: argparse.Namespace) -> int:
     try:
-        from edm_sym.abstraction import run_cli
+        from edm_sym.abstract_cli import run_cli
     except ImportError:
         raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
     return run_cli(args)

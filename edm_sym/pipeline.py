@@ -173,8 +173,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         The evaluation summary (also written to ``evaluation.json``).
     """
     from edm_sym.abstraction import abstract, load_config
+    from edm_sym.exporting import export
     from edm_sym.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
-    from edm_sym.render import export
     from edm_sym.result import load_result, save_result
     from edm_sym.simulate import simulate
 

@@ -366,7 +366,7 @@ def abstract(
     KeyboardInterrupt
         Only when interrupted before the first population was evaluated.
     """
-    from edm_sym import __version__
+    from edm_sym.version import __version__
 
     cfg = config if config is not None else default_config()
     inputs = tuple(inputs)

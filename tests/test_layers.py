@@ -1,0 +1,35 @@
+"""The layers of docs/architecture.md, checked: imports point down only.
+
+The import-linter contracts live in pyproject.toml ([tool.importlinter]);
+this test runs them, and checks that no module imports the package face.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+importlinter = pytest.importorskip("importlinter", reason="pip install -e .[test]")
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_the_import_linter_contracts_are_kept(monkeypatch: pytest.MonkeyPatch,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    from importlinter.cli import lint_imports
+
+    monkeypatch.chdir(REPO)
+    status = lint_imports(config_filename=str(REPO / "pyproject.toml"), no_cache=True)
+    out = capsys.readouterr().out
+    assert status == 0, out
+    assert "0 broken" in out and "Layers point down" in out
+
+
+def test_no_module_imports_the_package_face() -> None:
+    # edm_sym/__init__.py is the application's face: it imports the layers, never the reverse.
+    import grimp
+
+    graph = grimp.build_graph("edm_sym")
+    importers = sorted(graph.find_modules_that_directly_import("edm_sym"))
+    assert importers == [], f"these modules import edm_sym itself: {importers}"
