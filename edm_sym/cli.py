@@ -142,6 +142,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.data import load_data, write_csv
+    from edm_sym.fitness import rms
 
     model_path = Path(args.model)
     # The model is validated completely before the data is read.
@@ -169,7 +170,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     rmse = None
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
-        rmse = float((cols["residual"] ** 2).mean() ** 0.5)
+        rmse = rms(cols["residual"])
     out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
     write_csv(out, cols)
     print(f"wrote {out}")

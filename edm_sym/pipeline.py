@@ -42,6 +42,7 @@ import numpy as np
 from edm_sym.data import DataLog, is_plant_spec, load_data
 from edm_sym.errors import ConfigError
 from edm_sym.fileio import write_atomic
+from edm_sym.fitness import rms
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -136,8 +137,6 @@ def load_pipeline(path: str | Path) -> Pipeline:
     )
 
 
-def _rmse(residual: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(residual**2)))
 
 
 def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
@@ -222,10 +221,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
 
     summary: dict[str, Any] = {}
     for label, log in logs.items():
-        row = {"edm": _rmse(log.columns[pipe.target] - simulate(result, log).total)}
+        row = {"edm": rms(log.columns[pipe.target] - simulate(result, log).total)}
         if lugre is not None:
             tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
-            row["lugre"] = _rmse(log.columns[pipe.target] - tau)
+            row["lugre"] = rms(log.columns[pipe.target] - tau)
             row["ratio"] = row["edm"] / row["lugre"]
         summary[label] = row
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")

@@ -16,7 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from edm_sym.data import DataLog
+from edm_sym.fitness import fitness
 from edm_sym.matrix import Compensator, Row
+
+__all__ = [
+    "Simulation", "fitness", "input_array", "plain_loop", "simulate", "simulate_row", "simulate_rows",
+]
 
 
 @dataclass(frozen=True)
@@ -122,9 +127,3 @@ def plain_loop(comp: Compensator, data: DataLog | Mapping[str, np.ndarray]) -> n
                 v = st(v)
             out[j, k] = v
     return out
-
-
-def fitness(residual: np.ndarray, weights: np.ndarray | float = 1.0) -> float:
-    """The paper's eq. 8: ``sqrt(mean(Lambda * residual**2))``."""
-    r = np.asarray(residual, dtype=float)
-    return float(np.sqrt(np.mean(np.asarray(weights) * r * r)))

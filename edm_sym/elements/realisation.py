@@ -61,6 +61,8 @@ class Realisation:
 
     #: A readable name of the stage kind (documentation and plans only; never branched on).
     kind: ClassVar[str] = "abstract"
+    #: The state vector's entries are ``<prefix>_<letter><i>`` (:meth:`state_labels`).
+    state_letter: ClassVar[str] = "x"
 
     @property
     def state_size(self) -> int:
@@ -69,7 +71,7 @@ class Realisation:
 
     def state_labels(self, prefix: str) -> list[str]:
         """Names of the state vector's entries, ``prefix`` first."""
-        return []
+        return [f"{prefix}_{self.state_letter}{i}" for i in range(self.state_size)]
 
     def state_layout(self) -> tuple[StatePart, ...]:
         """The state as the generated code declares it."""
@@ -146,6 +148,7 @@ class LinearFilter(Realisation):
     """
 
     kind: ClassVar[str] = "linear"
+    state_letter: ClassVar[str] = "z"
     b: tuple[float, ...]
     a: tuple[float, ...]
     method: str
@@ -158,9 +161,6 @@ class LinearFilter(Realisation):
     @property
     def state_size(self) -> int:
         return self.order
-
-    def state_labels(self, prefix: str) -> list[str]:
-        return [f"{prefix}_z{i}" for i in range(self.order)]
 
     def state_layout(self) -> tuple[StatePart, ...]:
         return (StatePart("z", self.order, "direct form II transposed state"),)
@@ -178,13 +178,15 @@ class LinearFilter(Realisation):
             return signal.lfilter(b, a, x, axis=-1)
 
     def update(self, v: float, state: Any, nxt: Any, k: int) -> float:
-        b, a, n = self.b, self.a, self.order
+        # Direct form II transposed, as scipy.signal.lfilter runs it (a[0] == 1).
+        b, a = self.b, self.a
+        n = len(a) - 1
         y = b[0] * v + (state[k] if n else 0.0)
         for i in range(n - 1):
             nxt[k + i] = b[i + 1] * v + state[k + i + 1] - a[i + 1] * y
         if n:
             nxt[k + n - 1] = b[n] * v - a[n] * y
-        return float(y)
+        return y
 
     def validate(self) -> None:
         if len(self.b) != len(self.a) or len(self.a) < 2 or self.a[0] != 1.0:
@@ -206,14 +208,12 @@ class DelayLine(Realisation):
     """
 
     kind: ClassVar[str] = "delay"
+    state_letter: ClassVar[str] = "d"
     samples: int
 
     @property
     def state_size(self) -> int:
         return self.samples
-
-    def state_labels(self, prefix: str) -> list[str]:
-        return [f"{prefix}_d{i}" for i in range(self.samples)]
 
     def state_layout(self) -> tuple[StatePart, ...]:
         n = self.samples

@@ -33,6 +33,29 @@ class HelperCalls:
         """The printed name of helper ``name``."""
         raise NotImplementedError
 
+    def helpers_wanted(self, names: Iterable[str] | None,
+                       table: Mapping[str, tuple[Any, ...]]) -> set[str]:
+        """``names`` (default: those used) with every helper they call, from ``table``.
+
+        ``table[name][0]`` lists the helpers that ``name`` calls.
+
+        Raises
+        ------
+        ValueError
+            On a name ``table`` does not hold.
+        """
+        wanted = set(self.helpers_used if names is None else names)
+        unknown = wanted - set(table)
+        if unknown:
+            raise ValueError(f"helpers: unknown {sorted(unknown)} (known: {sorted(table)})")
+        todo = list(wanted)
+        while todo:
+            for dep in table[todo.pop()][0]:
+                if dep not in wanted:
+                    wanted.add(dep)
+                    todo.append(dep)
+        return wanted
+
     def _helper_call(self, name: str, args: Iterable[Any]) -> str:
         self.helpers_used.add(name)
         return f"{self.helper_symbol(name)}({', '.join(self._print(a) for a in args)})"

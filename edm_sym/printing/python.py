@@ -96,16 +96,7 @@ class EdmPythonPrinter(HelperCalls, StageLines, PythonCodePrinter):
 
         Helpers they call are added; the order is fixed (callees first).
         """
-        wanted = set(self.helpers_used if names is None else names)
-        unknown = wanted - set(_HELPERS)
-        if unknown:
-            raise ValueError(f"helpers: unknown {sorted(unknown)} (known: {sorted(_HELPERS)})")
-        todo = list(wanted)
-        while todo:
-            for dep in _HELPERS[todo.pop()][0]:
-                if dep not in wanted:
-                    wanted.add(dep)
-                    todo.append(dep)
+        wanted = self.helpers_wanted(names, _HELPERS)
         return ["\n".join([f"def _{name}({params}):", *(f"    {b}" for b in body)])
                 for name, (_, params, body) in _HELPERS.items() if name in wanted]
 

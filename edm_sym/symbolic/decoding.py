@@ -63,10 +63,8 @@ def decode_row(
     row : RowModel
     role : str or None
         The physical role of the row's input.
-    simplify : SimplifyOptions, optional
-    classify : ClassifyOptions, optional
-    systems : bool, default True
-        Build the python-control forms (``linear_parts``, ``system``).
+    simplify, classify, systems
+        As for :func:`decode`.
 
     Returns
     -------

@@ -118,17 +118,9 @@ def to_tf(G: sp.Expr, name: str | None = None) -> ct.TransferFunction:  # noqa: 
 
 
 def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
-    """The linear stages (filters and delays) of a row as :class:`LinearPart` objects.
+    """The linear stages (filters and delays) of ``row`` as :class:`LinearPart` objects.
 
-    Parameters
-    ----------
-    row : RowModel
-    ts : float
-        The sample time [s].
-
-    Returns
-    -------
-    tuple of LinearPart
+    ``ts`` is the sample time [s]; static maps and relays have no part.
     """
     parts = []
     for st in row.stages:
