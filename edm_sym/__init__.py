@@ -1,13 +1,18 @@
 """edm_sym: Element Description Method compensators for reaction torque observers.
 
-The public API (CONTRACT.md section 7)::
+The public API (docs/api.md#python-api)::
 
     import edm_sym
     result = edm_sym.load_result("result.json")
     data = edm_sym.load_data("log.csv")
     sim = edm_sym.simulate(result, data)      # sim.rows (m, N), sim.total (N,)
+    print(edm_sym.describe(result, data).table())  # terms, contributions, flags
     model = edm_sym.decode(result)            # sympy + python-control per row
     edm_sym.export(result, "c", "out/")
+
+``edm_sym.EDMRegressor`` (docs/estimator.md) needs the optional extra
+``edm_sym[sklearn]``; it is imported on first access, so ``import edm_sym``
+never imports scikit-learn.
 """
 
 from __future__ import annotations
@@ -43,6 +48,7 @@ __all__ = [
     "Simulation",
     "__version__",
     "decode",
+    "describe",
     "export",
     "load_data",
     "load_result",
@@ -71,6 +77,30 @@ def decode(result: EdmResult | Compensator, **options: Any) -> Any:
     return _decode(result, **options)
 
 
+def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -> Any:
+    """What a model found, row by row: physical terms, contribution, flags (``edm describe``).
+
+    Parameters
+    ----------
+    result : EdmResult or path-like
+        The result (a path is loaded).
+    data : DataLog, path-like or str, optional
+        The log the contributions are measured on; default: the data the
+        result records (``report_inputs.data``), else none.
+    **options
+        ``ts``, ``options`` (a ``SignificanceOptions``), ``roles``; see
+        :func:`edm_sym.description.describe`.
+
+    Returns
+    -------
+    edm_sym.description.Description
+        ``.table()`` for people, ``.to_json()`` for the shape of docs/describe.md.
+    """
+    from edm_sym.description import describe as _describe  # sympy is imported only here
+
+    return _describe(result, data, **options)
+
+
 def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) -> list[Path]:
     """Render a result as C, Python, LaTeX or all of them into ``out_dir``.
 
@@ -94,3 +124,21 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
     from edm_sym.exporting import export as _export  # jinja2 is imported only here
 
     return _export(result, target, out_dir, **options)
+
+
+#: Names resolved on first access, so that their optional dependencies load only then.
+_LAZY = {"EDMRegressor": "edm_sym.estimator"}
+
+
+def __getattr__(name: str) -> Any:
+    """``edm_sym.EDMRegressor``: imported from :mod:`edm_sym.estimator` (needs scikit-learn) when used."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'edm_sym' has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

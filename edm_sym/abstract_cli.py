@@ -1,4 +1,4 @@
-"""``edm abstract``: the command-line side of the abstraction (CONTRACT.md section 2).
+"""``edm abstract``: the command-line side of the abstraction (docs/cli.md#edm-abstract).
 
 Bad input (config, columns, options) raises :class:`~edm_sym.errors.ConfigError`
 or :class:`~edm_sym.errors.DataFormatError`, which ``edm`` prints as one line
@@ -14,8 +14,12 @@ import argparse
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from edm_sym.errors import ConfigError
+
+if TYPE_CHECKING:
+    from edm_sym.result import EdmResult
 
 
 def checkpoint_path(output: str | Path) -> Path:
@@ -26,6 +30,17 @@ def checkpoint_path(output: str | Path) -> Path:
 
 def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
+
+
+def _warn_bounds(result: EdmResult, output: Path) -> None:
+    """The closing summary's flags: parameters at their range bounds (docs/describe.md)."""
+    from edm_sym.bounds import bound_summary
+
+    lines = bound_summary(result.compensator)
+    for line in lines:
+        print(f"edm abstract: warning: {line}", file=sys.stderr)
+    if lines:
+        print(f"edm abstract: see `edm describe {output}` for every row's flags", file=sys.stderr)
 
 
 def run_cli(args: argparse.Namespace) -> int:
@@ -41,8 +56,8 @@ def run_cli(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        0 when done (also at the time limit), 1 when interrupted (the best
-        result so far is written anyway).
+        0 when done (also at the time limit), 130 when interrupted (the best
+        result so far is written anyway, and the checkpoint kept).
     """
     from edm_sym.abstraction.run import abstract
     from edm_sym.abstraction.schedule import default_config, load_config
@@ -83,4 +98,5 @@ def run_cli(args: argparse.Namespace) -> int:
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}")
-    return 1 if reason == "interrupted" else 0
+    _warn_bounds(result, output)
+    return 130 if reason == "interrupted" else 0

@@ -1,4 +1,4 @@
-"""Data logs: CSV, .npz and MATLAB .mat (CONTRACT.md section 3).
+"""Data logs: CSV, .npz and MATLAB .mat (docs/cli.md#data-files).
 
 A log is a set of equally long numeric columns with a uniform sample time.
 Every defect (missing file or column, empty file, non-numeric cell, NaN or
@@ -21,8 +21,13 @@ import numpy as np
 from edm_sym.errors import DataFormatError
 from edm_sym.fileio import write_atomic
 
-#: Relative tolerance on sample-time deviations (CSV text rounds time stamps).
+#: Clock drift accepted between two sample times of one drive (relative): a log's
+#: time column and ``--ts``, or a model's sample time and a second log's
+#: (docs/data.md, "Sample time").
 TIME_RTOL = 1e-3
+#: Jitter accepted on single time stamps: every step within this share of the
+#: median step. A longer step is a gap (missing samples), a shorter one a burst.
+JITTER_RTOL = 0.25
 #: A data spec ``plant:PRESET/EXCITATION[@SEED]`` names a simulated plant log.
 PLANT_SCHEME = "plant:"
 
@@ -89,7 +94,8 @@ class DataLog:
 
 
 def load_data(
-    path: str | Path, *, ts: float | None = None, require: Iterable[str] = ()
+    path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
+    default_ts: float | None = None,
 ) -> DataLog:
     """Read a log from CSV, .npz or .mat.
 
@@ -104,6 +110,9 @@ def load_data(
         it must agree with it.
     require : iterable of str
         Column names that must be present.
+    default_ts : float, optional
+        Sample time [s] for a log with neither a ``t`` column nor ``ts``: the
+        one a model file records, so a user need not give it again.
 
     Returns
     -------
@@ -136,6 +145,8 @@ def load_data(
     else:
         columns = _read_csv(name, raw)
     # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
+    if ts is None and "t" not in columns:
+        ts = default_ts
     log_ts = _sample_time(name, columns, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
     log = DataLog(columns, log_ts, name, hashlib.sha256(raw).hexdigest(), scalars)
     for col in require:
@@ -173,6 +184,14 @@ def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
     except UnicodeDecodeError:
         raise DataFormatError(name, "expected UTF-8 text, found binary data") from None
     reader = csv.reader(io.StringIO(text))
+    try:
+        return _parse_csv(name, reader)
+    except csv.Error as exc:  # an unterminated quote, a cell beyond the csv module's size limit
+        raise DataFormatError(f"{name}: row {reader.line_num}",
+                              f"expected CSV cells of numbers, found unreadable text ({exc})") from None
+
+
+def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
     header = next(reader, None)
     if not header or not any(h.strip() for h in header):
         raise DataFormatError(f"{name}: row 1", "expected a header row of column names, found none")
@@ -215,9 +234,46 @@ def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:
         raise DataFormatError(name, f"expected an .npz archive, found unreadable data ({exc})") from None
 
 
+#: The signature of an HDF5 file; MATLAB v7.3 files carry it after a 512-byte header.
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+#: MATLAB classes of numeric arrays (others, such as char, cell or struct, are skipped).
+_MATLAB_NUMERIC = {"double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+                   "int64", "uint64", "logical"}
+
+
+def _is_mat73(raw: bytes) -> bool:
+    return raw[512:520] == _HDF5_SIGNATURE or raw[:8] == _HDF5_SIGNATURE
+
+
+def _load_mat73(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    """Top-level numeric arrays of a MATLAB v7.3 (HDF5) file, in MATLAB's orientation."""
+    try:
+        import h5py
+    except ImportError:
+        raise DataFormatError(name, "expected a MATLAB file scipy can read, found a v7.3 (HDF5) file; "
+                              "install the extra 'edm_sym[mat73]' (h5py) to read it") from None
+    out: dict[str, np.ndarray] = {}
+    try:
+        with h5py.File(io.BytesIO(raw), "r") as f:
+            for key in f:
+                obj = f[key]
+                cls = obj.attrs.get("MATLAB_class", b"double") if isinstance(obj, h5py.Dataset) else b""
+                cls = cls.decode() if isinstance(cls, bytes) else str(cls)
+                if key.startswith("#") or cls not in _MATLAB_NUMERIC:
+                    continue
+                # MATLAB writes column-major: an N x 1 column is stored as 1 x N.
+                out[key] = np.asarray(obj[()]).T
+    except (OSError, ValueError) as exc:
+        raise DataFormatError(name, f"expected a MATLAB v7.3 (HDF5) file, found unreadable data ({exc})") \
+            from None
+    return out
+
+
 def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
     from scipy import io as sio
 
+    if _is_mat73(raw):
+        return _load_mat73(name, raw)
     try:
         doc = sio.loadmat(io.BytesIO(raw))
     except Exception as exc:  # scipy raises several types for a bad file
@@ -265,19 +321,93 @@ def _sample_time(
     if len(t) < 2:
         raise DataFormatError(f"{name}: column 't'", f"expected at least 2 samples, found {len(t)}")
     dt = np.diff(t)
+    back = np.flatnonzero(dt <= 0)
+    if back.size:
+        k = int(back[0])
+        what = "a repeated" if dt[k] == 0 else "a decreasing"
+        raise DataFormatError(f"{name}: row {k + 1 + row_offset}, column 't'",
+                              f"expected increasing time stamps, found {what} one "
+                              f"({t[k + 1]:.9g} s after {t[k]:.9g} s)")
     step = float(np.median(dt))
-    if not step > 0:
-        raise DataFormatError(f"{name}: column 't'", f"expected increasing time, found step {step}")
-    bad = np.flatnonzero(np.abs(dt - step) > TIME_RTOL * step)
+    bad = np.flatnonzero(np.abs(dt - step) > JITTER_RTOL * step)
     if bad.size:
         k = int(bad[0])
+        kind = f"a gap of {dt[k] / step - 1:.3g} samples" if dt[k] > step else "a short step"
         raise DataFormatError(
             f"{name}: row {k + 1 + row_offset}, column 't'",
-            f"expected uniform sampling (step {step:g} s), found a step of {dt[k]:g} s",
+            f"expected uniform sampling (step {step:g} s, jitter up to {JITTER_RTOL:.0%}), "
+            f"found a step of {dt[k]:g} s ({kind})",
         )
+    # The sample time is the mean step: exact on a uniform grid and, unlike the
+    # median, unbiased by per-stamp jitter (its error shrinks as 1/N).
+    step = float(t[-1] - t[0]) / (len(t) - 1)
     if ts is not None and abs(ts - step) > TIME_RTOL * step:
         raise DataFormatError(f"{name}: --ts", f"expected the step of column 't' ({step:g} s), found {ts:g}")
     return step
+
+
+def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = False) -> DataLog:
+    """Check a log against a model's sample time; resample it onto the model's grid if asked.
+
+    A second recording of the same drive never has exactly the model's sample
+    time: the logger's clock drifts. A relative difference up to
+    :data:`TIME_RTOL` is accepted and the log is used as it is (its own sample
+    time stays in ``data.ts``; callers report both). A larger one is refused,
+    unless ``resample`` is true: then every column is resampled onto the
+    model's grid with a polyphase anti-aliasing filter
+    (:func:`scipy.signal.resample_poly`, the ratio as a fraction of integers
+    below 1000) and the time column is rebuilt.
+
+    Parameters
+    ----------
+    data : DataLog
+    ts : float
+        The model's sample time [s].
+    model : str
+        The model file's name, for messages.
+    resample : bool
+        Resample a log whose sample time differs by more than the tolerance.
+
+    Returns
+    -------
+    DataLog
+        ``data`` itself, or its resampled copy (``ts`` = the model's).
+
+    Raises
+    ------
+    DataFormatError
+        When the sample times differ by more than :data:`TIME_RTOL` and
+        ``resample`` is false, or no integer ratio below 1000 reaches the
+        model's sample time within the tolerance.
+    """
+    if abs(data.ts - ts) <= TIME_RTOL * ts:
+        return data
+    where = f"{data.source}: sample time"
+    if not resample:
+        raise DataFormatError(where, f"expected {ts:g} s as in {model} (within {TIME_RTOL:g} relative), "
+                              f"found {data.ts:g} s; --resample resamples the log onto the model's grid")
+    from fractions import Fraction
+
+    from scipy import signal
+
+    ratio = Fraction(data.ts / ts).limit_denominator(1000)  # up / down
+    up, down = ratio.numerator, ratio.denominator
+    if abs(data.ts * down / up - ts) > TIME_RTOL * ts:
+        raise DataFormatError(where, f"expected a ratio of small integers to the model's {ts:g} s, "
+                              f"found {data.ts:g} s (best {up}/{down})")
+    cols = {}
+    for key, col in data.columns.items():
+        if key == "t":
+            continue
+        cols[key] = np.ascontiguousarray(signal.resample_poly(col, up, down, padtype="line"))
+    n = len(next(iter(cols.values()))) if cols else 0
+    if n < 2:
+        raise DataFormatError(where, f"expected at least 2 samples after resampling, found {n}")
+    t0 = float(data.columns["t"][0]) if "t" in data.columns else 0.0
+    out = {"t": t0 + ts * np.arange(n)} if "t" in data.columns else {}
+    out.update(cols)
+    digest = hashlib.sha256(f"{data.sha256}@resample:{up}/{down}".encode()).hexdigest()
+    return DataLog(out, ts, f"{data.source} (resampled {up}/{down})", digest, dict(data.scalars))
 
 
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:

@@ -6,6 +6,9 @@ and what was found, so the command line can print it as one line and exit 2.
 
 from __future__ import annotations
 
+#: The problem of a JSON or TOML document too deeply nested for Python's parsers.
+TOO_DEEP = "expected a document nested at most about a thousand levels deep, found deeper nesting"
+
 
 class EdmError(Exception):
     """Base class of the errors edm_sym raises on bad input."""

@@ -51,8 +51,11 @@ class ObserverOptions:
     def __post_init__(self) -> None:
         if not np.isfinite(self.nominal_inertia) or self.nominal_inertia < 0:
             raise ValueError(f"nominal_inertia: expected a number >= 0, found {self.nominal_inertia}")
-        if not self.cutoff_hz > 0:
+        if not (np.isfinite(self.cutoff_hz) and self.cutoff_hz > 0):
             raise ValueError(f"cutoff_hz: expected a positive frequency, found {self.cutoff_hz}")
+        if not isinstance(self.force_gain, str) and not np.isfinite(self.force_gain):
+            raise ValueError(f"force_gain: expected a finite number or a scalar's name, "
+                             f"found {self.force_gain}")
 
 
 def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
@@ -83,12 +86,20 @@ def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
             raise DataFormatError(f"{data.source}: scalar {gain!r}",
                                   f"expected a stored scalar named {gain!r}, found: {have}")
         gain = data.scalars[gain]
+        if not np.isfinite(gain):
+            raise DataFormatError(f"{data.source}: scalar {options.force_gain!r}",
+                                  f"expected a finite gain, found {gain}")
     nyquist = 0.5 / data.ts
     if options.cutoff_hz >= nyquist:
         raise DataFormatError(f"{data.source}: cutoff",
                               f"expected a corner below Nyquist ({nyquist:g} Hz), "
                               f"found {options.cutoff_hz:g}")
     b, a = signal.butter(options.order, options.cutoff_hz / nyquist)
+    need = 3 * max(len(a), len(b)) + 1  # filtfilt's padding, plus one sample
+    if len(q) < need:
+        raise DataFormatError(f"{data.source}: column {options.position!r}",
+                              f"expected at least {need} samples for the order-{options.order} "
+                              f"zero-phase filter, found {len(q)}")
     qf = signal.filtfilt(b, a, q)
     qd = np.gradient(qf, data.ts)
     qdd = np.gradient(qd, data.ts)

@@ -30,6 +30,7 @@ result records its data and LuGre file (``report_inputs``), so a plain
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 from collections.abc import Mapping
@@ -40,8 +41,8 @@ from typing import Any
 import numpy as np
 
 from edm_sym.data import DataLog, is_plant_spec, load_data
-from edm_sym.errors import ConfigError
-from edm_sym.fileio import write_atomic
+from edm_sym.errors import TOO_DEEP, ConfigError
+from edm_sym.fileio import check_outputs, write_atomic
 from edm_sym.fitness import rms
 
 if sys.version_info >= (3, 11):
@@ -102,8 +103,12 @@ def load_pipeline(path: str | Path) -> Pipeline:
         doc = tomllib.loads(path.read_text("utf-8"))
     except OSError as exc:
         raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "expected UTF-8 TOML text, found binary data") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ConfigError(str(path), TOO_DEEP) from None
     name = path.name
     for section, table in doc.items():
         if section not in SECTIONS:
@@ -123,6 +128,12 @@ def load_pipeline(path: str | Path) -> Pipeline:
         raise ConfigError(f"{name}: abstraction.inputs", f"expected column names, found {inputs!r}")
     config = _get(f"{name}: abstraction", abst, "config", str, None)
     limit = _get(f"{name}: abstraction", abst, "time_limit", (int, float), None)
+    if limit is not None and not (math.isfinite(limit) and limit > 0):
+        raise ConfigError(f"{name}: abstraction.time_limit",
+                          f"expected a number of seconds > 0, found {limit}")
+    seed = _get(f"{name}: abstraction", abst, "seed", int, 0)
+    if not 0 <= seed < 2**32:
+        raise ConfigError(f"{name}: abstraction.seed", f"expected an integer >= 0 and < 2**32, found {seed}")
     return Pipeline(
         folder=path.resolve().parent,
         abstraction_data=abstraction_data,
@@ -130,7 +141,7 @@ def load_pipeline(path: str | Path) -> Pipeline:
         target=_get(f"{name}: abstraction", abst, "target", str),
         inputs=tuple(inputs),
         config=path.resolve().parent / config if config else None,
-        seed=_get(f"{name}: abstraction", abst, "seed", int, 0),
+        seed=seed,
         time_limit=float(limit) if limit is not None else None,
         lugre=doc.get("lugre"),
         export=doc.get("export", {}),
@@ -187,6 +198,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
                                        require=[*pipe.inputs, pipe.target])
     abst = logs["abstraction"]
     lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
+    ex = pipe.export
+    out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
+        Path("generated") / pipe.folder.name
+    # Every output is checked before the long work: none may be an input, all must be writable.
+    data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
+    check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
+                  [path, pipe.config, *data_files], option="pipeline output")
 
     lugre = None
     if pipe.lugre is not None:
@@ -216,6 +234,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         from dataclasses import replace
 
         save_result(replace(result, report_inputs=stored), result_file)
+        if result.provenance.get("stop_reason") == "interrupted":
+            # The best result so far is saved; the rest of the flow must not run on it.
+            raise KeyboardInterrupt
     result = load_result(result_file)
     print(f"result: {result_file}", file=out)
 
@@ -233,9 +254,6 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         lug = f"{row['lugre']:12.4g} {row['ratio']:10.3f}" if "lugre" in row else ""
         print(f"{label:<12} {row['edm']:12.4g} {lug}", file=out)
 
-    ex = pipe.export
-    out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
-        Path("generated") / pipe.folder.name
     written = export(result, _get(f"{name}: export", ex, "target", str, "all"), out_dir,
                      prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
                      real=_get(f"{name}: export", ex, "real", str, "double"),

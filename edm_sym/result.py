@@ -1,4 +1,4 @@
-"""result.json: the abstraction result (CONTRACT.md section 3).
+"""result.json: the abstraction result (docs/result-format.md).
 
 Loading validates against the JSON Schema shipped in the package, then checks
 what a schema cannot (known element codes, names matching codes, shapes
@@ -18,8 +18,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from edm_sym.bounds import bound_flags
 from edm_sym.elements import REGISTRY, ParamRange
-from edm_sym.errors import ResultFormatError
+from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.validation import json_path, schema_problem
@@ -106,7 +107,17 @@ class EdmResult:
             "steps": [_step_to_json(s) for s in self.steps],
             "provenance": dict(self.provenance),
             **({"report_inputs": dict(self.report_inputs)} if self.report_inputs else {}),
+            **_bounds_block(comp),
         }
+
+
+def _bounds_block(comp: Compensator) -> dict[str, Any]:
+    """``parameters_at_bound``, derived from the matrix (written only when not empty).
+
+    Loading ignores the key: it is recomputed from the matrix, so it cannot go stale.
+    """
+    flags = bound_flags(comp)
+    return {"parameters_at_bound": [f.to_json() for f in flags]} if flags else {}
 
 
 def matrix_to_json(matrix: ElementMatrix) -> dict[str, Any]:
@@ -159,7 +170,12 @@ def schema() -> dict[str, Any]:
 
 
 def format_path(parts: Sequence[Any]) -> str:
-    """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``."""
+    """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``.
+
+    A key that is not a plain name (a space, a newline, a quote ...) is shown
+    JSON-quoted in brackets, ``parameters["a\\nb"]``, so the path stays one line
+    (:func:`edm_sym.validation.json_path`).
+    """
     return json_path(parts) or "(top level)"
 
 
@@ -290,6 +306,8 @@ def load_result(path: str | Path) -> EdmResult:
         doc = json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
     except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
         raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ResultFormatError(str(path), TOO_DEEP) from None
     res = parse_result(doc, path.name)
     return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -31,11 +32,24 @@ _TYPE_NAMES = {
 }
 
 
+#: A key shown as ``.name`` in a path; any other is shown JSON-quoted in brackets.
+_PLAIN_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
+
+
 def json_path(parts: Sequence[Any]) -> str:
-    """A field path as text: ``["matrix", "rows", 3]`` -> ``"matrix.rows[3]"`` (top level: ``""``)."""
+    """A field path as text: ``["matrix", "rows", 3]`` -> ``"matrix.rows[3]"`` (top level: ``""``).
+
+    A key that is not a plain name (a space, a newline, a quote ...) is shown
+    JSON-quoted in brackets, ``parameters["a\\nb"]``, so the path stays one line.
+    """
     out = ""
     for part in parts:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif not _PLAIN_KEY.fullmatch(str(part)):
+            out += f"[{json.dumps(str(part))}]"
+        else:
+            out += f".{part}" if out else str(part)
     return out
 
 

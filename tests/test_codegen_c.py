@@ -3,7 +3,7 @@
 Needs a host C compiler (marked ``toolchain``; skipped when gcc/clang is missing).
 Double precision must match the reference simulator to 1e-9 N m at every
 sample of a 20 000-sample log; single precision to 1e-4 of the RMS of the
-compensation torque (CONTRACT.md section 8).
+compensation torque (docs/api.md#numerical-agreement).
 """
 
 from __future__ import annotations

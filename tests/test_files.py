@@ -161,7 +161,9 @@ BAD_DATA = [
     ("nonuniform.csv", "t,omega\n0,1\n0.001,1\n0.0025,1\n0.0035,1\n", "row 4, column 't'"),
     ("ragged.csv", "t,omega\n0,1\n0.001\n", "row 3"),
     ("missing_column.csv", "t,theta_w\n0,1\n0.001,1\n", "column 'omega'"),
-    ("no_time.csv", "omega\n1\n2\n", "column 't'"),
+    ("repeated_time.csv", "t,omega\n0,1\n0.001,1\n0.001,1\n0.002,1\n", "row 4, column 't'"),
+    ("decreasing_time.csv", "t,omega\n0,1\n0.001,1\n0.0005,1\n0.002,1\n", "row 4, column 't'"),
+    ("gap.csv", "t,omega\n0,1\n0.001,1\n0.002,1\n0.005,1\n0.006,1\n", "row 5, column 't'"),
 ]
 
 

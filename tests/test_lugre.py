@@ -560,6 +560,17 @@ def test_any_corruption_loads_cleanly_or_is_refused_clearly(tmp_path, data):
         assert isinstance(loaded, LuGreResult)
 
 
+def test_an_odd_key_is_named_quoted_on_one_line(tmp_path):
+    doc = valid_document(tmp_path)
+    doc["parameters"]["a\nb c"] = 1.0
+    path = tmp_path / "lugre.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ResultFormatError) as info:
+        load_lugre(path)
+    assert "\n" not in str(info.value)
+    assert info.value.where == 'lugre.json: parameters["a\\nb c"]'
+
+
 # --------------------------------------------------------------------- hygiene
 
 

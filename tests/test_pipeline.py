@@ -82,3 +82,49 @@ def test_bad_pipeline_is_refused(text: str, where: str, tmp_path: Path, capsys) 
     assert main(["pipeline", str(p)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and where in err
+
+
+@pytest.mark.parametrize("value", ["-5", "0", "nan", "inf"])
+def test_a_time_limit_that_is_no_duration_is_refused(tmp_path: Path, value: str, capsys) -> None:
+    p = _write(tmp_path, PIPELINE.replace("seed = 3", f"seed = 3\ntime_limit = {value}"))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pipeline.toml: abstraction.time_limit" in err, err
+    assert not (tmp_path / "result.json").exists()
+
+
+def test_a_data_file_where_the_pipeline_writes_is_refused_before_any_work(tmp_path: Path, capsys) -> None:
+    from edm_sym.data import write_csv
+    from edm_sym.plant import simulate_plant
+
+    write_csv(tmp_path / "result.json", simulate_plant("lugre", "abstraction").columns)
+    before = (tmp_path / "result.json").read_bytes()
+    p = _write(tmp_path, PIPELINE.replace('abstraction = "plant:lugre/abstraction"',
+                                          'abstraction = "result.json"'))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "expected a new file" in err and "result.json" in err
+    assert (tmp_path / "result.json").read_bytes() == before
+    assert not (tmp_path / "lugre.json").exists()
+
+
+def test_an_interrupted_abstraction_stops_the_pipeline_with_130(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
+    import edm_sym.abstraction as abstraction
+
+    real = abstraction.abstract
+
+    def interrupted(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        kwargs["callback"] = lambda info: True  # ends the run like Ctrl-C would, at a generation
+        res = real(*args, **kwargs)
+        from dataclasses import replace
+
+        return replace(res, provenance={**res.provenance, "stop_reason": "interrupted"})
+
+    monkeypatch.setattr(abstraction, "abstract", interrupted)
+    p = _write(tmp_path, PIPELINE)
+    assert main(["pipeline", str(p), "--quiet"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert (tmp_path / "result.json").exists()  # the best so far is kept
+    assert not (tmp_path / "evaluation.json").exists() and not (tmp_path / "gen").exists()

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.abstraction.ga import Population
-from edm_sym.errors import ConfigError
+from edm_sym.errors import TOO_DEEP, ConfigError
 from edm_sym.fileio import write_atomic
 
 FORMAT = "edm-abstraction-checkpoint"
@@ -128,6 +128,8 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ConfigError(str(path), f"expected a checkpoint (JSON), found invalid text ({exc})"
                           ) from None
+    except RecursionError:
+        raise ConfigError(str(path), TOO_DEEP) from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT or doc.get("version") != VERSION:
         raise ConfigError(f"{path}: format", f"expected {FORMAT!r} version {VERSION}, found "
                                              "something else")

@@ -21,7 +21,7 @@ from typing import Any
 
 from edm_sym.abstraction.weighting import Weighting, parse_weighting
 from edm_sym.elements import BY_NAME, ParamRange, default_ranges
-from edm_sym.errors import ConfigError
+from edm_sym.errors import TOO_DEEP, ConfigError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -399,8 +399,8 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     cache_mb = 256.0
     if "cache_mb" in doc:
         v = doc["cache_mb"]
-        if isinstance(v, bool) or not isinstance(v, int | float) or not v > 0:
-            raise ConfigError(f"{f}cache_mb", f"expected a number > 0, found {_found(v)}")
+        if isinstance(v, bool) or not isinstance(v, int | float) or not 0 < v < 1e6:
+            raise ConfigError(f"{f}cache_mb", f"expected a number > 0 and < 1e6 (MB), found {_found(v)}")
         cache_mb = float(v)
     ga = GaSettings()
     if "ga" in doc:
@@ -543,4 +543,6 @@ def load_config(path: str | Path) -> AbstractionConfig:
         raise ConfigError(path.name, "expected UTF-8 TOML text, found binary data") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path.name, f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ConfigError(path.name, TOO_DEEP) from None
     return parse_config(doc, path.name)

@@ -100,12 +100,16 @@ class Param:
         sample time ``ts`` and length ``t_sum`` seconds (paper, eqs. 6-7).
     rule : str
         The default range as a readable rule, for the documentation.
+    period : float or None
+        The period of a periodic parameter (a phase), else None: a range at
+        least this wide reaches every value, so its bounds limit nothing.
     """
 
     meaning: str
     unit: str
     default: Callable[[float, float], ParamRange]
     rule: str
+    period: float | None = None
 
 
 def corner_range(ts: float, t_sum: float, *, top_divisor: float = 1.0) -> ParamRange:

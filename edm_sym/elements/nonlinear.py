@@ -122,7 +122,8 @@ class SinePhase(StaticElement):
     category = "nonlinear"
     formula = "y = sin(x + a)"
     param = Param("phase", "rad", lambda ts, t_sum: ParamRange(-3.141592653589793,
-                  3.141592653589793, "linear"), "-pi .. pi (linear)")
+                  3.141592653589793, "linear"), "-pi .. pi (linear)",
+                  period=2 * 3.141592653589793)
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:
@@ -164,7 +165,8 @@ class TangentPhase(StaticElement):
     formula = "y = tan(x + a)"
     guard = TAN_GUARD
     param = Param("phase", "rad", lambda ts, t_sum: ParamRange(-1.5707963267948966,
-                  1.5707963267948966, "linear"), "-pi/2 .. pi/2 (linear)")
+                  1.5707963267948966, "linear"), "-pi/2 .. pi/2 (linear)",
+                  period=3.141592653589793)
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:

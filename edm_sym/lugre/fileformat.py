@@ -21,7 +21,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from edm_sym.errors import ResultFormatError
+from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.lugre.model import PARAMETER_NAMES, LuGreParams
 from edm_sym.lugre.result import LuGreProvenance, LuGreResult, MethodScore
@@ -185,6 +185,8 @@ def load_lugre(path: str | os.PathLike) -> LuGreResult:
         ) from None
     except ValueError as exc:
         raise ResultFormatError(name, f"invalid JSON: {exc}") from None
+    except RecursionError:
+        raise ResultFormatError(name, TOO_DEEP) from None
     return parse_lugre(document, name)
 
 

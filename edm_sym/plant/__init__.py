@@ -1,7 +1,7 @@
 """The data source: a servo axis with DOB, velocity loop and reaction torque observer.
 
 Simulates free-motion logs (``t, theta_w, theta_uw, omega, alpha, tau_ext``,
-CONTRACT.md section 4) of a rigid axis with known friction, for the EDM
+docs/cli.md#plant-log-columns) of a rigid axis with known friction, for the EDM
 abstraction and for checking identified models against the ground truth::
 
     from edm_sym.plant import PRESETS, EXCITATIONS, simulate_plant

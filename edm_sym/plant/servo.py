@@ -52,7 +52,7 @@ __all__ = [
     "simulate_plant",
 ]
 
-#: Log columns, in order (CONTRACT.md section 4).
+#: Log columns, in order (docs/cli.md#plant-log-columns).
 COLUMNS: tuple[str, ...] = ("t", "theta_w", "theta_uw", "omega", "alpha", "tau_ext")
 #: Keys of :attr:`PlantLog.truth`.
 TRUTH_KEYS: tuple[str, ...] = (

@@ -33,7 +33,7 @@ RESULT_FORMAT = "edm-result"
 
 #: A filter whose frequency response moves by more than this fraction of its
 #: peak when its coefficients are rounded to float gets a NumericsWarning in a
-#: single-precision export (the contract asks 1e-4 of the RMS; this leaves margin).
+#: single-precision export (docs/api.md#numerical-agreement asks 1e-4 of the RMS; this leaves margin).
 FLOAT_RESPONSE_LIMIT = 2e-5
 
 

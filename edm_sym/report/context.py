@@ -17,6 +17,7 @@ from typing import Any
 
 from edm_sym.printing.latex import EdmLatexPrinter
 from edm_sym.report.diagrams import matrix_diagram
+from edm_sym.report.flags import bounds_fact, judge_report_rows, judged_titles
 from edm_sym.report.rows import (
     KIND_TITLES,
     ROLE_TITLES,
@@ -313,13 +314,15 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + r"~N\,m"))
     if inp.lugre is not None:
         facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
-    rows = [row_context(p, model, row, runs) for row in model.rows]
+    facts.append(bounds_fact(p, model))
+    judged = judge_report_rows(model, runs)  # honest names (edm_sym.report.flags)
+    rows = [row_context(p, model, row, runs, j) for row, j in zip(model.rows, judged, strict=True)]
     overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),
                  "input": p.math(p._print(row.input_symbol)),
-                 "terms": p.text(", ".join(KIND_TITLES.get(t.kind, t.kind) for t in row.terms)
+                 "terms": p.text(", ".join(judged_titles(j, KIND_TITLES))
                                  or "none (identically 0)"),
                  "rms": [x["value"] for x in r["rms"]]}
-                for r, row in zip(rows, model.rows, strict=True)]
+                for r, row, j in zip(rows, model.rows, judged, strict=True)]
     total = [(row.expr_numeric, f"row {row.index + 1}") for row in model.rows]
     compare = runs[-1] if runs else None
     lugre = ([_lugre(p, inp.lugre, compare)]

@@ -18,10 +18,37 @@ from pathlib import Path
 
 from edm_sym.errors import ToolMissingError
 
+#: The LaTeX packages the report template loads, each with the Debian package that
+#: ships its .sty (checked against ``dpkg -S`` by tests/test_report_pdf.py; ``edm
+#: doctor`` lists them as found or missing). ``lmodern`` is only a *Recommends* of
+#: TeX Live, so an install with ``--no-install-recommends`` must name it.
+LATEX_PACKAGES: dict[str, str] = {
+    "adjustbox": "texlive-latex-extra",
+    "amsmath": "texlive-latex-base",
+    "amssymb": "texlive-base",
+    "array": "texlive-latex-base",
+    "booktabs": "texlive-latex-recommended",
+    "caption": "texlive-latex-recommended",
+    "float": "texlive-latex-recommended",
+    "fontenc": "texlive-latex-base",
+    "fvextra": "texlive-latex-extra",
+    "geometry": "texlive-latex-base",
+    "graphicx": "texlive-latex-base",
+    "hyperref": "texlive-latex-base",
+    "lmodern": "lmodern",
+    "microtype": "texlive-latex-recommended",
+    "placeins": "texlive-latex-extra",
+    "tabularx": "texlive-latex-base",
+    "tikz": "texlive-pictures",
+}
+
+#: Debian packages that give latexmk, pdfLaTeX and every package of LATEX_PACKAGES.
+LATEX_APT = ("latexmk", *sorted(set(LATEX_PACKAGES.values())))
+
 #: How to get latexmk and the LaTeX packages the report uses.
-INSTALL_HINT = ("install TeX Live with latexmk, e.g. 'sudo apt-get install latexmk "
-                "texlive-latex-extra texlive-fonts-recommended' (Debian/Ubuntu) or "
-                "'tlmgr install latexmk adjustbox fvextra pgf'")
+INSTALL_HINT = ("install TeX Live with latexmk, e.g. 'sudo apt-get install "
+                + " ".join(LATEX_APT) + "' (Debian/Ubuntu) or "
+                "'tlmgr install latexmk lm adjustbox fvextra pgf'; 'edm doctor' lists what is missing")
 
 #: Files latexmk and pdflatex leave beside the .tex (suffixes of ``<stem>``).
 AUX_SUFFIXES = (".aux", ".log", ".fls", ".fdb_latexmk", ".out", ".toc", ".lof", ".lot",
@@ -66,6 +93,25 @@ class LatexLog:
     def worst_overfull(self) -> float:
         """The widest overfull box in points (0 when there is none)."""
         return max((pt for pt, _ in self.overfull), default=0.0)
+
+
+_USEPACKAGE = re.compile(r"\\usepackage(?:\[[^\]]*\])?\{([^}]+)\}")
+
+
+def used_packages(tex: str) -> tuple[str, ...]:
+    """The LaTeX packages a template or .tex loads with ``\\usepackage``, sorted.
+
+    Parameters
+    ----------
+    tex : str
+        LaTeX source (``\\usepackage[opts]{a,b}`` gives ``a`` and ``b``).
+
+    Returns
+    -------
+    tuple of str
+    """
+    names = {n.strip() for group in _USEPACKAGE.findall(tex) for n in group.split(",")}
+    return tuple(sorted(n for n in names if n))
 
 
 def parse_log(text: str) -> LatexLog:

@@ -18,6 +18,7 @@ import sympy as sp
 from edm_sym.elements.realisation import DelayLine, LinearFilter, Relay, StaticMap
 from edm_sym.printing.latex import EdmLatexPrinter
 from edm_sym.report.diagrams import chain_diagram, chain_printer
+from edm_sym.report.flags import row_flags
 from edm_sym.report.runs import LogRun
 from edm_sym.symbolic.model import RowModel, SymbolicModel, X
 
@@ -219,9 +220,19 @@ def _elements_text(p: EdmLatexPrinter, row: RowModel) -> str:
 
 
 def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
-                runs: Sequence[LogRun]) -> dict[str, Any]:
-    """The template context of one row (see the module docstring)."""
-    titles = [KIND_TITLES.get(t.kind, t.kind) for t in row.terms] or ["no output (identically 0)"]
+                runs: Sequence[LogRun], judged: Any = None) -> dict[str, Any]:
+    """The template context of one row (see the module docstring).
+
+    ``judged`` (a :class:`~edm_sym.symbolic.significance.JudgedRow`) names the row
+    honestly: only its judged terms, and its flags.
+    """
+    terms = row.terms if judged is None else tuple(jt.term for jt in judged.terms)
+    titles = [KIND_TITLES.get(t.kind, t.kind) for t in terms] or (
+        ["negligible"] if judged is not None and judged.negligible
+        else ["no output (identically 0)"])
+    no_terms = ["The row's output is identically zero: it can be removed."]
+    if judged is not None and judged.negligible:
+        no_terms = ["Negligible: its physical terms are not named (see the flags)."]
     j = row.index + 1
     discrete, signals = _difference_equations(row, model.sample_time)
     return {
@@ -235,8 +246,9 @@ def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
         "equations": _row_equations(p, row),
         "discrete": discrete,
         "signals": signals,
-        "term_lists": [[_term(p, t) for t in row.terms]] if row.terms else [],
-        "no_terms": [] if row.terms else ["The row's output is identically zero: it can be removed."],
+        "term_lists": [[_term(p, t) for t in terms]] if terms else [],
+        "no_terms": [] if terms else no_terms,
+        "flags": [] if judged is None else row_flags(p, judged),
         "rms": [{"log": p.text(r.label), "value": rms_text(p, r.contributions.rms[row.index])}
                 for r in runs],
     }

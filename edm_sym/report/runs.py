@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.data import DataLog, load_data
+from edm_sym.data import TIME_RTOL, DataLog, load_data, match_sample_time
 from edm_sym.errors import DataFormatError
 from edm_sym.fitness import rms
 from edm_sym.simulate import simulate
@@ -109,12 +109,8 @@ def load_log(path: str | Path, result: Any, *, ts: float | None = None,
     need = [*result.inputs, result.target]
     if lugre is not None and lugre.result.velocity_name:
         need.append(lugre.result.velocity_name)
-    data = load_data(path, ts=ts, require=need)
-    want = result.sample_time
-    if abs(data.ts - want) > 1e-6 * want:
-        raise DataFormatError(f"{data.source}: sample time",
-                              f"expected {want:g} s as in the result, found {data.ts:g} s")
-    return data
+    data = load_data(path, ts=ts, require=need, default_ts=result.sample_time)
+    return match_sample_time(data, result.sample_time, model="the result")
 
 
 def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = None) -> LogRun:
@@ -143,10 +139,10 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
         from edm_sym.lugre import simulate_lugre
 
         lr = lugre.result
-        if abs(lr.sample_time - data.ts) > 1e-6 * data.ts:
+        if abs(lr.sample_time - data.ts) > TIME_RTOL * data.ts:
             raise DataFormatError(f"{lugre.name}: sample_time",
-                                  f"expected {data.ts:g} s as in {data.source}, "
-                                  f"found {lr.sample_time:g} s")
+                                  f"expected {data.ts:g} s as in {data.source} (within {TIME_RTOL:g} "
+                                  f"relative), found {lr.sample_time:g} s")
         lugre_tau = np.asarray(simulate_lugre(lr.params, data.column(lr.velocity_name), data.ts))
         lugre_rmse = rms(target - lugre_tau)
     contrib = contributions(result, data, target)

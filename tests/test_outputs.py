@@ -1,0 +1,180 @@
+"""Outputs never harm inputs, odd outputs are written in place, and every fault has its exit status.
+
+Exit statuses (docs/cli.md#exit-status): 0 done, 1 a bug (with a line saying
+how to report it), 2 bad input or an unwritable output, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+
+import pytest
+
+from edm_sym import cli
+from edm_sym.cli import export_main, main
+from edm_sym.data import write_csv
+from edm_sym.result import EdmResult, StepRecord, dumps
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
+
+
+@pytest.fixture
+def files(coulomb_viscous, tmp_path: Path) -> dict[str, Path]:
+    import numpy as np
+    from conftest import TS
+
+    res = EdmResult(coulomb_viscous, "tau_ext",
+                    (StepRecord(1, coulomb_viscous.matrix, 0.5, (0.5,), 1, 10,
+                                {"kind": "constant", "value": 1.0}),),
+                    {"seed": 0, "package_version": "0.1.0", "data_sha256": "0" * 64}, 0.5)
+    (tmp_path / "r.json").write_text(dumps(res))
+    t = np.arange(300) * TS
+    omega = 3 * np.sin(2 * np.pi * t)
+    log = write_csv(tmp_path / "log.csv", {"t": t, "theta_w": np.mod(t, 6.28), "omega": omega,
+                                           "tau_ext": 0.9 * np.sign(omega)})
+    return {"result": tmp_path / "r.json", "data": log}
+
+
+def _one_line(capsys: pytest.CaptureFixture) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    return err
+
+
+def _snapshot(paths: list[Path]) -> dict[Path, bytes]:
+    return {p: p.read_bytes() for p in paths}
+
+
+@pytest.mark.parametrize("which", ["data", "result", "data_via_link"])
+def test_simulate_refuses_to_write_over_an_input(files, which: str, tmp_path: Path, capsys) -> None:
+    before = _snapshot([files["result"], files["data"]])
+    target = files["result"] if which == "result" else files["data"]
+    if which == "data_via_link":
+        (tmp_path / "link.csv").symlink_to(files["data"])
+        target = tmp_path / "link.csv"
+    assert main(["simulate", str(files["result"]), str(files["data"]), "-o", str(target)]) == 2
+    err = _one_line(capsys)
+    assert "expected a new file" in err and files["data" if which != "result" else "result"].name in err
+    assert _snapshot([files["result"], files["data"]]) == before
+
+
+def test_lugre_and_observe_refuse_the_input_as_output(files, capsys) -> None:
+    before = _snapshot([files["data"]])
+    assert main(["lugre", str(files["data"]), "--target", "tau_ext", "--velocity", "omega",
+                 "-o", str(files["data"])]) == 2
+    assert "expected a new file" in _one_line(capsys)
+    assert main(["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+                 "--nominal-inertia", "1e-3", "-o", str(files["data"])]) == 2
+    assert "expected a new file" in _one_line(capsys)
+    assert _snapshot([files["data"]]) == before
+
+
+def test_abstract_refuses_a_data_file_where_its_checkpoint_goes(files, tmp_path: Path, capsys) -> None:
+    data = tmp_path / "out.json.checkpoint"
+    data.write_bytes(files["data"].read_bytes())
+    before = _snapshot([data])
+    assert main(["abstract", str(data), "--target", "tau_ext", "--inputs", "omega",
+                 "-o", str(tmp_path / "out.json")]) == 2
+    assert "checkpoint" in _one_line(capsys)
+    assert _snapshot([data]) == before and not (tmp_path / "out.json").exists()
+
+
+def test_export_refuses_a_result_named_like_its_own_output(tmp_path: Path, capsys) -> None:
+    res = tmp_path / "edm_comp.py"
+    res.write_bytes(EXAMPLE.read_bytes())
+    assert export_main([str(res), "--target", "python", "-o", str(tmp_path)]) == 2
+    assert "expected a new file" in _one_line(capsys)
+    assert res.read_bytes() == EXAMPLE.read_bytes()
+
+
+def test_dev_null_stays_a_device(files, capsys) -> None:
+    assert main(["simulate", str(files["result"]), str(files["data"]), "-o", os.devnull]) == 0
+    assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
+
+
+def test_a_fifo_is_written_in_place(files, tmp_path: Path) -> None:
+    import threading
+
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    assert main(["simulate", str(files["result"]), str(files["data"]), "-o", str(fifo)]) == 0
+    reader.join(timeout=30)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert got and got[0].startswith(b"t,row_1")
+
+
+def test_a_folder_as_output_is_refused_before_any_work(files, tmp_path: Path, capsys) -> None:
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    assert main(["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
+                 "-o", str(folder)]) == 2
+    assert "found a folder" in _one_line(capsys)
+
+
+def test_deeply_nested_json_is_bad_input_not_a_crash(tmp_path: Path, capsys) -> None:
+    deep = tmp_path / "deep.json"
+    deep.write_text('{"format": "edm-result", "x": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    assert main(["simulate", str(deep), "x.csv"]) == 2
+    assert "deep.json" in _one_line(capsys)
+
+
+def test_interrupt_exits_130(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    def interrupted(args):  # noqa: ANN001, ANN202
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_cmd_plant", interrupted)
+    assert main(["plant", "--preset", "auger", "--excitation", "abstraction",
+                 "-o", os.devnull]) == 130
+    assert "interrupted" in _one_line(capsys)
+
+
+def test_a_bug_exits_1_and_says_how_to_report_it(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    def broken(args):  # noqa: ANN001, ANN202
+        raise ZeroDivisionError("oops")
+
+    monkeypatch.setattr(cli, "_cmd_plant", broken)
+    assert main(["plant", "--preset", "auger", "--excitation", "abstraction"]) == 1
+    err = _one_line(capsys)
+    assert "ZeroDivisionError" in err and "report" in err
+
+
+def test_every_exit_status_is_documented() -> None:
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text()
+    for code in (cli.EXIT_OK, cli.EXIT_FAILED, cli.EXIT_BAD_INPUT, cli.EXIT_INTERRUPTED):
+        assert f"`{code}`" in doc or f"| {code} " in doc, code
+    assert cli.EXIT_INTERRUPTED == 128 + 2  # the shell's status for SIGINT
+
+
+# -- bad values named, never a crash -------------------------------------------------
+
+def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
+    huge = tmp_path / "huge.csv"
+    huge.write_text("t,omega\n0," + "1" * 200_000 + "\n0.001,1\n")
+    short = tmp_path / "short.csv"
+    short.write_text("t,q,f\n0,0,0\n0.001,0,0\n")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("cache_mb = inf\n")
+    cases = [
+        (["simulate", str(files["result"]), str(huge), "-o", str(tmp_path / "a.csv")], "huge.csv: row 2"),
+        (["observe", str(short), "--position", "q", "--force", "f", "--nominal-inertia", "1e-3",
+          "-o", str(tmp_path / "b.csv")], "short.csv: column 'q'"),
+        (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+          "--nominal-inertia", "1e-3", "--force-gain", "inf", "-o", str(tmp_path / "c.csv")], "force_gain"),
+        (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+          "--nominal-inertia", "nan", "-o", str(tmp_path / "d.csv")], "--nominal-inertia"),
+        (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
+          "--seed", "9" * 5000, "-o", str(tmp_path / "e.json")], "(5000 characters)"),
+        (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
+          "--config", str(cfg), "-o", str(tmp_path / "f.json")], "c.toml: cache_mb"),
+    ]
+    for argv, where in cases:
+        assert main(argv) == 2, argv
+        err = _one_line(capsys)
+        assert where in err and len(err) < 400, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml", "huge.csv", "log.csv", "r.json",
+                                                           "short.csv"]
