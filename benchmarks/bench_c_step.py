@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from edm_sym import load_result
-from edm_sym.render import export
+from edm_sym.exporting import export
 from edm_sym.simulate import plain_loop, simulate
 
 REPO = Path(__file__).resolve().parent.parent

@@ -17,7 +17,6 @@ never imports scikit-learn.
 
 from __future__ import annotations
 
-from importlib import metadata as _metadata
 from pathlib import Path
 from typing import Any
 
@@ -32,11 +31,7 @@ from edm_sym.errors import (
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
 from edm_sym.result import EdmResult, load_result, save_result
 from edm_sym.simulate import Simulation, simulate
-
-try:
-    __version__ = _metadata.version("edm_sym")
-except _metadata.PackageNotFoundError:  # running from a source tree
-    __version__ = "0+unknown"
+from edm_sym.version import __version__
 
 __all__ = [
     "Compensator",
@@ -119,14 +114,14 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
         The output folder.
     **options
         ``prefix``, ``real`` and the report's options; see
-        :func:`edm_sym.render.export`.
+        :func:`edm_sym.exporting.export`.
 
     Returns
     -------
     list of pathlib.Path
         The files written.
     """
-    from edm_sym.render import export as _export  # jinja2 is imported only here
+    from edm_sym.exporting import export as _export  # jinja2 is imported only here
 
     return _export(result, target, out_dir, **options)
 

@@ -224,7 +224,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
         result = front_member(result, args.front_member)
     try:
-        from edm_sym.render import export
+        from edm_sym.exporting import export
     except ImportError:
         raise ToolMissingError("edm export: code generation is not available in this build") from None
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
@@ -248,6 +248,7 @@ def _export_names(args: argparse.Namespace) -> list[str]:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.data import load_data, write_csv
+    from edm_sym.fitness import rms
 
     model_path = Path(args.model)
     out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
@@ -277,7 +278,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     rmse = None
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
-        rmse = float((cols["residual"] ** 2).mean() ** 0.5)
+        rmse = rms(cols["residual"])
     write_csv(out, cols)
     print(f"wrote {out}")
     print(f"rmse {rmse:.10g}" if rmse is not None else f"rmse nan (no column {target!r} in DATA)")
@@ -378,7 +379,7 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
 
 def _cmd_abstract(args: argparse.Namespace) -> int:
     try:
-        from edm_sym.abstraction import run_cli
+        from edm_sym.abstract_cli import run_cli
     except ImportError:
         raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
     out = Path(args.output)

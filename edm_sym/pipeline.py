@@ -43,6 +43,7 @@ import numpy as np
 from edm_sym.data import DataLog, is_plant_spec, load_data
 from edm_sym.errors import TOO_DEEP, ConfigError
 from edm_sym.fileio import check_outputs, write_atomic
+from edm_sym.fitness import rms
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -147,8 +148,6 @@ def load_pipeline(path: str | Path) -> Pipeline:
     )
 
 
-def _rmse(residual: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(residual**2)))
 
 
 def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
@@ -184,8 +183,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         The evaluation summary (also written to ``evaluation.json``).
     """
     from edm_sym.abstraction import abstract, load_config
+    from edm_sym.exporting import export
     from edm_sym.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
-    from edm_sym.render import export
     from edm_sym.result import load_result, save_result
     from edm_sym.simulate import simulate
 
@@ -243,10 +242,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
 
     summary: dict[str, Any] = {}
     for label, log in logs.items():
-        row = {"edm": _rmse(log.columns[pipe.target] - simulate(result, log).total)}
+        row = {"edm": rms(log.columns[pipe.target] - simulate(result, log).total)}
         if lugre is not None:
             tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
-            row["lugre"] = _rmse(log.columns[pipe.target] - tau)
+            row["lugre"] = rms(log.columns[pipe.target] - tau)
             row["ratio"] = row["edm"] / row["lugre"]
         summary[label] = row
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")

@@ -11,7 +11,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -19,13 +18,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import jsonschema
-
 from edm_sym.bounds import bound_flags
 from edm_sym.elements import REGISTRY, ParamRange
 from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.validation import json_path, schema_problem
 
 FORMAT = "edm-result"
 VERSION = 1
@@ -183,63 +181,22 @@ def schema() -> dict[str, Any]:
     return json.loads(text)
 
 
-_PLAIN_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
-
-
 def format_path(parts: Sequence[Any]) -> str:
     """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``.
 
     A key that is not a plain name (a space, a newline, a quote ...) is shown
-    JSON-quoted in brackets, ``parameters["a\\nb"]``, so the path stays one line.
+    JSON-quoted in brackets, ``parameters["a\\nb"]``, so the path stays one line
+    (:func:`edm_sym.validation.json_path`).
     """
-    out = ""
-    for part in parts:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        elif not _PLAIN_KEY.fullmatch(str(part)):
-            out += f"[{json.dumps(str(part))}]"
-        else:
-            out += f".{part}" if out else str(part)
-    return out or "(top level)"
-
-
-def _expected(err: jsonschema.ValidationError) -> str:
-    v, val = err.validator, err.validator_value
-    texts = {
-        "type": lambda: f"a value of type {' or '.join(val) if isinstance(val, list) else val}",
-        "const": lambda: json.dumps(val),
-        "enum": lambda: "one of " + ", ".join(json.dumps(x) for x in val),
-        "minimum": lambda: f"a number >= {val}",
-        "maximum": lambda: f"a number <= {val}",
-        "exclusiveMinimum": lambda: f"a number > {val}",
-        "minItems": lambda: f"at least {val} item(s)",
-        "uniqueItems": lambda: "no repeated items",
-        "pattern": lambda: f"text matching {val}",
-        "minLength": lambda: "a non-empty string",
-    }
-    return texts.get(v, lambda: f"to satisfy {v!s} {json.dumps(val)}")()
+    return json_path(parts) or "(top level)"
 
 
 def _schema_error(name: str, doc: Any) -> ResultFormatError | None:
-    validator = jsonschema.Draft202012Validator(schema())
-    err = jsonschema.exceptions.best_match(validator.iter_errors(doc))
-    if err is None:
+    problem = schema_problem(schema(), doc)
+    if problem is None:
         return None
-    path = list(err.absolute_path)
-    if err.validator == "required":
-        missing = [k for k in err.validator_value if k not in err.instance]
-        where = format_path([*path, missing[0]] if missing else path)
-        return ResultFormatError(f"{name}: {where}", "expected this field, found it missing")
-    if err.validator == "anyOf":
-        what = ("a sha256 hex digest" if path and str(path[-1]).endswith("sha256")
-                else "an object with fitness, rmse and samples")
-        return ResultFormatError(
-            f"{name}: {format_path(path)}",
-            f"expected null or {what}, found {json.dumps(err.instance)[:60]}",
-        )
-    found = json.dumps(err.instance)
-    found = found if len(found) <= 60 else found[:57] + "..."
-    return ResultFormatError(f"{name}: {format_path(path)}", f"expected {_expected(err)}, found {found}")
+    path, text = problem
+    return ResultFormatError(f"{name}: {format_path(path)}", text)
 
 
 def _matrix_from_json(name: str, where: str, doc: Mapping[str, Any],

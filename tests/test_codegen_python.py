@@ -14,7 +14,7 @@ import pytest
 
 from edm_sym import load_result
 from edm_sym.elements import all_elements
-from edm_sym.render import export
+from edm_sym.exporting import export
 from edm_sym.simulate import simulate
 
 

@@ -19,8 +19,9 @@ from hypothesis import strategies as st
 from edm_sym import load_result
 from edm_sym.elements import all_elements
 from edm_sym.errors import NumericsWarning
+from edm_sym.exporting import export
 from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
-from edm_sym.render import TARGETS, export, render
+from edm_sym.render import TARGETS, render
 from edm_sym.render.context import c_context, input_macros, plan, source_of
 from edm_sym.render.environment import environment, template_dir
 from edm_sym.render.writer import OutputError, write_files
@@ -63,6 +64,33 @@ def test_targets_write_their_files(target: str, names: list[str], tmp_path: Path
     assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written)
     for p in written:
         assert p.stat().st_mode & 0o444 == 0o444  # readable like any file, not 0600
+
+
+def test_target_all_decodes_once_and_hands_every_target_one_model(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import edm_sym.exporting
+    import edm_sym.report
+    import edm_sym.symbolic
+    from edm_sym.symbolic import decoding
+
+    calls: dict[str, list] = {"decode": [], "build": [], "render": [], "report": []}
+
+    def spy(key, fn):  # noqa: ANN001, ANN202
+        def wrapped(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+            out = fn(*args, **kwargs)
+            calls[key].append(kwargs.get("model", out))
+            return out
+        return wrapped
+
+    monkeypatch.setattr(edm_sym.symbolic, "decode", spy("decode", edm_sym.symbolic.decode))
+    monkeypatch.setattr(decoding, "build_model", spy("build", decoding.build_model))
+    monkeypatch.setattr(edm_sym.symbolic, "build_model", spy("build", edm_sym.symbolic.build_model))
+    monkeypatch.setattr(edm_sym.exporting, "render", spy("render", edm_sym.exporting.render))
+    monkeypatch.setattr(edm_sym.report, "write_report", spy("report", edm_sym.report.write_report))
+    export(EXAMPLE, "all", tmp_path)
+    assert len(calls["decode"]) == 1 and len(calls["build"]) == 1
+    model = calls["decode"][0]
+    assert calls["render"] == [model] and calls["report"] == [model]
 
 
 def test_prefix_names_files_and_symbols(tmp_path: Path) -> None:

@@ -133,7 +133,7 @@ def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None
 
 def test_shipped_example_report_compiles_and_names_the_four_terms(tmp_path: Path) -> None:
     """examples/auger/result.json with the logs and LuGre file it records (report_inputs)."""
-    from edm_sym.render import report_inputs
+    from edm_sym.exporting import report_inputs
 
     result = edm_sym.load_result(REPO / "examples" / "auger" / "result.json")
     files = write_report(result, tmp_path, **report_inputs(result))

@@ -65,7 +65,7 @@ def render_case(case: Case, out_dir: Path) -> list[Path]:
     import warnings
 
     from edm_sym import load_result
-    from edm_sym.render import export
+    from edm_sym.exporting import export
 
     result = load_result(case.result_file)
     written: list[Path] = []
@@ -78,7 +78,7 @@ def render_case(case: Case, out_dir: Path) -> list[Path]:
 
 def main() -> int:
     """Rewrite every golden folder and generated/auger; print what was written."""
-    from edm_sym.render import export
+    from edm_sym.exporting import export
     from edm_sym.result import load_result, save_result
 
     for case in CASES:

@@ -12,7 +12,6 @@ speed design.
 
 from __future__ import annotations
 
-from edm_sym.abstraction.cli import run_cli
 from edm_sym.abstraction.evaluator import Evaluator, RowCache
 from edm_sym.abstraction.run import GenerationInfo, abstract
 from edm_sym.abstraction.schedule import (
@@ -43,5 +42,4 @@ __all__ = [
     "default_config",
     "load_config",
     "parse_config",
-    "run_cli",
 ]

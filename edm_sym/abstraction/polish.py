@@ -23,16 +23,13 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from edm_sym.abstraction.ga import THROUGH, Population
-from edm_sym.elements import BY_NAME, ParamRange
+from edm_sym.elements import BY_NAME, REGISTRY, ParamRange
 
 #: Elements whose output is their parameter times a function of the input.
-SCALABLE = frozenset(BY_NAME[n].code for n in ("gain", "power_gain", "sin_amp", "tan_amp"))
+SCALABLE = frozenset(c for c, el in REGISTRY.items() if el.scales_output)
 #: Elements with f(c x) = c f(x) for every real c (linear, no offset).
-HOMOGENEOUS = frozenset(BY_NAME[n].code for n in (
-    "through", "invert", "gain", "power_gain", "derivative", "integral", "lpf", "hpf",
-    "lead", "lag", "phase", "notch", "dead_time", "shift"))
+HOMOGENEOUS = frozenset(c for c, el in REGISTRY.items() if el.homogeneous)
 GAIN = BY_NAME["gain"].code
-_NAME = {BY_NAME[n].code: n for n in BY_NAME}
 
 
 def scale_position(codes: Sequence[int], gain_allowed: bool) -> tuple[int, bool] | None:
@@ -123,7 +120,7 @@ def gain_fit(
                 codes[j, pos] = GAIN
                 ps[j, pos] = ranges["gain"].encode(c)
                 continue
-            rng = ranges[_NAME[int(codes[j, pos])]]
+            rng = ranges[REGISTRY[int(codes[j, pos])].name]
             a = rng.decode(float(ps[j, pos])) * c
             if rng.scaling == "log" and not a > 0:
                 continue

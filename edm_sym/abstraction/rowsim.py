@@ -10,7 +10,6 @@ row's output is a pure function of its genes, whatever any cache holds.
 
 from __future__ import annotations
 
-import math
 import os
 import pickle
 import signal
@@ -23,8 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from edm_sym.abstraction.cache import RowCache
-from edm_sym.elements import BY_NAME, REGISTRY, Element, ParamRange
-from edm_sym.simulate import simulate_element_fast
+from edm_sym.elements import REGISTRY, Element, ParamRange
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
@@ -81,8 +79,9 @@ class Worker:
     """A process's state for one run: context, decoder, prefix cache, shared rows.
 
     ``trig`` holds sin and cos of each input signal: a sine element reading an
-    input directly (the paper's position-dependent friction) then costs two
-    multiply-adds instead of a sine per sample.
+    input directly (the paper's position-dependent friction; its class
+    declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
+    per sample.
     """
 
     ctx: SimContext
@@ -98,19 +97,6 @@ class Worker:
             x = self.ctx.inputs[k]
             hit = self.trig[k] = (np.sin(x), np.cos(x))
         return hit
-
-
-def _sin_amp(s: np.ndarray, c: np.ndarray, a: float) -> np.ndarray:
-    return a * s  # the reference's a * sin(x), bit for bit
-
-
-def _sin_phase(s: np.ndarray, c: np.ndarray, a: float) -> np.ndarray:
-    return s * math.cos(a) + c * math.sin(a)  # sin(x + a), equal to rounding
-
-
-#: Elements that, reading an input directly, are computed from its cached sin and cos
-#: (a speed table by element class; every other element runs its own simulation).
-FROM_INPUT_SINES = {BY_NAME["sin_amp"]: _sin_amp, BY_NAME["sin_phase"]: _sin_phase}
 
 
 _WORKERS: OrderedDict[str, Worker] = OrderedDict()
@@ -179,8 +165,8 @@ def simulate_table(worker: Worker, table: np.ndarray) -> list[np.ndarray]:
             code = int(line[1 + i])
             cls, rng = decoder[code]
             a = rng.decode(float(line[1 + n + i])) if rng is not None else None
-            fast = FROM_INPUT_SINES.get(cls) if i == 0 else None
-            prev, y = y, (simulate_element_fast(cls, y, a, ctx.ts) if fast is None
+            fast = cls.from_sin_cos if i == 0 else None
+            prev, y = y, (cls.realise(a, ctx.ts).run(y) if fast is None
                           else fast(*worker.sin_cos(int(line[0])), a))
             if i < n - 1 and y is not prev:
                 cache.put(prefix_key(line, n, i + 1), y)

@@ -41,14 +41,15 @@ from edm_sym.abstraction.prune import apply_parsimony
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.abstraction.validation import Scorer, plan_holdout
 from edm_sym.data import DataLog
-from edm_sym.elements import BY_NAME, ParamRange
+from edm_sym.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.errors import ConfigError, NumericsWarning
 from edm_sym.matrix import Compensator, ElementMatrix
 from edm_sym.result import EdmResult, StepRecord
 from edm_sym.simulate import fitness, simulate_rows
 
-#: Elements whose output is identically 0 at a = 0 (a new row that changes nothing).
-_ZERO_ELEMENTS = ("gain", "sin_amp", "tan_amp")
+#: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
+#: those whose output is a f(x).
+_ZERO_ELEMENTS = tuple(el.name for el in all_elements() if el.scales_output)
 
 
 @dataclass(frozen=True)
@@ -381,7 +382,7 @@ def abstract(
     KeyboardInterrupt
         Only when interrupted before the first population was evaluated.
     """
-    from edm_sym import __version__
+    from edm_sym.version import __version__
 
     cfg = config if config is not None else default_config()
     inputs = tuple(inputs)

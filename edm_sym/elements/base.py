@@ -6,7 +6,8 @@ place, its name and integer code, the meaning, range and scaling of its
 parameter ``a``, its continuous-time form, its discrete-time realisation, its
 state size and its domain guards; defining the class registers it.
 
-There are four kinds, by how they compute:
+There are four kinds, by how they compute; each is realised in discrete time
+by one type of :mod:`edm_sym.elements.realisation` (``Element.realise``):
 
 * :class:`StaticElement` -- memoryless ``y = f(x, a)``; ``f`` is written once
   against a small math interface (:mod:`edm_sym.elements.ops`) so the same
@@ -28,10 +29,9 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from scipy import signal
 
 from edm_sym.discrete import discretize
-from edm_sym.elements import ops as _ops
+from edm_sym.elements.realisation import DelayLine, LinearFilter, Realisation, Relay, StaticMap
 
 Scaling = Literal["linear", "log"]
 
@@ -170,16 +170,31 @@ class Element:
         REGISTRY[cls.code] = cls
         BY_NAME[cls.name] = cls
 
+    # -- traits the genetic algorithm reads (declared here, not in name lists) -----
+    #: The output is the parameter times a function of the input (``a f(x)``),
+    #: so a least-squares gain can be folded into ``a``.
+    scales_output: ClassVar[bool] = False
+    #: ``f(c x) = c f(x)`` for every real c (linear, without offset).
+    homogeneous: ClassVar[bool] = False
+    #: ``f(sin x, cos x, a)`` giving the output from the input's sine and cosine
+    #: (reading an input directly, the GA computes those once per input), or None.
+    from_sin_cos: ClassVar[Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None] = None
+
     # -- numeric -------------------------------------------------------------
+    @classmethod
+    def realise(cls, a: float | None, ts: float) -> Realisation:
+        """The discrete-time realisation for parameter ``a`` and sample time ``ts``."""
+        raise NotImplementedError
+
     @classmethod
     def simulate(cls, x: np.ndarray, a: float | None, ts: float) -> np.ndarray:
         """Run the element over a whole signal (last axis is time), from rest."""
-        raise NotImplementedError
+        return cls.realise(a, ts).run(np.asarray(x, dtype=float))
 
     @classmethod
     def state_size(cls, a: float | None, ts: float) -> int:
         """Number of real state variables of the discrete realisation."""
-        return 0
+        return cls.realise(a, ts).state_size
 
     @classmethod
     def stepper(cls, a: float | None, ts: float) -> Callable[[float], float]:
@@ -188,7 +203,7 @@ class Element:
         It computes the same thing as :meth:`simulate` one sample at a time;
         the benchmarks compare against it and the tests cross-check the two.
         """
-        raise NotImplementedError
+        return cls.realise(a, ts).stepper()
 
     @classmethod
     def has_param(cls) -> bool:
@@ -197,9 +212,9 @@ class Element:
 
 
 class StaticElement(Element):
-    """A memoryless element ``y = f(x, a)``."""
+    """A memoryless element ``y = f(x, a)``, realised as a :class:`StaticMap`."""
 
-    kind: ClassVar[str] = "static"
+    kind: ClassVar[str] = StaticMap.kind
     _abstract: ClassVar[bool] = True
 
     @staticmethod
@@ -208,14 +223,8 @@ class StaticElement(Element):
         raise NotImplementedError
 
     @classmethod
-    def simulate(cls, x: np.ndarray, a: float | None, ts: float) -> np.ndarray:
-        with np.errstate(over="ignore", invalid="ignore"):
-            return np.asarray(cls.f(_ops.NUMPY, x, a), dtype=float) * np.ones_like(x)
-
-    @classmethod
-    def stepper(cls, a: float | None, ts: float) -> Callable[[float], float]:
-        f, m = cls.f, _ops.SCALAR
-        return lambda x: float(f(m, x, a))
+    def realise(cls, a: float | None, ts: float) -> StaticMap:
+        return StaticMap(cls, a)
 
 
 class LinearElement(Element):
@@ -223,10 +232,12 @@ class LinearElement(Element):
 
     ``tf(a)`` returns numerator and denominator coefficients in descending
     powers of s; they may be numbers or sympy expressions. ``method`` names the
-    discretisation (see :func:`edm_sym.discrete.discretize`).
+    discretisation (see :func:`edm_sym.discrete.discretize`); the realisation
+    is a :class:`LinearFilter`.
     """
 
-    kind: ClassVar[str] = "linear"
+    kind: ClassVar[str] = LinearFilter.kind
+    homogeneous: ClassVar[bool] = True
     method: ClassVar[str] = "bilinear"
     _abstract: ClassVar[bool] = True
 
@@ -239,45 +250,19 @@ class LinearElement(Element):
     def coefficients(cls, a: float | None, ts: float) -> tuple[np.ndarray, np.ndarray]:
         """Discrete coefficients ``(b, a)`` in powers of z^-1, ``a[0] == 1``."""
         num, den = cls.tf(a)
-        return discretize(
-            [float(c) for c in num], [float(c) for c in den], ts, cls.method
-        )
+        return discretize(num, den, ts, cls.method)
 
     @classmethod
-    def state_size(cls, a: float | None, ts: float) -> int:
+    def realise(cls, a: float | None, ts: float) -> LinearFilter:
         b, den = cls.coefficients(a, ts)
-        return max(len(b), len(den)) - 1
-
-    @classmethod
-    def simulate(cls, x: np.ndarray, a: float | None, ts: float) -> np.ndarray:
-        b, den = cls.coefficients(a, ts)
-        with np.errstate(over="ignore", invalid="ignore"):
-            return signal.lfilter(b, den, x, axis=-1)
-
-    @classmethod
-    def stepper(cls, a: float | None, ts: float) -> Callable[[float], float]:
-        b, den = (list(map(float, c)) for c in cls.coefficients(a, ts))
-        n = max(len(b), len(den)) - 1
-        b += [0.0] * (n + 1 - len(b))
-        den += [0.0] * (n + 1 - len(den))
-        z = [0.0] * n
-
-        def step(x: float) -> float:
-            # Direct form II transposed, the same structure as lfilter.
-            y = b[0] * x + (z[0] if n else 0.0)
-            for i in range(n - 1):
-                z[i] = b[i + 1] * x + z[i + 1] - den[i + 1] * y
-            if n:
-                z[n - 1] = b[n] * x - den[n] * y
-            return y
-
-        return step
+        return LinearFilter(tuple(b.tolist()), tuple(den.tolist()), cls.method)
 
 
 class DelayElement(Element):
-    """A pure delay of ``samples(a, ts)`` whole samples, starting from zeros."""
+    """A pure delay of ``samples(a, ts)`` whole samples, realised as a :class:`DelayLine`."""
 
-    kind: ClassVar[str] = "delay"
+    kind: ClassVar[str] = DelayLine.kind
+    homogeneous: ClassVar[bool] = True
     _abstract: ClassVar[bool] = True
 
     @staticmethod
@@ -286,67 +271,20 @@ class DelayElement(Element):
         raise NotImplementedError
 
     @classmethod
-    def state_size(cls, a: float | None, ts: float) -> int:
-        return cls.samples(a, ts)
-
-    @classmethod
-    def simulate(cls, x: np.ndarray, a: float | None, ts: float) -> np.ndarray:
-        k = cls.samples(a, ts)
-        y = np.zeros_like(x, dtype=float)
-        if k < x.shape[-1]:
-            y[..., k:] = x[..., : x.shape[-1] - k]
-        return y
-
-    @classmethod
-    def stepper(cls, a: float | None, ts: float) -> Callable[[float], float]:
-        k = cls.samples(a, ts)
-        buf = [0.0] * k
-        pos = [0]
-
-        def step(x: float) -> float:
-            if k == 0:
-                return x
-            y = buf[pos[0]]
-            buf[pos[0]] = x
-            pos[0] = (pos[0] + 1) % k
-            return y
-
-        return step
+    def realise(cls, a: float | None, ts: float) -> DelayLine:
+        return DelayLine(int(cls.samples(a, ts)))
 
 
 class RelayElement(Element):
     """Relay with hysteresis: switches to +1 at ``x >= a``, to -1 at ``x <= -a``.
 
     Between the thresholds it holds its last output; it starts at 0, so until
-    the input first leaves the band the output is 0.
+    the input first leaves the band the output is 0. Realised as a :class:`Relay`.
     """
 
-    kind: ClassVar[str] = "relay"
+    kind: ClassVar[str] = Relay.kind
     _abstract: ClassVar[bool] = True
 
     @classmethod
-    def state_size(cls, a: float | None, ts: float) -> int:
-        return 1
-
-    @classmethod
-    def simulate(cls, x: np.ndarray, a: float | None, ts: float) -> np.ndarray:
-        x = np.asarray(x, dtype=float)
-        event = np.where(x >= a, 1.0, np.where(x <= -a, -1.0, np.nan))
-        # Forward-fill the last switching event along time (vectorised hold).
-        idx = np.where(np.isnan(event), 0, np.arange(1, x.shape[-1] + 1))
-        idx = np.maximum.accumulate(idx, axis=-1)
-        padded = np.concatenate([np.zeros(x.shape[:-1] + (1,)), event], axis=-1)
-        return np.take_along_axis(padded, idx, axis=-1)
-
-    @classmethod
-    def stepper(cls, a: float | None, ts: float) -> Callable[[float], float]:
-        state = [0.0]
-
-        def step(x: float) -> float:
-            if x >= a:
-                state[0] = 1.0
-            elif x <= -a:
-                state[0] = -1.0
-            return state[0]
-
-        return step
+    def realise(cls, a: float | None, ts: float) -> Relay:
+        return Relay(float(a))

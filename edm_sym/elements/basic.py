@@ -12,6 +12,7 @@ class Through(StaticElement):
     code = 0
     title = "Through"
     category = "basic"
+    homogeneous = True
     formula = "y = x"
 
     @staticmethod
@@ -24,6 +25,7 @@ class Invert(StaticElement):
     code = 1
     title = "Invert"
     category = "basic"
+    homogeneous = True
     formula = "y = -x"
 
     @staticmethod

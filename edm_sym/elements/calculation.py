@@ -35,6 +35,8 @@ class Gain(StaticElement):
     code = 3
     title = "Gain"
     category = "calculation"
+    homogeneous = True
+    scales_output = True
     formula = "y = a x"
     param = Param("gain (either sign)", "output unit per input unit",
                   lambda ts, t_sum: ParamRange(-10.0, 10.0, "linear"), "-10 .. 10 (linear)")
@@ -51,6 +53,8 @@ class PowerGain(StaticElement):
     code = 4
     title = "Power gain"
     category = "calculation"
+    homogeneous = True
+    scales_output = True
     formula = "y = a x,  a = 10^e (searched over decades)"
     param = Param("gain magnitude", "output unit per input unit",
                   lambda ts, t_sum: ParamRange(1e-4, 1e4, "log"), "1e-4 .. 1e4 (log, eq. 5)")

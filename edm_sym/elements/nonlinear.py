@@ -6,6 +6,7 @@ the output finite for every finite input.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from edm_sym.elements.base import Param, ParamRange, RelayElement, StaticElement
@@ -128,18 +129,29 @@ class SinePhase(StaticElement):
     def f(m: Any, x: Any, a: Any) -> Any:
         return m.sin(x + a)
 
+    @staticmethod
+    def from_sin_cos(s: Any, c: Any, a: float) -> Any:
+        """``sin(x + a) = sin x cos a + cos x sin a``, equal to rounding."""
+        return s * math.cos(a) + c * math.sin(a)
+
 
 class SineAmplitude(StaticElement):
     name = "sin_amp"
     code = 23
     title = "Sine wave (amp.)"
     category = "nonlinear"
+    scales_output = True
     formula = "y = a sin(x)"
     param = AMPLITUDE
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:
         return a * m.sin(x)
+
+    @staticmethod
+    def from_sin_cos(s: Any, c: Any, a: float) -> Any:
+        """``a sin(x)`` from ``sin(x)``, bit for bit."""
+        return a * s
 
 
 TAN_GUARD = f"tan limited to +-{TAN_LIMIT:g}, so its poles give a finite output"
@@ -166,6 +178,7 @@ class TangentAmplitude(StaticElement):
     code = 25
     title = "Tangent (amp.)"
     category = "nonlinear"
+    scales_output = True
     formula = "y = a tan(x)"
     guard = TAN_GUARD
     param = AMPLITUDE

@@ -14,7 +14,6 @@ number, found -3``.
 from __future__ import annotations
 
 import functools
-import importlib.metadata
 import json
 import math
 import os
@@ -22,13 +21,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import jsonschema
-
 from edm_sym.errors import TOO_DEEP, ResultFormatError
 from edm_sym.fileio import write_atomic
 from edm_sym.lugre.model import PARAMETER_NAMES, LuGreParams
 from edm_sym.lugre.result import LuGreProvenance, LuGreResult, MethodScore
-from edm_sym.result import format_path
+from edm_sym.validation import json_path, schema_problem, show_value
+from edm_sym.version import __version__
 
 __all__ = ["FORMAT", "VERSION", "load_lugre", "lugre_schema", "parse_lugre", "save_lugre"]
 
@@ -36,14 +34,6 @@ __all__ = ["FORMAT", "VERSION", "load_lugre", "lugre_schema", "parse_lugre", "sa
 FORMAT = "edm-lugre"
 #: Value of the ``version`` field.
 VERSION = 1
-
-_TYPE_NAMES = {
-    "number": "a number",
-    "integer": "an integer",
-    "string": "a string",
-    "object": "an object",
-}
-
 
 @functools.cache
 def lugre_schema() -> dict[str, Any]:
@@ -66,56 +56,7 @@ def package_version() -> str:
     str
         The version string.
     """
-    try:
-        return importlib.metadata.version("edm_sym")
-    except importlib.metadata.PackageNotFoundError:
-        return "0+unknown"
-
-
-def _show(value: Any) -> str:
-    text = json.dumps(value) if not isinstance(value, float) or math.isfinite(value) else repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _dotted(path: list[Any]) -> str:
-    return format_path(path)
-
-
-def _describe(error: jsonschema.ValidationError) -> tuple[list[Any], str]:
-    """Field path and a one-line problem for one schema violation."""
-    path = list(error.absolute_path)
-    kind, rule, found = error.validator, error.validator_value, error.instance
-    if kind == "required":
-        missing = [k for k in rule if k not in found]
-        return path + [missing[0]], "required field is missing"
-    if kind == "additionalProperties":
-        allowed = sorted(error.schema.get("properties", {}))
-        extra = sorted(k for k in found if k not in allowed)
-        return path + [extra[0]], f"unexpected field (allowed: {', '.join(allowed)})"
-    if kind == "type":
-        return path, f"expected {_TYPE_NAMES.get(rule, rule)}, found {_show(found)}"
-    if kind == "const":
-        return path, f"expected {_show(rule)}, found {_show(found)}"
-    if kind == "exclusiveMinimum" and rule == 0:
-        return path, f"expected a positive number, found {_show(found)}"
-    if kind == "minimum" and rule == 0:
-        return path, f"expected a non-negative number, found {_show(found)}"
-    if kind == "minProperties" and rule == 1:
-        return path, f"expected a non-empty object, found {_show(found)}"
-    if kind == "minLength":
-        return path, f"expected a non-empty string, found {_show(found)}"
-    if kind == "pattern" and path and path[-1] == "data_sha256":
-        return path, f"expected 64 lowercase hex digits, found {_show(found)}"
-    return path, error.message
-
-
-def _priority(error: jsonschema.ValidationError) -> tuple[int, list[str], str]:
-    # A wrong format or version explains everything else, so report it first.
-    path = [str(p) for p in error.absolute_path]
-    head = path[0] if path else ""
-    if error.validator == "required" and not path:
-        head = next((k for k in error.validator_value if k not in error.instance), "")
-    return (0 if head in ("format", "version") else 1, path, str(error.validator))
+    return __version__
 
 
 def _reject_constant(token: str) -> float:
@@ -165,18 +106,17 @@ def parse_lugre(document: Any, source: str = "LUGRE.json") -> LuGreResult:
         On any defect, naming ``source`` and the field.
     """
     if not isinstance(document, dict):
-        raise ResultFormatError(source, f"expected a JSON object at the top level, found {_show(document)}")
+        raise ResultFormatError(
+            source, f"expected a JSON object at the top level, found {show_value(document)}")
     bad = _find_nonfinite(document, [])
     if bad is not None:
         raise ResultFormatError(
-            f"{source}: {_dotted(bad)}", "expected a finite number, found a number out of range"
+            f"{source}: {json_path(bad)}", "expected a finite number, found a number out of range"
         )
-    validator = jsonschema.Draft202012Validator(lugre_schema())
-    errors = sorted(validator.iter_errors(document), key=_priority)
-    if errors:
-        path, problem = _describe(errors[0])
-        where = f"{source}: {_dotted(path)}" if path else source
-        raise ResultFormatError(where, problem)
+    problem = schema_problem(lugre_schema(), document)
+    if problem is not None:
+        path, text = problem
+        raise ResultFormatError(f"{source}: {json_path(path)}" if path else source, text)
     try:
         params = LuGreParams.from_dict(document["parameters"])
     except ValueError as exc:
@@ -319,14 +259,8 @@ def save_lugre(
     ----------
     path : path-like
         Destination; written through a temporary file and a rename.
-    result : LuGreResult
-        The identified model.
-    target, velocity : str
-        Data columns of the target torque and of the velocity.
-    data_sha256 : str
-        SHA-256 of the data file (64 hex digits).
-    seed : int
-        Seed of the identification.
+    result, target, velocity, data_sha256, seed
+        As for :func:`lugre_document`, which makes the document.
 
     Raises
     ------

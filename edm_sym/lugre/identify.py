@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 from scipy import linalg, optimize
 
 from edm_sym.errors import ConfigError, DataFormatError
+from edm_sym.fitness import fitness
 from edm_sym.lugre.model import (
     LuGreParams,
     _as_velocity,
@@ -266,7 +267,7 @@ class _VarPro:
         if coef[0] <= 0.0:
             coef[0] = self.tau_c_min
         resid = self.problem.target - coef @ cols
-        return float(np.sqrt(np.mean(self.problem.weights * resid * resid))), coef
+        return fitness(resid, self.problem.weights), coef
 
     def __call__(self, theta: np.ndarray) -> float:
         if self.best is not None and self.problem.time_is_up():

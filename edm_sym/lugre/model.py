@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from edm_sym.errors import DataFormatError
+from edm_sym.fitness import fitness
 
 __all__ = [
     "PARAMETER_NAMES",
@@ -333,6 +334,4 @@ def weighted_rmse(target: ArrayLike, tau_cmp: ArrayLike, weights: ArrayLike | No
         The weighted RMS of the residual ``target - tau_cmp``.
     """
     r = np.asarray(target, dtype=float) - np.asarray(tau_cmp, dtype=float)
-    if weights is None:
-        return float(np.sqrt(np.mean(r * r)))
-    return float(np.sqrt(np.mean(np.asarray(weights, dtype=float) * r * r)))
+    return fitness(r, 1.0 if weights is None else weights)

@@ -14,17 +14,17 @@ See ``docs/plant.md`` for the block diagram and every preset parameter.
 from __future__ import annotations
 
 from edm_sym.plant.excitation import EXCITATIONS, excitation_command, get_excitation
+from edm_sym.plant.filters import (
+    acceleration_from_velocity,
+    lowpass,
+    lowpass_coefficients,
+    velocity_from_angle,
+)
 from edm_sym.plant.friction import (
     FRICTION_COMPONENTS,
     friction_components,
     ripple_torque,
     stribeck_level,
-)
-from edm_sym.plant.observer import (
-    acceleration_from_velocity,
-    lowpass,
-    lowpass_coefficients,
-    velocity_from_angle,
 )
 from edm_sym.plant.presets import PRESETS, PlantPreset, RippleHarmonic, get_preset
 from edm_sym.plant.servo import (

@@ -32,17 +32,13 @@ from types import MappingProxyType
 import numpy as np
 
 from edm_sym.errors import ConfigError
+from edm_sym.fitness import rms
+from edm_sym.plant import filters
 from edm_sym.plant.excitation import get_excitation
 from edm_sym.plant.friction import (
     FRICTION_COMPONENTS,
     friction_components,
     solve_substep,
-)
-from edm_sym.plant.observer import (
-    acceleration_from_velocity,
-    lowpass,
-    lowpass_coefficients,
-    velocity_from_angle,
 )
 from edm_sym.plant.presets import PlantPreset, get_preset
 
@@ -149,7 +145,7 @@ class PlantLog:
         return {
             name: {
                 "mean": float(np.mean(x)),
-                "rms": float(np.sqrt(np.mean(x * x))),
+                "rms": rms(x),
                 "min": float(np.min(x)),
                 "max": float(np.max(x)),
             }
@@ -164,7 +160,7 @@ class PlantLog:
         float
             [rad/s]
         """
-        return float(np.sqrt(np.mean((self.omega_cmd - self.omega) ** 2)))
+        return rms(self.omega_cmd - self.omega)
 
 
 def default_substeps(ts: float) -> int:
@@ -298,9 +294,9 @@ def simulate_axis(
     else:
         theta_w = np.mod(theta_m, _TWO_PI)
         theta_w[theta_w >= _TWO_PI] = 0.0
-    omega_log = velocity_from_angle(theta_m, ts, p.g_velocity)
-    alpha_log = acceleration_from_velocity(omega_log, ts, p.g_acceleration)
-    tau_ext = lowpass(balance, p.g_rtob, ts)
+    omega_log = filters.velocity_from_angle(theta_m, ts, p.g_velocity)
+    alpha_log = filters.acceleration_from_velocity(omega_log, ts, p.g_acceleration)
+    tau_ext = filters.lowpass(balance, p.g_rtob, ts)
 
     truth, alpha_true = _ground_truth(p, theta, omega, z, i_ref, noise, env_samples)
     state = {
@@ -374,7 +370,7 @@ def _run_loop(
     h = ts / steps
     jn, ktn, kt, jj = p.inertia_nominal, p.torque_constant_nominal, p.torque_constant, p.inertia
     kv, ki = p.velocity_gain, p.velocity_integral
-    a_dob, b_dob = lowpass_coefficients(p.g_dob, ts)
+    a_dob, b_dob = filters.lowpass_coefficients(p.g_dob, ts)
     quantum = _TWO_PI / p.encoder_counts if p.encoder_counts else 0.0
     lugre = p.has_lugre
     s0, s1, s2 = p.bristle_stiffness, p.bristle_damping, p.viscous

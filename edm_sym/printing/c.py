@@ -25,7 +25,7 @@ from sympy.codegen.ast import float32, float64, real
 from sympy.printing.c import C99CodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
-from edm_sym.printing.helpers import HelperCalls
+from edm_sym.printing.helpers import HelperCalls, StageLines
 
 #: The real types a compensator can be printed in.
 REALS = ("float", "double")
@@ -85,7 +85,7 @@ def c_comment_text(text: str) -> str:
     return re.sub(r"\s", " ", text).rstrip()
 
 
-class EdmC99Printer(HelperCalls, C99CodePrinter):
+class EdmC99Printer(HelperCalls, StageLines, C99CodePrinter):
     """C99 printer for edm_sym expressions in one real type.
 
     Parameters
@@ -172,20 +172,19 @@ class EdmC99Printer(HelperCalls, C99CodePrinter):
     def helper_symbol(self, name: str) -> str:
         return f"{self.prefix}_{name}"
 
-    def _print_Max(self, expr: sp.Expr) -> str:
-        # fmax(a, b) equals numpy.maximum for every non-NaN pair.
+    def _fold(self, function: str, expr: sp.Expr) -> str:
         args = [self._print(a) for a in expr.args]
         out = args[0]
         for a in args[1:]:
-            out = f"fmax{self.func_suffix}({out}, {a})"
+            out = f"{function}{self.func_suffix}({out}, {a})"
         return out
 
+    def _print_Max(self, expr: sp.Expr) -> str:
+        # fmax(a, b) equals numpy.maximum for every non-NaN pair.
+        return self._fold("fmax", expr)
+
     def _print_Min(self, expr: sp.Expr) -> str:
-        args = [self._print(a) for a in expr.args]
-        out = args[0]
-        for a in args[1:]:
-            out = f"fmin{self.func_suffix}({out}, {a})"
-        return out
+        return self._fold("fmin", expr)
 
     # -- helper definitions ----------------------------------------------------
     def helper_definitions(self, names: Iterable[str] | None = None) -> list[str]:
@@ -202,16 +201,7 @@ class EdmC99Printer(HelperCalls, C99CodePrinter):
         list of str
             One multi-line C definition per helper.
         """
-        wanted = set(self.helpers_used if names is None else names)
-        unknown = wanted - set(_HELPERS)
-        if unknown:
-            raise ValueError(f"helpers: unknown {sorted(unknown)} (known: {sorted(_HELPERS)})")
-        todo = list(wanted)
-        while todo:
-            for dep in _HELPERS[todo.pop()][0]:
-                if dep not in wanted:
-                    wanted.add(dep)
-                    todo.append(dep)
+        wanted = self.helpers_wanted(names, _HELPERS)
         fmt = {
             "R": self.real_t, "P": self.prefix, "f": self.func_suffix,
             "zero": self.literal(0.0), "one": self.literal(1.0), "m1": self.literal(-1.0),

@@ -18,7 +18,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from edm_sym.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
-from edm_sym.printing.helpers import HelperCalls
+from edm_sym.printing.helpers import HelperCalls, StageLines
 
 # name -> (helpers it calls, parameters, body lines); bodies are ScalarOps'.
 _HELPERS: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
@@ -44,7 +44,7 @@ def py_literal(value: float) -> str:
     return repr(v)
 
 
-class EdmPythonPrinter(HelperCalls, PythonCodePrinter):
+class EdmPythonPrinter(HelperCalls, StageLines, PythonCodePrinter):
     """Python printer for edm_sym expressions using only the ``math`` module.
 
     Attributes
@@ -96,16 +96,7 @@ class EdmPythonPrinter(HelperCalls, PythonCodePrinter):
 
         Helpers they call are added; the order is fixed (callees first).
         """
-        wanted = set(self.helpers_used if names is None else names)
-        unknown = wanted - set(_HELPERS)
-        if unknown:
-            raise ValueError(f"helpers: unknown {sorted(unknown)} (known: {sorted(_HELPERS)})")
-        todo = list(wanted)
-        while todo:
-            for dep in _HELPERS[todo.pop()][0]:
-                if dep not in wanted:
-                    wanted.add(dep)
-                    todo.append(dep)
+        wanted = self.helpers_wanted(names, _HELPERS)
         return ["\n".join([f"def _{name}({params}):", *(f"    {b}" for b in body)])
                 for name, (_, params, body) in _HELPERS.items() if name in wanted]
 

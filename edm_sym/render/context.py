@@ -1,10 +1,11 @@
 """Template contexts: everything a template shows, computed and validated here.
 
 The plan of a compensator (:func:`plan`) is language-neutral: per row, its
-stages with their state (names and sizes: filter states, ring buffers sized by
-the decoded delay, relay outputs) and readable labels. :func:`c_context` and
-:func:`python_context` turn the plan into the strings the templates place,
-asking the printers for every piece of C or Python; the templates only loop.
+stages with their state as each stage's realisation lays it out (filter
+states, ring buffers sized by the decoded delay, relay outputs) and readable
+labels. :func:`c_context` and :func:`python_context` turn the plan into the
+strings the templates place, asking the printers for every piece of C or
+Python (a stage's lines by the type of its realisation); the templates only loop.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.discrete import METHODS
+from edm_sym.elements.realisation import LinearFilter, StaticMap
 from edm_sym.errors import NumericsWarning
 from edm_sym.printing import REALS, EdmC99Printer, EdmPythonPrinter, c_comment_text
 from edm_sym.printing.c import is_c_identifier
@@ -59,25 +60,33 @@ class Source:
 
 
 @dataclass(frozen=True)
-class StatePart:
-    """One state variable of a stage: ``size`` reals, or an index when ``size`` is None."""
+class StateMember:
+    """One state variable of a stage: ``size`` reals, or an index when ``size`` is None.
+
+    ``suffix`` is the realisation's name for it (:class:`~edm_sym.elements.realisation.StatePart`).
+    """
 
     name: str
     size: int | None
     comment: str
+    suffix: str
 
 
 @dataclass(frozen=True)
 class StagePlan:
-    """A stage with its label and state."""
+    """A stage with its label and state (laid out by its realisation)."""
 
     row: int
     col: int
     name: str
-    kind: str
     label: str
     stage: Any
-    state: tuple[StatePart, ...]
+    state: tuple[StateMember, ...]
+
+    @property
+    def kind(self) -> str:
+        """The stage kind's readable name (from its realisation's type)."""
+        return self.stage.realisation.kind
 
 
 @dataclass(frozen=True)
@@ -165,37 +174,19 @@ def plan(model: SymbolicModel, prefix: str) -> tuple[RowPlan, ...]:
             label = st.element.name
             if st.param is not None:
                 label += f" ({st.param.symbol} = {_fmt(st.param.value)})"
-            if st.kind == "static":
-                state: tuple[StatePart, ...] = ()
-                if st.expr is None:
-                    raise ValueError(f"{where}: expected a static expression, found none")
-            elif st.kind == "linear":
-                if len(st.b) != len(st.a) or len(st.a) < 2 or st.a[0] != 1.0:
-                    raise ValueError(f"{where}: expected b, a of one length >= 2 with a[0] = 1, "
-                                     f"found b = {st.b}, a = {st.a}")
-                if not all(math.isfinite(c) for c in (*st.b, *st.a)):
-                    raise ValueError(f"{where}: expected finite coefficients, found b = {st.b}, "
-                                     f"a = {st.a}")
-                state = (StatePart(f"{name}_z", len(st.a) - 1,
-                                   f"row {row.index + 1} element {st.col + 1} {label}: "
-                                   "direct form II transposed state"),)
-            elif st.kind == "delay":
-                if not (isinstance(st.delay, int) and st.delay >= 1):
-                    raise ValueError(f"{where}: expected a delay of >= 1 sample, found {st.delay!r}")
-                state = (StatePart(f"{name}_buf", st.delay,
-                                   f"row {row.index + 1} element {st.col + 1} {label}: "
-                                   f"ring buffer, {st.delay} samples"),)
-                if st.delay > 1:
-                    state += (StatePart(f"{name}_pos", None, "its oldest sample"),)
-            elif st.kind == "relay":
-                if st.threshold is None or not math.isfinite(st.threshold):
-                    raise ValueError(f"{where}: expected a finite threshold, found {st.threshold!r}")
-                state = (StatePart(f"{name}_out", 1,
-                                   f"row {row.index + 1} element {st.col + 1} {label}: "
-                                   "relay output"),)
-            else:
-                raise ValueError(f"{where}: unknown stage kind {st.kind!r}")
-            stages.append(StagePlan(row.index, st.col, name, st.kind, label, st, state))
+            if isinstance(st.realisation, StaticMap) and st.expr is None:
+                raise ValueError(f"{where}: expected a static expression, found none")
+            try:
+                st.realisation.validate()
+            except ValueError as exc:
+                raise ValueError(f"{where}: {exc}") from None
+            # The first member's comment says whose state it is; the others follow it.
+            state = tuple(
+                StateMember(f"{name}_{p.suffix}", p.size, p.comment if k else
+                            f"row {row.index + 1} element {st.col + 1} {label}: {p.comment}",
+                            p.suffix)
+                for k, p in enumerate(st.realisation.state_layout()))
+            stages.append(StagePlan(row.index, st.col, name, label, st, state))
         idx = model.inputs.index(row.input)
         rows.append(RowPlan(row.index, row.input, idx, macros[idx], tuple(stages)))
     return tuple(rows)
@@ -232,9 +223,9 @@ def warn_single_precision(rows: tuple[RowPlan, ...]) -> list[str]:
     messages = []
     for row in rows:
         for sp in row.stages:
-            if sp.kind != "linear":
+            if not isinstance(sp.stage.realisation, LinearFilter):
                 continue
-            err = float_response_error(sp.stage.b, sp.stage.a)
+            err = float_response_error(sp.stage.realisation.b, sp.stage.realisation.a)
             if err > FLOAT_RESPONSE_LIMIT:
                 messages.append(
                     f"rows[{row.index}].elements[{sp.col}] ({sp.label}): rounding its coefficients "
@@ -251,15 +242,9 @@ def _dynamic_notes(rows: tuple[RowPlan, ...], ts: float) -> list[str]:
     out = []
     for row in rows:
         for sp in row.stages:
-            where = f"row {row.index + 1}, element {sp.col + 1}, {sp.label}"
-            st = sp.stage
-            if sp.kind == "linear":
-                out.append(f"{where}: {METHODS[st.method]} (order {len(st.a) - 1})")
-            elif sp.kind == "delay":
-                out.append(f"{where}: z^-{st.delay}, a ring buffer of {st.delay} sample(s)")
-            elif sp.kind == "relay":
-                out.append(f"{where}: relay, +1 once x >= {_fmt(st.threshold)}, "
-                           f"-1 once x <= {_fmt(-st.threshold)}, starts at 0")
+            note = sp.stage.realisation.describe()
+            if note is not None:
+                out.append(f"row {row.index + 1}, element {sp.col + 1}, {sp.label}: {note}")
     return out
 
 
@@ -329,14 +314,7 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
                     members.append(pr.declare_real_array(p.name, p.size, p.comment))
                     init += pr.zero_real_array(lv[p.name], p.size)
                     loops |= p.size > 1
-            if sp.kind == "static":
-                lines = pr.assign("x", st.numeric_expr())
-            elif sp.kind == "linear":
-                lines = pr.linear_lines(st.b, st.a, lv[f"{sp.name}_z"])
-            elif sp.kind == "delay":
-                lines = pr.delay_lines(st.delay, lv[f"{sp.name}_buf"], lv.get(f"{sp.name}_pos"))
-            else:
-                lines = pr.relay_lines(st.threshold, f"{lv[f'{sp.name}_out']}[0]")
+            lines = pr.stage_lines(st, {p.suffix: lv[p.name] for p in sp.state})
             stages.append({"comment": c_comment_text(f"element {sp.col + 1}: {sp.label}"),
                            "lines": lines})
         out_rows.append({"index": row.index, "input_macro": row.input_macro,
@@ -388,14 +366,7 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
             st = sp.stage
             attr = {p.name: pr.state_ref(p.name) for p in sp.state}
             reset += [pr.zero_state(attr[p.name], p.size) for p in sp.state]
-            if sp.kind == "static":
-                lines = pr.assign("x", st.numeric_expr())
-            elif sp.kind == "linear":
-                lines = pr.linear_lines(st.b, st.a, attr[f"{sp.name}_z"])
-            elif sp.kind == "delay":
-                lines = pr.delay_lines(st.delay, attr[f"{sp.name}_buf"], attr.get(f"{sp.name}_pos"))
-            else:
-                lines = pr.relay_lines(st.threshold, f"{attr[f'{sp.name}_out']}[0]")
+            lines = pr.stage_lines(st, {p.suffix: attr[p.name] for p in sp.state})
             stages.append({"comment": f"element {sp.col + 1}: {sp.label}", "lines": lines})
         out_rows.append({"index": row.index, "number": row.index + 1,
                          "input_index": row.input_index, "comment": wrap(row.summary),

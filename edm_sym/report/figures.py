@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from edm_sym.fitness import rms
+
 #: Points per plotted curve after decimation.
 MAX_POINTS = 1500
 #: Column width of the report in inches (A4 with 2.5 cm margins).
@@ -177,9 +179,9 @@ def zoom_window(t: np.ndarray, residual: np.ndarray, fraction: float = 0.1) -> t
     n = len(t)
     pieces = max(1, round(1.0 / fraction))
     edges = np.linspace(0, n, pieces + 1).astype(int)
-    rms = [float(np.sqrt(np.mean(np.square(residual[lo:hi])))) if hi > lo else -1.0
-           for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
-    k = int(np.argmax(rms))
+    pieces_rms = [rms(residual[lo:hi]) if hi > lo else -1.0
+                  for lo, hi in zip(edges[:-1], edges[1:], strict=True)]
+    k = int(np.argmax(pieces_rms))
     lo, hi = int(edges[k]), max(int(edges[k + 1]) - 1, int(edges[k]))
     return float(t[lo]), float(t[hi])
 

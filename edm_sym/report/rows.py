@@ -15,6 +15,7 @@ from typing import Any
 
 import sympy as sp
 
+from edm_sym.elements.realisation import DelayLine, LinearFilter, Relay, StaticMap
 from edm_sym.printing.latex import EdmLatexPrinter
 from edm_sym.report.diagrams import chain_diagram, chain_printer
 from edm_sym.report.flags import row_flags
@@ -85,6 +86,29 @@ def _row_equations(p: EdmLatexPrinter, row: RowModel) -> list[dict[str, str]]:
     return lines
 
 
+def _filter_equation(st: Any, p: EdmLatexPrinter, out: str, inp: str, ts: float
+                     ) -> tuple[str, str]:
+    r = st.realisation
+    return (p.difference_equation(out, inp, r.b, r.a),
+            f"{st.element.name}, {METHOD_TITLES.get(r.method, r.method)}")
+
+
+def _delay_equation(st: Any, p: EdmLatexPrinter, out: str, inp: str, ts: float
+                    ) -> tuple[str, str]:
+    n = st.realisation.samples
+    return p.delayed(inp, n), f"{st.element.name}, {n} sample(s) = {n * ts:.6g} s"
+
+
+def _relay_equation(st: Any, p: EdmLatexPrinter, out: str, inp: str, ts: float
+                    ) -> tuple[str, str]:
+    return (p.relay_equation(out, inp, st.realisation.threshold),
+            "hysteresis relay, starts at 0")
+
+
+#: The difference equation (right-hand side, what it is) of each stage kind with memory.
+_EQUATIONS = {LinearFilter: _filter_equation, DelayLine: _delay_equation, Relay: _relay_equation}
+
+
 def _difference_equations(row: RowModel, ts: float, digits: int = 10
                           ) -> tuple[list[dict[str, str]], list[dict[str, str]]]:
     """The row in discrete time, from the stages' coefficients (the simulator's numbers).
@@ -100,45 +124,41 @@ def _difference_equations(row: RowModel, ts: float, digits: int = 10
         ``name`` and ``what`` of each signal.
     """
     j = row.index + 1
-    segments: list[tuple[str, int, int, Any]] = []  # (kind, first column, last column, data)
+    # (first column, last column, data): data is (input dummy, expression) for
+    # consecutive static maps composed into one signal, else the stage itself.
+    segments: list[tuple[int, int, Any]] = []
     acc_sym = sp.Dummy("v", real=True)
     acc: sp.Expr = acc_sym
     first = 1
     for st in row.stages:
-        if st.kind == "static":
+        if isinstance(st.realisation, StaticMap):
             acc = st.numeric_expr().xreplace({X: acc})
             continue
         if acc != acc_sym:
-            segments.append(("static", first, st.col, (acc_sym, acc)))
-        segments.append((st.kind, st.col + 1, st.col + 1, st))
+            segments.append((first, st.col, (acc_sym, acc)))
+        segments.append((st.col + 1, st.col + 1, st))
         first = st.col + 2
         acc_sym = sp.Dummy("v", real=True)
         acc = acc_sym
     if acc != acc_sym or not segments:
-        segments.append(("static", first, len(row.stages), (acc_sym, acc)))
+        segments.append((first, len(row.stages), (acc_sym, acc)))
     base = EdmLatexPrinter()
     names = [base.signal("y", j) if k == len(segments) - 1 else base.signal("x", j, last)
-             for k, (_, _, last, _) in enumerate(segments)]
+             for k, (_, last, _) in enumerate(segments)]
     lines, signals = [], []
     prev = base._print(row.input_symbol)
-    for k, (kind, col0, col1, data) in enumerate(segments):
+    for k, (col0, col1, data) in enumerate(segments):
         out = names[k]
         where = f"element {col0}" if col0 == col1 else f"elements {col0}--{col1}"
-        if kind == "static":
+        if isinstance(data, tuple):
             sym, expr = data
             pr = EdmLatexPrinter({"digits": digits, "symbol_names": {sym: f"{prev}[k]"}})
             rhs = pr.doprint(expr)
             what = f"{where}, static" if col0 <= col1 else "the input, passed through"
-        elif kind == "linear":
-            rhs = EdmLatexPrinter({"digits": digits}).difference_equation(out, prev, data.b, data.a)
-            what = f"{where}, {data.element.name}, {METHOD_TITLES.get(data.method, data.method)}"
-        elif kind == "delay":
-            rhs = base.delayed(prev, data.delay)
-            what = (f"{where}, {data.element.name}, {data.delay} sample(s) = "
-                    f"{data.delay * ts:.6g} s")
         else:
-            rhs = EdmLatexPrinter({"digits": digits}).relay_equation(out, prev, data.threshold)
-            what = f"{where}, hysteresis relay, starts at 0"
+            equation = _EQUATIONS[type(data.realisation)]
+            rhs, what = equation(data, EdmLatexPrinter({"digits": digits}), out, prev, ts)
+            what = f"{where}, {what}"
         lines.append({"lhs": f"{out}[k]", "body": rhs, "end": r"\\"})
         signals.append({"name": base.math(out), "what": base.text(what)})
         prev = out

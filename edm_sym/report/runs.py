@@ -16,6 +16,7 @@ import numpy as np
 
 from edm_sym.data import TIME_RTOL, DataLog, load_data, match_sample_time
 from edm_sym.errors import DataFormatError
+from edm_sym.fitness import rms
 from edm_sym.simulate import simulate
 from edm_sym.symbolic.contributions import Contributions, contributions
 
@@ -86,8 +87,6 @@ class LogRun:
         return len(self.t) * self.ts
 
 
-def _rmse(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
 
 
 def load_log(path: str | Path, result: Any, *, ts: float | None = None,
@@ -145,10 +144,10 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
                                   f"expected {data.ts:g} s as in {data.source} (within {TIME_RTOL:g} "
                                   f"relative), found {lr.sample_time:g} s")
         lugre_tau = np.asarray(simulate_lugre(lr.params, data.column(lr.velocity_name), data.ts))
-        lugre_rmse = _rmse(target - lugre_tau)
+        lugre_rmse = rms(target - lugre_tau)
     contrib = contributions(result, data, target)
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
-                  sim.total, _rmse(target - sim.total), contrib, lugre_tau, lugre_rmse)
+                  sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse)
 
 
 @dataclass(frozen=True)

@@ -138,7 +138,7 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     validate_prefix(prefix)
     out = Path(out_dir)
     if model is None:
-        from edm_sym import decode
+        from edm_sym.symbolic import decode
 
         model = decode(result)
     ref = load_lugre_ref(lugre) if lugre is not None else None

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.data import DataLog
+from edm_sym.fitness import rms
 from edm_sym.matrix import Compensator
 from edm_sym.simulate import input_array, simulate_rows
 
@@ -54,8 +55,6 @@ class Contributions:
         return "\n".join(lines)
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
 
 
 def contributions(
@@ -90,4 +89,4 @@ def contributions(
                          f"found shape {y.shape}")
     rows = simulate_rows(comp, comp.matrix.rows, x)
     cum = np.cumsum(rows, axis=0)
-    return Contributions(tuple(_rms(r) for r in rows), tuple(_rms(y - c) for c in cum), _rms(y))
+    return Contributions(tuple(rms(r) for r in rows), tuple(rms(y - c) for c in cum), rms(y))

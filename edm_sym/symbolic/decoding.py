@@ -1,15 +1,16 @@
 """The full symbolic decoding of a compensator: expressions, systems, physical terms.
 
-:func:`decode` starts from :func:`~edm_sym.symbolic.model.build_model` (the
-stages every exporter prints) and adds, per row: the raw and the simplified
-expression, with named parameters and with numbers; the python-control forms;
-the input's role and the physical terms. The result is the same frozen
-:class:`~edm_sym.symbolic.model.SymbolicModel`, with those fields filled.
+:func:`decode` starts from the stages of
+:func:`~edm_sym.symbolic.model.build_model` (what every exporter prints) and
+makes, per row, a new frozen row with: the raw and the simplified expression,
+with named parameters and with numbers; the python-control forms; the input's
+role and the physical terms. It returns a new frozen
+:class:`~edm_sym.symbolic.model.SymbolicModel`; nothing is filled in later.
+Exporters receive this one model (``edm_sym.exporting.export`` decodes once).
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
@@ -62,10 +63,8 @@ def decode_row(
     row : RowModel
     role : str or None
         The physical role of the row's input.
-    simplify : SimplifyOptions, optional
-    classify : ClassifyOptions, optional
-    systems : bool, default True
-        Build the python-control forms (``linear_parts``, ``system``).
+    simplify, classify, systems
+        As for :func:`decode`.
 
     Returns
     -------
@@ -78,11 +77,10 @@ def decode_row(
                                signs=parameter_signs(model), options=simplify)
     expr_n = simplify_expression(raw_n, model.input_symbols, numeric=True, options=simplify)
     terms = classify_expression(expr_n, row.input_symbol, role, options=classify)
-    extra: dict[str, Any] = {}
-    if systems:
-        extra = {"linear_parts": stage_parts(row, ts), "system": row_system(row, ts)}
-    return dataclasses.replace(row, role=role, expr_raw=raw, expr_raw_numeric=raw_n,
-                               expr=expr, expr_numeric=expr_n, terms=terms, **extra)
+    return RowModel(row.index, row.input, row.input_symbol, row.stages, role=role,
+                    expr_raw=raw, expr_raw_numeric=raw_n, expr=expr, expr_numeric=expr_n,
+                    terms=terms, linear_parts=stage_parts(row, ts) if systems else (),
+                    system=row_system(row, ts) if systems else None)
 
 
 def decode(
@@ -124,4 +122,5 @@ def decode(
     role_map = input_roles(base.inputs, roles)
     rows = tuple(decode_row(base, r, role=role_map[r.input], simplify=simplify,
                             classify=classify, systems=systems) for r in base.rows)
-    return dataclasses.replace(base, rows=rows, roles=role_map)
+    return SymbolicModel(base.compensator, base.inputs, base.input_symbols, base.sample_time,
+                         rows, base.params, base.source_sha256, base.target, role_map)

@@ -8,17 +8,17 @@ length L, into coefficient lists in descending powers of z, which is what
 ``control.tf(num, den, dt)`` takes.
 
 Each row is a discrete :class:`control.NonlinearIOSystem` (``dt = Ts``) whose
-state concatenates every stage's state, left to right: the direct form II
-transposed filter states of a linear stage (the structure of
-:func:`scipy.signal.lfilter`), the buffer of a delay (newest first), the held
-output of a relay. Static stages are the model's own expressions, lambdified.
-Simulated with :func:`control.input_output_response` it reproduces the
-reference simulator.
+state concatenates every stage's state, left to right, and whose update is
+each stage's realisation (:meth:`~edm_sym.elements.realisation.Realisation.update`):
+the direct form II transposed filter states of a linear stage (the structure
+of :func:`scipy.signal.lfilter`), the buffer of a delay (newest first), the
+held output of a relay; static maps have none. Simulated with
+:func:`control.input_output_response` it reproduces the reference simulator.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,8 +26,8 @@ import control as ct
 import numpy as np
 import sympy as sp
 
-from edm_sym.symbolic.functions import NUMPY_FUNCTIONS
-from edm_sym.symbolic.model import RowModel, Stage, X
+from edm_sym.elements.realisation import DelayLine, LinearFilter
+from edm_sym.symbolic.model import RowModel, Stage
 from edm_sym.symbolic.operators import rational, s
 
 
@@ -118,93 +118,36 @@ def to_tf(G: sp.Expr, name: str | None = None) -> ct.TransferFunction:  # noqa: 
 
 
 def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
-    """The linear stages (filters and delays) of a row as :class:`LinearPart` objects.
+    """The linear stages (filters and delays) of ``row`` as :class:`LinearPart` objects.
 
-    Parameters
-    ----------
-    row : RowModel
-    ts : float
-        The sample time [s].
-
-    Returns
-    -------
-    tuple of LinearPart
+    ``ts`` is the sample time [s]; static maps and relays have no part.
     """
     parts = []
     for st in row.stages:
         name = f"row_{row.index + 1}_{st.element.name}_{st.col}"
-        if st.kind == "linear":
-            num, den = st.tf
-            if st.param is not None:
-                sub = {st.param.symbol: sp.Float(st.param.value, 17)}
-                num = [sp.sympify(c).xreplace(sub) for c in num]
-                den = [sp.sympify(c).xreplace(sub) for c in den]
-            parts.append(LinearPart(st.col, st.element.name, to_tf(rational(num, den), name),
-                                    discrete_tf(st.b, st.a, ts, f"{name}_d"), st.method or ""))
-        elif st.kind == "delay":
-            n = st.delay
-            parts.append(LinearPart(st.col, st.element.name, None,
-                                    ct.tf([1.0], [1.0] + [0.0] * n, dt=ts, name=f"{name}_d"),
-                                    "delay"))
+        part = _PARTS.get(type(st.realisation))
+        if part is not None:
+            parts.append(part(st, name, ts))
     return tuple(parts)
 
 
+def _filter_part(st: Stage, name: str, ts: float) -> LinearPart:
+    r = st.realisation
+    return LinearPart(st.col, st.element.name, to_tf(rational(*st.numeric_tf()), name),
+                      discrete_tf(r.b, r.a, ts, f"{name}_d"), r.method)
+
+
+def _delay_part(st: Stage, name: str, ts: float) -> LinearPart:
+    n = st.realisation.samples
+    return LinearPart(st.col, st.element.name, None,
+                      ct.tf([1.0], [1.0] + [0.0] * n, dt=ts, name=f"{name}_d"), "delay")
+
+
+#: The python-control form of each linear realisation type (static maps and relays have none).
+_PARTS = {LinearFilter: _filter_part, DelayLine: _delay_part}
+
+
 # -- the row as one discrete nonlinear system -----------------------------------
-
-
-
-def _static_step(st: Stage) -> tuple[int, Callable]:
-    f = sp.lambdify(X, st.numeric_expr(), modules=[NUMPY_FUNCTIONS, "numpy"])
-
-    def step(v: float, x: np.ndarray, nxt: np.ndarray, k: int) -> float:
-        return float(f(v))
-
-    return 0, step
-
-
-def _linear_step(st: Stage) -> tuple[int, Callable]:
-    b, a = z_polynomials(st.b, st.a)
-    n = len(b) - 1
-
-    def step(v: float, x: np.ndarray, nxt: np.ndarray, k: int) -> float:
-        # Direct form II transposed, as scipy.signal.lfilter (a[0] == 1).
-        y = b[0] * v + (x[k] if n else 0.0)
-        for i in range(n - 1):
-            nxt[k + i] = b[i + 1] * v + x[k + i + 1] - a[i + 1] * y
-        if n:
-            nxt[k + n - 1] = b[n] * v - a[n] * y
-        return y
-
-    return n, step
-
-
-def _delay_step(st: Stage) -> tuple[int, Callable]:
-    n = st.delay
-
-    def step(v: float, x: np.ndarray, nxt: np.ndarray, k: int) -> float:
-        if n == 0:
-            return v
-        y = x[k + n - 1]
-        nxt[k + 1:k + n] = x[k:k + n - 1]
-        nxt[k] = v
-        return float(y)
-
-    return n, step
-
-
-def _relay_step(st: Stage) -> tuple[int, Callable]:
-    thr = float(st.threshold)
-
-    def step(v: float, x: np.ndarray, nxt: np.ndarray, k: int) -> float:
-        y = 1.0 if v >= thr else (-1.0 if v <= -thr else float(x[k]))
-        nxt[k] = y
-        return y
-
-    return 1, step
-
-
-_STEPS = {"static": _static_step, "linear": _linear_step, "delay": _delay_step,
-          "relay": _relay_step}
 
 
 def state_labels(row: RowModel) -> list[str]:
@@ -218,15 +161,7 @@ def state_labels(row: RowModel) -> list[str]:
     -------
     list of str
     """
-    out: list[str] = []
-    for st in row.stages:
-        if st.kind == "linear":
-            out += [f"c{st.col}_z{i}" for i in range(max(len(st.b), len(st.a)) - 1)]
-        elif st.kind == "delay":
-            out += [f"c{st.col}_d{i}" for i in range(st.delay)]
-        elif st.kind == "relay":
-            out.append(f"c{st.col}_relay")
-    return out
+    return [label for st in row.stages for label in st.realisation.state_labels(f"c{st.col}")]
 
 
 def row_system(row: RowModel, ts: float) -> ct.NonlinearIOSystem:
@@ -248,9 +183,8 @@ def row_system(row: RowModel, ts: float) -> ct.NonlinearIOSystem:
     chain = []
     k = 0
     for st in row.stages:
-        size, step = _STEPS[st.kind](st)
-        chain.append((k, step))
-        k += size
+        chain.append((k, st.realisation.update))
+        k += st.realisation.state_size
     nstates = k
 
     def run(x: Any, u: Any) -> tuple[float, np.ndarray]:

@@ -14,14 +14,8 @@ from typing import Any
 
 import sympy as sp
 
-from edm_sym.elements import (
-    DelayElement,
-    Element,
-    LinearElement,
-    ParamRange,
-    RelayElement,
-    StaticElement,
-)
+from edm_sym.elements import Element, LinearElement, ParamRange, StaticElement
+from edm_sym.elements.realisation import DelayLine, LinearFilter, Realisation, Relay
 from edm_sym.matrix import Compensator
 from edm_sym.symbolic.functions import SYMPY_OPS
 
@@ -56,33 +50,58 @@ class Stage:
         Column index (0-based, left to right).
     element : type[Element]
         The element class.
-    kind : str
-        ``"static"``, ``"linear"``, ``"delay"`` or ``"relay"``.
+    realisation : Realisation
+        What it computes in discrete time (:mod:`edm_sym.elements.realisation`):
+        the simulator's coefficients, delay or threshold. Exporters dispatch on
+        its type.
     param : ParamInfo or None
     expr : sympy.Expr or None
         Static stages: the output in terms of :data:`X` and the parameter symbol.
     tf : tuple of (num, den) or None
         Linear stages: continuous coefficient lists in s with the parameter symbol.
-    b, a : tuple of float
-        Linear stages: the discrete coefficients (z^-1 powers, ``a[0] == 1``)
-        that the simulator uses, and ``method`` their discretisation.
-    delay : int
-        Delay stages: the delay in samples.
-    threshold : float or None
-        Relay stages: the switching threshold.
     """
 
     col: int
     element: type[Element]
-    kind: str
+    realisation: Realisation
     param: ParamInfo | None
     expr: sp.Expr | None = None
     tf: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None
-    b: tuple[float, ...] = ()
-    a: tuple[float, ...] = ()
-    method: str | None = None
-    delay: int = 0
-    threshold: float | None = None
+
+    @property
+    def kind(self) -> str:
+        """The stage kind's readable name (``"static"``, ``"linear"``, ...), for people."""
+        return self.realisation.kind
+
+    @property
+    def b(self) -> tuple[float, ...]:
+        """A filter's numerator coefficients (z^-1 powers); empty for other stages."""
+        r = self.realisation
+        return r.b if isinstance(r, LinearFilter) else ()
+
+    @property
+    def a(self) -> tuple[float, ...]:
+        """A filter's denominator coefficients (z^-1 powers, ``a[0] == 1``); else empty."""
+        r = self.realisation
+        return r.a if isinstance(r, LinearFilter) else ()
+
+    @property
+    def method(self) -> str | None:
+        """A filter's discretisation; None for other stages."""
+        r = self.realisation
+        return r.method if isinstance(r, LinearFilter) else None
+
+    @property
+    def delay(self) -> int:
+        """A delay's length in samples; 0 for other stages."""
+        r = self.realisation
+        return r.samples if isinstance(r, DelayLine) else 0
+
+    @property
+    def threshold(self) -> float | None:
+        """A relay's switching threshold; None for other stages."""
+        r = self.realisation
+        return r.threshold if isinstance(r, Relay) else None
 
     @property
     def value(self) -> float | None:
@@ -97,13 +116,23 @@ class Stage:
             return self.expr
         return self.expr.subs(self.param.symbol, sp.Float(self.param.value, 17))
 
+    def numeric_tf(self) -> tuple[list[Any], list[Any]]:
+        """A linear stage's continuous coefficients with the parameter's value substituted."""
+        num, den = self.tf
+        if self.param is None:
+            return list(num), list(den)
+        sub = {self.param.symbol: sp.Float(self.param.value, 17)}
+        return ([sp.sympify(c).xreplace(sub) for c in num],
+                [sp.sympify(c).xreplace(sub) for c in den])
+
 
 @dataclass(frozen=True)
 class RowModel:
-    """One row of the model: its input and its stages (more is added by decoding).
+    """One row of the model: its input, its stages and (decoded) its expressions.
 
-    :func:`build_model` fills the first five fields; :func:`edm_sym.symbolic.decode`
-    fills the rest (they keep their defaults otherwise).
+    :func:`build_model` gives rows with the first five fields (what the code
+    printers need); :func:`edm_sym.symbolic.decode` makes new rows with every
+    field (the others keep their defaults in a stages-only model).
 
     Attributes
     ----------
@@ -212,20 +241,15 @@ def _stage(comp: Compensator, j: int, i: int) -> Stage:
             element=el.name, row=j, col=i,
         )
     a_sym = info.symbol if info else None
-    ts = comp.sample_time
+    realisation = el.realise(info.value if info else None, comp.sample_time)
+    expr = tf = None
+    # The sympy forms come from the element class (a declaration), not from a stage kind.
     if issubclass(el, StaticElement):
-        return Stage(i, el, "static", info, expr=sp.sympify(el.f(SYMPY_OPS, X, a_sym)))
-    if issubclass(el, LinearElement):
+        expr = sp.sympify(el.f(SYMPY_OPS, X, a_sym))
+    elif issubclass(el, LinearElement):
         num, den = el.tf(a_sym)
-        b, a = el.coefficients(info.value if info else None, ts)
-        return Stage(i, el, "linear", info,
-                     tf=(tuple(sp.sympify(c) for c in num), tuple(sp.sympify(c) for c in den)),
-                     b=tuple(float(v) for v in b), a=tuple(float(v) for v in a), method=el.method)
-    if issubclass(el, DelayElement):
-        return Stage(i, el, "delay", info, delay=el.samples(info.value if info else None, ts))
-    if issubclass(el, RelayElement):
-        return Stage(i, el, "relay", info, threshold=info.value if info else 0.0)
-    raise TypeError(f"element {el.name!r} has no known kind")
+        tf = (tuple(sp.sympify(c) for c in num), tuple(sp.sympify(c) for c in den))
+    return Stage(i, el, realisation, info, expr=expr, tf=tf)
 
 
 def build_model(comp: Compensator, *, sha256: str | None = None,

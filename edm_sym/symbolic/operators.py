@@ -10,7 +10,8 @@ operators applied to their input expression:
 * ``Relay(x, a)`` -- the relay with hysteresis of half width ``a`` (starts at 0).
 
 They are sympy ``Function`` subclasses, so rewrite rules match them by type and
-every printer can give them a method; each has ``_latex``. They cannot be
+every printer gives them a ``_print_<Operator>`` method (LaTeX:
+:class:`edm_sym.printing.latex.EdmLatexPrinter`). They cannot be
 lambdified: their numeric form is the python-control system of
 :mod:`edm_sym.symbolic.lti`.
 """
@@ -59,11 +60,6 @@ class LTI(_Operator):
         """``G(s)``."""
         return self.args[1]
 
-    def _latex(self, printer: Any) -> str:
-        x, G = self.args
-        return (rf"\left\{{{printer._print(G)}\right\}}"
-                rf"\left[{printer._print(x)}\right]")
-
 
 class Delay(_Operator):
     """``Delay(x, T)``: ``x`` delayed by ``T`` seconds, the buffer starting at zero."""
@@ -80,10 +76,6 @@ class Delay(_Operator):
     def time(self) -> sp.Expr:
         """The delay ``T`` [s]."""
         return self.args[1]
-
-    def _latex(self, printer: Any) -> str:
-        x, T = self.args
-        return rf"\left[{printer._print(x)}\right]_{{t - {printer._print(T)}}}"
 
 
 class Relay(_Operator):
@@ -104,10 +96,6 @@ class Relay(_Operator):
     def threshold(self) -> sp.Expr:
         """The half width ``a`` of the hysteresis band."""
         return self.args[1]
-
-    def _latex(self, printer: Any) -> str:
-        x, a = self.args
-        return rf"\operatorname{{relay}}_{{{printer._print(a)}}}\left({printer._print(x)}\right)"
 
 
 #: The operators with memory, for ``isinstance`` checks.

@@ -12,12 +12,38 @@ from __future__ import annotations
 
 import sympy as sp
 
+from edm_sym.elements.realisation import DelayLine, LinearFilter, StaticMap
+from edm_sym.elements.realisation import Relay as RelayLine
 from edm_sym.symbolic.model import RowModel, Stage, X
 from edm_sym.symbolic.operators import LTI, Delay, Relay, rational
 
 
-def _value(stage: Stage) -> sp.Float:
-    return sp.Float(stage.param.value, 17)
+def _static(stage: Stage, x: sp.Expr, ts: float, numeric: bool) -> sp.Expr:
+    body = stage.numeric_expr() if numeric else stage.expr
+    return body.xreplace({X: x})
+
+
+def _linear(stage: Stage, x: sp.Expr, ts: float, numeric: bool) -> sp.Expr:
+    num, den = stage.numeric_tf() if numeric else stage.tf
+    return LTI(x, rational(num, den))
+
+
+def _delay(stage: Stage, x: sp.Expr, ts: float, numeric: bool) -> sp.Expr:
+    if numeric or stage.param is None:
+        return Delay(x, sp.Float(stage.realisation.samples * ts, 17))
+    # The parameter is a time for the dead time and a count for the shift.
+    unit_is_time = stage.param.unit == "s"
+    T = stage.param.symbol if unit_is_time else stage.param.symbol * sp.Float(ts, 17)  # noqa: N806
+    return Delay(x, T)
+
+
+def _relay(stage: Stage, x: sp.Expr, ts: float, numeric: bool) -> sp.Expr:
+    thr = stage.realisation.threshold
+    return Relay(x, sp.Float(thr, 17) if numeric or stage.param is None else stage.param.symbol)
+
+
+#: The operator of each realisation type.
+OPERATORS = {StaticMap: _static, LinearFilter: _linear, DelayLine: _delay, RelayLine: _relay}
 
 
 def stage_operator(stage: Stage, x: sp.Expr, *, ts: float, numeric: bool) -> sp.Expr:
@@ -38,27 +64,7 @@ def stage_operator(stage: Stage, x: sp.Expr, *, ts: float, numeric: bool) -> sp.
     -------
     sympy.Expr
     """
-    if stage.kind == "static":
-        body = stage.numeric_expr() if numeric else stage.expr
-        return body.xreplace({X: x})
-    if stage.kind == "linear":
-        num, den = stage.tf
-        if numeric and stage.param is not None:
-            sub = {stage.param.symbol: _value(stage)}
-            num = [sp.sympify(c).xreplace(sub) for c in num]
-            den = [sp.sympify(c).xreplace(sub) for c in den]
-        return LTI(x, rational(num, den))
-    if stage.kind == "delay":
-        if numeric or stage.param is None:
-            return Delay(x, sp.Float(stage.delay * ts, 17))
-        # The parameter is a time for the dead time and a count for the shift.
-        unit_is_time = stage.param.unit == "s"
-        T = stage.param.symbol if unit_is_time else stage.param.symbol * sp.Float(ts, 17)
-        return Delay(x, T)
-    if stage.kind == "relay":
-        a = sp.Float(stage.threshold, 17) if numeric or stage.param is None else stage.param.symbol
-        return Relay(x, a)
-    raise TypeError(f"stage {stage.col} ({stage.element.name}): unknown kind {stage.kind!r}")
+    return OPERATORS[type(stage.realisation)](stage, x, ts, numeric)
 
 
 def row_expression(row: RowModel, *, ts: float, numeric: bool = False) -> sp.Expr:

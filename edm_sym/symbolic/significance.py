@@ -191,7 +191,7 @@ def _term_flags(term: PhysicalTerm) -> list[Flag]:
 
 
 def _delay_samples(row: RowModel) -> int:
-    return sum(st.delay for st in row.stages if st.kind == "delay")
+    return sum(st.delay for st in row.stages)  # 0 for every stage but a delay line
 
 
 def judge_rows(

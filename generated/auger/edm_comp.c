@@ -64,8 +64,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     /* element 1: through */
     /* element 2: phase (a_2 = 0.314159) */
     {
-        const edm_comp_real_t y = -0.99968589007491282 * x + s->r1_e2_z[0];
-        s->r1_e2_z[0] = x * 1.0 - y * (-0.9996858900749126);
+        const edm_comp_real_t y = -0.99968589007491271 * x + s->r1_e2_z[0];
+        s->r1_e2_z[0] = x * 1.0 - y * (-0.99968589007491271);
         x = y;
     }
     /* element 3: through */
@@ -80,16 +80,16 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     x = -8.9632185247268126e-05*x;
     /* element 2: phase (a_6 = 670.099) */
     {
-        const edm_comp_real_t y = -0.49807172801460031 * x + s->r2_e2_z[0];
-        s->r2_e2_z[0] = x * 1.0 - y * (-0.49807172801460042);
+        const edm_comp_real_t y = -0.49807172801460037 * x + s->r2_e2_z[0];
+        s->r2_e2_z[0] = x * 1.0 - y * (-0.49807172801460037);
         x = y;
     }
     /* element 3: tan_amp (a_7 = -0.956015) */
     x = -0.95601471801515103*edm_comp_tan(x);
     /* element 4: lpf (a_8 = 127.898) */
     {
-        const edm_comp_real_t y = 0.060105267050525657 * x + s->r2_e4_z[0];
-        s->r2_e4_z[0] = x * 0.060105267050525546 - y * (-0.8797894658989488);
+        const edm_comp_real_t y = 0.060105267050525622 * x + s->r2_e4_z[0];
+        s->r2_e4_z[0] = x * 0.060105267050525622 - y * (-0.8797894658989488);
         x = y;
     }
     r[1] = x;
@@ -110,8 +110,8 @@ edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
     x = 0.96367092749855665*x;
     /* element 4: lpf (a_12 = 154.64) */
     {
-        const edm_comp_real_t y = 0.071770647462172432 * x + s->r3_e4_z[0];
-        s->r3_e4_z[0] = x * 0.071770647462172321 - y * (-0.85645870507565525);
+        const edm_comp_real_t y = 0.071770647462172377 * x + s->r3_e4_z[0];
+        s->r3_e4_z[0] = x * 0.071770647462172377 - y * (-0.85645870507565536);
         x = y;
     }
     r[2] = x;

@@ -16,16 +16,16 @@ through its elements left to right, and the rows are summed:
     row 5: theta_w -> one_way (a_17 = 0.701633) -> offset (a_18 = 0.3482) -> shift
         (a_19 = 5.8791) -> sin_amp (a_20 = 0.0566169)
 Discrete time (sample time 0.001 s), elements with state:
-    row 1, element 2, phase (a_2 = 0.314159): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 1)
-    row 2, element 2, phase (a_6 = 670.099): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 1)
-    row 2, element 4, lpf (a_8 = 127.898): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 1)
+    row 1, element 2, phase (a_2 = 0.314159): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 1)
+    row 2, element 2, phase (a_6 = 670.099): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 1)
+    row 2, element 4, lpf (a_8 = 127.898): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 1)
     row 3, element 2, hysteresis (a_10 = 0.0869222): relay, +1 once x >= 0.0869222, -1 once
         x <= -0.0869222, starts at 0
-    row 3, element 4, lpf (a_12 = 154.64): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 1)
+    row 3, element 4, lpf (a_12 = 154.64): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 1)
     row 5, element 3, shift (a_19 = 5.8791): z^-6, a ring buffer of 6 sample(s)
 
 Uses only the Python standard library. ``Compensator().step(u)`` consumes one
@@ -87,8 +87,8 @@ class Compensator:
         # element 1: through
         # element 2: phase (a_2 = 0.314159)
         z = self._r1_e2_z
-        y = -0.9996858900749128 * x + z[0]
-        z[0] = x * 1.0 - y * (-0.9996858900749126)
+        y = -0.9996858900749127 * x + z[0]
+        z[0] = x * 1.0 - y * (-0.9996858900749127)
         x = y
         # element 3: through
         # element 4: gain (a_4 = -8.16729e-05)
@@ -101,15 +101,15 @@ class Compensator:
         x = -8.963218524726813e-05*x
         # element 2: phase (a_6 = 670.099)
         z = self._r2_e2_z
-        y = -0.4980717280146003 * x + z[0]
-        z[0] = x * 1.0 - y * (-0.4980717280146004)
+        y = -0.49807172801460037 * x + z[0]
+        z[0] = x * 1.0 - y * (-0.49807172801460037)
         x = y
         # element 3: tan_amp (a_7 = -0.956015)
         x = -0.956014718015151*_tan(x)
         # element 4: lpf (a_8 = 127.898)
         z = self._r2_e4_z
-        y = 0.06010526705052566 * x + z[0]
-        z[0] = x * 0.060105267050525546 - y * (-0.8797894658989488)
+        y = 0.06010526705052562 * x + z[0]
+        z[0] = x * 0.06010526705052562 - y * (-0.8797894658989488)
         x = y
         r2 = x
         # row 3: omega -> log (a_9 = 0.12768) -> hysteresis (a_10 = 0.0869222) -> gain
@@ -127,8 +127,8 @@ class Compensator:
         x = 0.9636709274985567*x
         # element 4: lpf (a_12 = 154.64)
         z = self._r3_e4_z
-        y = 0.07177064746217243 * x + z[0]
-        z[0] = x * 0.07177064746217232 - y * (-0.8564587050756552)
+        y = 0.07177064746217238 * x + z[0]
+        z[0] = x * 0.07177064746217238 - y * (-0.8564587050756554)
         x = y
         r3 = x
         # row 4: omega -> dead_zone (a_13 = 2.67708) -> offset (a_14 = -0.463402) -> through ->

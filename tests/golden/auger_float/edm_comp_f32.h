@@ -18,15 +18,15 @@
  *                  shift (a_19 = 5.8791) -> sin_amp (a_20 = 0.0566169)
  * Discrete time (sample time 0.001 s), elements with state:
  *              row 1, element 2, phase (a_2 = 0.314159): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  *              row 2, element 2, phase (a_6 = 670.099): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  *              row 2, element 4, lpf (a_8 = 127.898): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  *              row 3, element 2, hysteresis (a_10 = 0.0869222): relay, +1 once x >=
  *                  0.0869222, -1 once x <= -0.0869222, starts at 0
  *              row 3, element 4, lpf (a_12 = 154.64): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  *              row 5, element 3, shift (a_19 = 5.8791): z^-6, a ring buffer of 6 sample(s)
  * Real type: float
  *

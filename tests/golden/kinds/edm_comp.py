@@ -14,16 +14,16 @@ through its elements left to right, and the rows are summed:
     row 4: omega -> one_way (a_13 = -0.5) -> acos -> integral (a_15 = 0.0630957) -> lead
         (a_16 = 9.93459)
 Discrete time (sample time 0.001 s), elements with state:
-    row 1, element 1, notch (a_1 = 78.9132): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 2)
+    row 1, element 1, notch (a_1 = 78.9132): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 2)
     row 1, element 2, dead_time (a_2 = 0.0072478): z^-7, a ring buffer of 7 sample(s)
     row 1, element 3, hysteresis (a_3 = 0.1): relay, +1 once x >= 0.1, -1 once x <= -0.1,
         starts at 0
     row 3, element 1, shift (a_9 = 1): z^-1, a ring buffer of 1 sample(s)
     row 4, element 3, integral (a_15 = 0.0630957): Tustin (bilinear), s = (2/Ts)
-        (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
-    row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1),
-        via scipy.signal.cont2discrete (order 1)
+        (z - 1)/(z + 1) (order 1)
+    row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
+        (order 1)
 
 Uses only the Python standard library. ``Compensator().step(u)`` consumes one
 sample ``u`` (in ``INPUTS`` order) and returns the compensation torque;
@@ -97,8 +97,8 @@ class Compensator:
         # element 1: notch (a_1 = 78.9132)
         z = self._r1_e1_z
         y = 0.9620978768311185 * x + z[0]
-        z[0] = z[1] + x * (-1.9182137950083769) - y * (-1.9182137950083766)
-        z[1] = x * 0.9620978768311185 - y * 0.9241957536622368
+        z[0] = z[1] + x * (-1.918213795008377) - y * (-1.918213795008377)
+        z[1] = x * 0.9620978768311185 - y * 0.9241957536622369
         x = y
         # element 2: dead_time (a_2 = 0.0072478)
         buf = self._r1_e2_buf
@@ -148,13 +148,13 @@ class Compensator:
         x = _acos(x)
         # element 3: integral (a_15 = 0.0630957)
         z = self._r4_e3_z
-        y = 3.1547867224035464e-05 * x + z[0]
-        z[0] = x * 3.1547867224035464e-05 - y * (-1.0)
+        y = 3.154786722400965e-05 * x + z[0]
+        z[0] = x * 3.154786722400965e-05 - y * (-1.0)
         x = y
         # element 4: lead (a_16 = 9.93459)
         z = self._r4_e4_z
         y = 9.574099270011846 * x + z[0]
-        z[0] = x * (-9.479454663347813) - y * (-0.905355393335966)
+        z[0] = x * (-9.479454663347813) - y * (-0.9053553933359659)
         x = y
         r4 = x
         return (r1, r2, r3, r4)

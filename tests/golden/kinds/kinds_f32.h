@@ -16,16 +16,16 @@
  *                  -> lead (a_16 = 9.93459)
  * Discrete time (sample time 0.001 s), elements with state:
  *              row 1, element 1, notch (a_1 = 78.9132): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 2)
+ *                  (z - 1)/(z + 1) (order 2)
  *              row 1, element 2, dead_time (a_2 = 0.0072478): z^-7, a ring buffer of 7
  *                  sample(s)
  *              row 1, element 3, hysteresis (a_3 = 0.1): relay, +1 once x >= 0.1, -1 once x
  *                  <= -0.1, starts at 0
  *              row 3, element 1, shift (a_9 = 1): z^-1, a ring buffer of 1 sample(s)
  *              row 4, element 3, integral (a_15 = 0.0630957): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  *              row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts)
- *                  (z - 1)/(z + 1), via scipy.signal.cont2discrete (order 1)
+ *                  (z - 1)/(z + 1) (order 1)
  * Real type: float
  *
  * Call kinds_f32_init() once, then kinds_f32_step() once per sample, every

@@ -106,10 +106,8 @@ def acceleration_from_velocity(omega: np.ndarray, ts: float, g: float) -> np.nda
     ----------
     omega : array_like
         Logged velocity [rad/s]; zero before ``omega[0]``.
-    ts : float
-        Sample time [s].
-    g : float
-        Cut-off of the low-pass [rad/s].
+    ts, g : float
+        As for :func:`velocity_from_angle`.
 
     Returns
     -------
