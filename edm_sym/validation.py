@@ -80,6 +80,11 @@ def _describe(error: jsonschema.ValidationError) -> tuple[list[Any], str]:
     if path and str(path[-1]).endswith("sha256") and kind in ("pattern", "anyOf"):
         null = " null or" if kind == "anyOf" else ""
         return path, f"expected{null} 64 lowercase hex digits, found {shown}"
+    if kind == "anyOf":
+        # Each alternative by its type; a $ref in these schemas always names an object.
+        names = [_type_name(alt.get("type", "object")) if alt.get("type") != "null" else "null"
+                 for alt in rule]
+        return path, f"expected {' or '.join(names)}, found {shown}"
     texts: Mapping[str, Any] = {
         "type": lambda: _type_name(rule),
         "const": lambda: show_value(rule),
