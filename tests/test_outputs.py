@@ -178,3 +178,20 @@ def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
         assert where in err and len(err) < 400, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml", "huge.csv", "log.csv", "r.json",
                                                            "short.csv"]
+
+
+@pytest.mark.parametrize("prefix,why", [
+    ("math", "C header"), ("stddef", "C header"), ("_", "leading underscore"), ("_x", "leading underscore"),
+    ("class", "keyword"), ("None", "keyword"), ("new", "keyword"), ("json", "Python module"),
+    ("numpy", "Python module"), ("os", "Python module"), ("1abc", "C identifier"), ("a-b", "C identifier"),
+])
+def test_prefix_that_would_shadow_or_clash_is_refused(prefix: str, why: str, tmp_path: Path, capsys) -> None:
+    assert export_main([str(EXAMPLE), "--target", "all", "--prefix", prefix, "-o", str(tmp_path / "g")]) == 2
+    err = _one_line(capsys)
+    assert "--prefix" in err and why in err and repr(prefix) in err
+    assert not (tmp_path / "g").exists()
+
+
+def test_an_ordinary_prefix_is_accepted(tmp_path: Path) -> None:
+    assert export_main([str(EXAMPLE), "--target", "c", "--prefix", "axis2_comp", "-o", str(tmp_path)]) == 0
+    assert (tmp_path / "axis2_comp.h").exists()

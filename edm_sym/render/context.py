@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import math
 import re
+import sys
 import textwrap
 import warnings
 from collections.abc import Mapping
@@ -105,10 +106,57 @@ class RowPlan:
         return f"row {self.index + 1}: " + " -> ".join([self.input, *(s.label for s in self.stages)])
 
 
-def validate_prefix(prefix: str) -> str:
-    """Return ``prefix`` when it is a C identifier (not a keyword), else raise ValueError."""
+#: C99/C11 standard headers: ``<prefix>.h`` must not shadow one of them.
+C_HEADERS = frozenset(
+    "assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal "
+    "stdalign stdarg stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath "
+    "threads time uchar wchar wctype".split())
+#: C++ keywords (a C file may be compiled as C++ in a firmware project).
+CXX_KEYWORDS = frozenset(
+    "alignas alignof and and_eq asm bitand bitor bool catch char16_t char32_t char8_t class "
+    "compl concept consteval constexpr constinit const_cast co_await co_return co_yield decltype "
+    "delete dynamic_cast explicit export false friend mutable namespace new noexcept not not_eq "
+    "nullptr operator or or_eq private protected public reinterpret_cast requires static_assert "
+    "static_cast template this thread_local throw true try typeid typename using virtual "
+    "wchar_t xor xor_eq".split())
+#: Python modules users import beside the generated module: ``<prefix>.py`` must not shadow them.
+PYTHON_NEIGHBOURS = frozenset(
+    "numpy scipy sympy control matplotlib pandas jinja2 pytest edm_sym".split())
+
+
+def prefix_problem(prefix: str) -> str | None:
+    """Why ``prefix`` cannot name the generated files and symbols, or None when it can.
+
+    A prefix must be a C identifier that starts with a letter (a leading
+    underscore is reserved to the C library: ``_`` would make ``__tan``), and
+    must be no C, C++ or Python keyword, no C standard header's name
+    (``<prefix>.h`` beside ``<math.h>``) and no module of Python's standard
+    library or of the packages users import beside the export (``<prefix>.py``
+    would shadow it).
+    """
+    import keyword
+
     if not isinstance(prefix, str) or not is_c_identifier(prefix):
-        raise ValueError(f"--prefix: expected a C identifier, found {prefix!r}")
+        return "expected a C identifier"
+    if not prefix[0].isalpha():
+        return "expected a name starting with a letter (a leading underscore is reserved to the C library)"
+    if prefix in CXX_KEYWORDS or keyword.iskeyword(prefix) or keyword.issoftkeyword(prefix):
+        return "expected a name that is no C, C++ or Python keyword"
+    if prefix in C_HEADERS:
+        return f"expected a name that shadows no C header (<{prefix}.h> is one)"
+    if prefix in sys.stdlib_module_names or prefix in PYTHON_NEIGHBOURS:
+        return f"expected a name that shadows no Python module ({prefix} is one)"
+    return None
+
+
+def validate_prefix(prefix: str) -> str:
+    """Return ``prefix`` when it can name the generated files and symbols, else raise ValueError.
+
+    See :func:`prefix_problem` for the rules.
+    """
+    problem = prefix_problem(prefix)
+    if problem:
+        raise ValueError(f"--prefix: {problem}, found {prefix!r}")
     return prefix
 
 
