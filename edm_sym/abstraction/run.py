@@ -68,6 +68,8 @@ class GenerationInfo:
     stats : EvalStats
         The evaluator's counters so far (rows requested and simulated, cache
         hit rate, element-samples and seconds in simulation).
+    best_matrix : ElementMatrix
+        The step's best individual so far.
     """
 
     step: int
@@ -76,6 +78,7 @@ class GenerationInfo:
     evaluations: int
     elapsed: float
     stats: EvalStats
+    best_matrix: ElementMatrix | None = None
 
 
 class _Stop(Exception):
@@ -144,11 +147,13 @@ class _Runner:
 
     def __init__(self, *, cfg: AbstractionConfig, x: np.ndarray, y: np.ndarray, t: np.ndarray,
                  ts: float, ranges: dict[str, ParamRange], human: Population | None,
+                 inputs: Sequence[str],
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
                  checkpoint: Path | None, time_limit: float | None, progress: bool,
                  callback: Callable[[GenerationInfo], bool | None] | None):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
+        self.inputs = tuple(inputs)
         self.state, self.rng, self.checkpoint = state, rng, checkpoint
         self.time_limit, self.callback = time_limit, callback
         self.start = time.monotonic()
@@ -180,7 +185,9 @@ class _Runner:
             self.bar.update(1)
         if self.callback is not None:
             info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
-                                  replace(self.evaluator.stats))
+                                  replace(self.evaluator.stats),
+                                  cur.population.matrix(int(np.argmin(cur.fitness)),
+                                                        self.inputs))
             if self.callback(info):
                 raise _Stop("stopped")
         if self.time_limit is not None and elapsed >= self.time_limit:
@@ -397,7 +404,7 @@ def abstract(
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
                           cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
     evaluator.start()
-    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human,
+    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
                      time_limit=time_limit, progress=progress, callback=callback)
     reason = "completed"
