@@ -36,6 +36,7 @@ from edm_sym.abstraction.checkpoint import (
 )
 from edm_sym.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
+from edm_sym.abstraction.local_search import tune_parameters
 from edm_sym.abstraction.polish import GAIN, gain_fit
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.data import DataLog
@@ -280,14 +281,58 @@ class _Runner:
         new_pop = Population.concat([ranked.take(np.arange(ga.elites)), kids])
         new_fit = np.concatenate([rfit[:ga.elites], kfit])
         best = float(np.min(new_fit))
-        prog = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
-                        cur.since_improvement).after(ga, best)
+        before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
+                          cur.since_improvement)
+        prog = before.after(ga, best)
+        if ga.local_search and prog.since_improvement and (
+                prog.done or prog.since_improvement % ga.local_search == 0):
+            # Stagnation: tune the best individual's parameters; the result takes the
+            # place of the worst individual, so the original stays in the population.
+            k = int(np.argmin(new_fit))
+            tuned, tfit, used = tune_parameters(self.evaluator, new_pop.take([k]),
+                                                float(new_fit[k]),
+                                                max_evaluations=ga.local_search_evaluations)
+            extra += used
+            if tfit < best:
+                worst = int(np.argmax(new_fit))
+                new_pop.inputs[worst], new_pop.codes[worst], new_pop.ps[worst] = (
+                    tuned.inputs[0], tuned.codes[0], tuned.ps[0])
+                new_fit[worst] = tfit
+                best = tfit
+                prog = before.after(ga, best)
+        restarts = cur.restarts
+        if prog.done and restarts < ga.restarts:
+            restarts += 1
+            new_pop, new_fit, used = self._restart(new_pop, new_fit, ops)
+            extra += used
+            best = float(np.min(new_fit))
+            prog = replace(Progress.start(best), generation=prog.generation)
         return StepState(step=cur.step, generation=prog.generation, blocks=prog.blocks,
                          block_start_best=prog.block_start_best, ref_best=prog.ref_best,
                          since_improvement=prog.since_improvement,
                          done=prog.done, population=new_pop, fitness=new_fit,
                          history=[*cur.history, best],
-                         evaluations=cur.evaluations + len(kids) + extra)
+                         evaluations=cur.evaluations + len(kids) + extra, restarts=restarts)
+
+    def _restart(self, pop: Population, fit: np.ndarray, ops: Operators
+                 ) -> tuple[Population, np.ndarray, int]:
+        """A stagnating step's new population: its elites, the best with one row anew, random."""
+        ga = ops.ga
+        p, m, n = pop.shape
+        keys = self.evaluator.individual_keys(pop.inputs, pop.codes, pop.ps)
+        order = rank(fit, keys)[:ga.elites]
+        elites = pop.take(order)
+        fresh = ops.random_population(self.rng, p - ga.elites, m, n)
+        count = max(1, int(round(ga.inherit_fraction * p)))
+        redraw = self.rng.integers(m, size=count)
+        for i in range(count):
+            keep = np.arange(m) != redraw[i]
+            fresh.inputs[i, keep] = elites.inputs[0, keep]
+            fresh.codes[i, keep] = elites.codes[0, keep]
+            fresh.ps[i, keep] = elites.ps[0, keep]
+        ffit, extra = self._evaluate(fresh, ops)
+        return (Population.concat([elites, fresh]), np.concatenate([fit[order], ffit]),
+                len(fresh) + extra)
 
     def close(self) -> None:
         if self.bar is not None:
