@@ -91,11 +91,14 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
 
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         save_result(res, Path(out_dir) / f"result_seed{seed}.json")
-    return {"seed": seed, "edm": edm, "ratio": edm / lugre, "cpu_s": cpu, "wall_s": wall,
-            "below_threshold_s": track["first"],
-            "fitness": res.fitness, "step_fitness": [s.fitness for s in res.steps],
-            "generations": [s.generations for s in res.steps],
-            "evaluations": sum(s.evaluations for s in res.steps)}
+    out = {"seed": seed, "edm": edm, "ratio": edm / lugre, "cpu_s": cpu, "wall_s": wall,
+           "below_threshold_s": track["first"],
+           "fitness": res.fitness, "step_fitness": [s.fitness for s in res.steps],
+           "generations": [s.generations for s in res.steps],
+           "evaluations": sum(s.evaluations for s in res.steps)}
+    if out_dir is not None:
+        (Path(out_dir) / f"seed{seed}.json").write_text(json.dumps(out, sort_keys=True) + "\n")
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict:
