@@ -39,6 +39,7 @@ class StepState:
     fitness: np.ndarray
     history: list[float]
     evaluations: int
+    restarts: int = 0
 
 
 @dataclass
@@ -94,6 +95,7 @@ def dumps(state: RunState) -> str:
             "since_improvement": cur.since_improvement, "done": cur.done,
             "population": _pop_json(cur.population), "fitness": cur.fitness.tolist(),
             "history": cur.history, "evaluations": cur.evaluations,
+            "restarts": cur.restarts,
         },
     }
     return json.dumps(doc, sort_keys=True) + "\n"
@@ -149,7 +151,8 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
             since_improvement=int(c["since_improvement"]), done=bool(c["done"]),
             population=_pop_from(c["population"]),
             fitness=np.array(c["fitness"], dtype=float),
-            history=[float(h) for h in c["history"]], evaluations=int(c["evaluations"]))
+            history=[float(h) for h in c["history"]], evaluations=int(c["evaluations"]),
+            restarts=int(c.get("restarts", 0)))
         return RunState(doc["fingerprint"], doc["rng_state"], finished, current)
     except (KeyError, TypeError, ValueError) as exc:
         raise ConfigError(str(path), f"expected a complete checkpoint, found a damaged one ({exc})"

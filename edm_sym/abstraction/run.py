@@ -36,6 +36,7 @@ from edm_sym.abstraction.checkpoint import (
 )
 from edm_sym.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
+from edm_sym.abstraction.local_search import tune_parameters
 from edm_sym.abstraction.polish import GAIN, gain_fit
 from edm_sym.abstraction.prune import apply_parsimony
 from edm_sym.abstraction.schedule import AbstractionConfig, StepConfig, default_config
@@ -71,6 +72,8 @@ class GenerationInfo:
     stats : EvalStats
         The evaluator's counters so far (rows requested and simulated, cache
         hit rate, element-samples and seconds in simulation).
+    best_matrix : ElementMatrix
+        The step's best individual so far.
     """
 
     step: int
@@ -79,6 +82,7 @@ class GenerationInfo:
     evaluations: int
     elapsed: float
     stats: EvalStats
+    best_matrix: ElementMatrix | None = None
 
 
 class _Stop(Exception):
@@ -147,11 +151,13 @@ class _Runner:
 
     def __init__(self, *, cfg: AbstractionConfig, x: np.ndarray, y: np.ndarray, t: np.ndarray,
                  ts: float, ranges: dict[str, ParamRange], human: Population | None,
+                 inputs: Sequence[str],
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
                  checkpoint: Path | None, time_limit: float | None, progress: bool,
                  callback: Callable[[GenerationInfo], bool | None] | None):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
+        self.inputs = tuple(inputs)
         self.state, self.rng, self.checkpoint = state, rng, checkpoint
         self.time_limit, self.callback = time_limit, callback
         self.start = time.monotonic()
@@ -183,7 +189,9 @@ class _Runner:
             self.bar.update(1)
         if self.callback is not None:
             info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
-                                  replace(self.evaluator.stats))
+                                  replace(self.evaluator.stats),
+                                  cur.population.matrix(int(np.argmin(cur.fitness)),
+                                                        self.inputs))
             if self.callback(info):
                 raise _Stop("stopped")
         if self.time_limit is not None and elapsed >= self.time_limit:
@@ -276,14 +284,58 @@ class _Runner:
         new_pop = Population.concat([ranked.take(np.arange(ga.elites)), kids])
         new_fit = np.concatenate([rfit[:ga.elites], kfit])
         best = float(np.min(new_fit))
-        prog = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
-                        cur.since_improvement).after(ga, best)
+        before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
+                          cur.since_improvement)
+        prog = before.after(ga, best)
+        if ga.local_search and prog.since_improvement and (
+                prog.done or prog.since_improvement % ga.local_search == 0):
+            # Stagnation: tune the best individual's parameters; the result takes the
+            # place of the worst individual, so the original stays in the population.
+            k = int(np.argmin(new_fit))
+            tuned, tfit, used = tune_parameters(self.evaluator, new_pop.take([k]),
+                                                float(new_fit[k]),
+                                                max_evaluations=ga.local_search_evaluations)
+            extra += used
+            if tfit < best:
+                worst = int(np.argmax(new_fit))
+                new_pop.inputs[worst], new_pop.codes[worst], new_pop.ps[worst] = (
+                    tuned.inputs[0], tuned.codes[0], tuned.ps[0])
+                new_fit[worst] = tfit
+                best = tfit
+                prog = before.after(ga, best)
+        restarts = cur.restarts
+        if prog.done and restarts < ga.restarts:
+            restarts += 1
+            new_pop, new_fit, used = self._restart(new_pop, new_fit, ops)
+            extra += used
+            best = float(np.min(new_fit))
+            prog = replace(Progress.start(best), generation=prog.generation)
         return StepState(step=cur.step, generation=prog.generation, blocks=prog.blocks,
                          block_start_best=prog.block_start_best, ref_best=prog.ref_best,
                          since_improvement=prog.since_improvement,
                          done=prog.done, population=new_pop, fitness=new_fit,
                          history=[*cur.history, best],
-                         evaluations=cur.evaluations + len(kids) + extra)
+                         evaluations=cur.evaluations + len(kids) + extra, restarts=restarts)
+
+    def _restart(self, pop: Population, fit: np.ndarray, ops: Operators
+                 ) -> tuple[Population, np.ndarray, int]:
+        """A stagnating step's new population: its elites, the best with one row anew, random."""
+        ga = ops.ga
+        p, m, n = pop.shape
+        keys = self.evaluator.individual_keys(pop.inputs, pop.codes, pop.ps)
+        order = rank(fit, keys)[:ga.elites]
+        elites = pop.take(order)
+        fresh = ops.random_population(self.rng, p - ga.elites, m, n)
+        count = max(1, int(round(ga.inherit_fraction * p)))
+        redraw = self.rng.integers(m, size=count)
+        for i in range(count):
+            keep = np.arange(m) != redraw[i]
+            fresh.inputs[i, keep] = elites.inputs[0, keep]
+            fresh.codes[i, keep] = elites.codes[0, keep]
+            fresh.ps[i, keep] = elites.ps[0, keep]
+        ffit, extra = self._evaluate(fresh, ops)
+        return (Population.concat([elites, fresh]), np.concatenate([fit[order], ffit]),
+                len(fresh) + extra)
 
     def close(self) -> None:
         if self.bar is not None:
@@ -419,7 +471,7 @@ def abstract(
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
                           cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
     evaluator.start()
-    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human,
+    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
                      time_limit=time_limit, progress=progress, callback=callback)
     reason = "completed"

@@ -52,6 +52,9 @@ _GA_FIELDS: dict[str, tuple[str, float | None, float | None]] = {
     "min_improvement": ("float", 0, 1),
     "inherit_fraction": ("prob", 0, 1),
     "gain_fit": ("bool", None, None),
+    "local_search": ("int", 0, None),
+    "local_search_evaluations": ("int", 1, None),
+    "restarts": ("int", 0, None),
     "elements": ("names", None, None),
 }
 
@@ -105,6 +108,17 @@ class GaSettings:
         Lamarckian local search: give new individuals the least-squares row
         scales where a gain-like element allows it (see
         :mod:`edm_sym.abstraction.polish`); False runs the plain Algorithm 1.
+    local_search : int
+        When the best has not improved for this many generations (and again
+        every this many, and when the step would end), tune the best
+        individual's parameters by least squares (see
+        :mod:`edm_sym.abstraction.local_search`); 0: never.
+    local_search_evaluations : int
+        Most individuals one local search evaluates.
+    restarts : int
+        When the step would end, restart it this many times from its elite:
+        the elites stay, a share ``inherit_fraction`` of the population gets
+        the best individual with one row drawn anew, the rest is random.
     elements : tuple of str or None
         Element names the GA may use; None: every registered element.
     """
@@ -127,6 +141,9 @@ class GaSettings:
     min_improvement: float = 1e-6
     inherit_fraction: float = 0.25
     gain_fit: bool = True
+    local_search: int = 20
+    local_search_evaluations: int = 300
+    restarts: int = 0
     elements: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:

@@ -1,0 +1,151 @@
+"""Robust search (issue 13): least-squares tuning of the elite, restarts of a stagnating step."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_abstraction import SMALL, TS, friction_log
+
+from edm_sym.abstraction import GenerationInfo, abstract, parse_config
+from edm_sym.abstraction import run as run_module
+from edm_sym.abstraction.evaluator import Evaluator
+from edm_sym.abstraction.ga import Population
+from edm_sym.abstraction.local_search import free_parameters, tune_parameters
+from edm_sym.data import DataLog
+from edm_sym.elements import BY_NAME, default_ranges
+from edm_sym.errors import ConfigError
+from edm_sym.result import dumps
+
+
+@pytest.fixture(scope="module")
+def log() -> DataLog:
+    return friction_log(2.0)[0]
+
+
+def run(data: DataLog, doc: dict, **kw) -> object:
+    return abstract(data, target="tau_ext", inputs=["omega", "alpha"],
+                    config=parse_config(doc, "test.toml"), **kw)
+
+
+def _individual(ranges: dict, coulomb: float, viscous: float, cutoff: float) -> Population:
+    """[sign, gain c, lpf f] on omega + [power_gain b, through, through] on omega."""
+    code = {name: BY_NAME[name].code for name in ("sign", "gain", "lpf", "power_gain", "through")}
+    return Population(
+        np.array([[0, 0]]),
+        np.array([[[code["sign"], code["gain"], code["lpf"]],
+                   [code["power_gain"], code["through"], code["through"]]]]),
+        np.array([[[0.0, ranges["gain"].encode(coulomb), ranges["lpf"].encode(cutoff)],
+                   [ranges["power_gain"].encode(viscous), 0.0, 0.0]]]))
+
+
+@pytest.fixture(scope="module")
+def problem():  # noqa: ANN201
+    data, floor = friction_log(2.0, seed=3)
+    x = data.stack(["omega", "alpha"])
+    y = data.columns["tau_ext"]
+    ranges = default_ranges(TS, len(y) * TS)
+    with Evaluator(x, y, TS, ranges, workers=1) as ev:
+        ev.start()
+        yield ev, ranges, floor
+
+
+def test_free_parameters_are_the_genes_with_a_parameter(problem) -> None:  # noqa: ANN001
+    _, ranges, _ = problem
+    ind = _individual(ranges, 0.7, 0.02, 50.0)
+    assert free_parameters(ind.codes[0]) == [(0, 1), (0, 2), (1, 0)]
+
+
+def test_least_squares_tunes_a_detuned_elite_to_the_best_of_its_structure(problem) -> None:  # noqa: ANN001
+    ev, ranges, _ = problem
+    ev.set_weights(1.0)
+    ind = _individual(ranges, 0.7, 0.02, 50.0)
+    f0 = float(ev.evaluate(ind.inputs, ind.codes, ind.ps)[0])
+    # The best this structure can do: the truth (1.0, 0.01) with the fastest filter.
+    ideal = _individual(ranges, 1.0, 0.01, ranges["lpf"].high)
+    f_ideal = float(ev.evaluate(ideal.inputs, ideal.codes, ideal.ps)[0])
+    out, f, used = tune_parameters(ev, ind, f0, max_evaluations=200)
+    assert 0 < used <= 200
+    assert f <= 1.001 * f_ideal, f"{f} vs {f_ideal} (from {f0})"
+    assert f == pytest.approx(float(ev.evaluate(out.inputs, out.codes, out.ps)[0]), rel=1e-12)
+    assert np.array_equal(out.codes, ind.codes) and np.array_equal(out.inputs, ind.inputs)
+    again = tune_parameters(ev, ind, f0, max_evaluations=200)
+    assert again[1] == f and np.array_equal(again[0].ps, out.ps)  # deterministic
+
+
+def test_least_squares_never_returns_a_worse_individual(problem) -> None:  # noqa: ANN001
+    ev, ranges, _ = problem
+    ev.set_weights(1.0)
+    ind = _individual(ranges, 0.7, 0.02, 50.0)
+    f0 = float(ev.evaluate(ind.inputs, ind.codes, ind.ps)[0])
+    out, f, used = tune_parameters(ev, ind, f0, max_evaluations=2)  # too small to start
+    assert (f, used) == (f0, 0) and np.array_equal(out.ps, ind.ps)
+    out, f, used = tune_parameters(ev, ind, f0, max_evaluations=6)  # stops within budget
+    assert used <= 6 and f <= f0
+
+
+def test_a_step_stagnating_calls_the_local_search_unless_it_is_off(
+        log: DataLog, monkeypatch: pytest.MonkeyPatch) -> None:
+    calls: list[float] = []
+    orig = run_module.tune_parameters
+
+    def spy(evaluator, best, fitness, **kw):  # noqa: ANN001, ANN003, ANN202
+        calls.append(fitness)
+        return orig(evaluator, best, fitness, **kw)
+
+    monkeypatch.setattr(run_module, "tune_parameters", spy)
+    doc = {**SMALL, "ga": {**SMALL["ga"], "local_search": 2}}
+    run(log, doc, seed=1, workers=1)
+    assert calls
+    calls.clear()
+    run(log, {**SMALL, "ga": {**SMALL["ga"], "local_search": 0}}, seed=1, workers=1)
+    assert not calls
+
+
+RESTART = {"ga": {"population": 16, "generations": 4, "continue": "improving", "max_blocks": 3,
+                  "patience": 3, "local_search": 2},
+           "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 3, "n_elements": 3}]}
+
+
+def _with(doc: dict, **ga) -> dict:
+    return {**doc, "ga": {**doc["ga"], **ga}}
+
+
+def test_restarts_continue_a_stagnating_step_and_never_lose_the_best(log: DataLog) -> None:
+    plain = run(log, _with(RESTART, restarts=0), seed=3, workers=1)
+    again = run(log, _with(RESTART, restarts=2), seed=3, workers=1)
+    for a, b in zip(plain.steps, again.steps, strict=True):
+        assert b.generations > a.generations
+        assert all(np.diff(b.history) <= 0)  # the elites survive a restart
+    assert again.steps[0].fitness <= plain.steps[0].fitness
+
+
+def test_restarts_are_deterministic_with_any_worker_count(log: DataLog) -> None:
+    doc = _with(RESTART, restarts=1)
+    one = dumps(run(log, doc, seed=4, workers=1))
+    assert dumps(run(log, doc, seed=4, workers=2)) == one
+
+
+@pytest.mark.parametrize("stop_after", [5, 9, 14])
+def test_a_run_with_restarts_resumes_to_the_same_bytes(
+        log: DataLog, tmp_path: Path, stop_after: int) -> None:
+    doc = _with(RESTART, restarts=1)
+    want = dumps(run(log, doc, seed=2, workers=1))
+    ckpt = tmp_path / "c"
+    count = [0]
+
+    def hook(info: GenerationInfo) -> bool:
+        count[0] += 1
+        return count[0] >= stop_after
+
+    run(log, doc, seed=2, workers=1, checkpoint=ckpt, callback=hook)
+    assert dumps(run(log, doc, seed=2, workers=1, checkpoint=ckpt, resume=True)) == want
+
+
+@pytest.mark.parametrize(("key", "value"), [("restarts", -1), ("local_search", -1),
+                                            ("local_search_evaluations", 0),
+                                            ("restarts", 1.5)])
+def test_bad_search_settings_are_refused(key: str, value: object) -> None:
+    with pytest.raises(ConfigError, match=key):
+        parse_config({"ga": {key: value}}, "cfg.toml")
