@@ -18,10 +18,11 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from edm_sym.abstraction.tables import settings_from_table
 from edm_sym.errors import ConfigError
 
 KNEE_WITHIN = 1.5
@@ -101,15 +102,7 @@ def parse_parsimony(where: str, doc: Any) -> ParsimonySettings:
     ConfigError
         Unknown key, wrong type or a value out of range.
     """
-    if not isinstance(doc, Mapping):
-        raise ConfigError(where, f"expected a table, found {type(doc).__name__}")
-    for key in doc:
-        if key not in _KEYS:
-            raise ConfigError(f"{where}.{key}", f"unknown key (known: {', '.join(_KEYS)})")
-    try:
-        return ParsimonySettings(**dict(doc))
-    except ConfigError as exc:
-        raise ConfigError(f"{where}.{exc.where.rsplit('.', 1)[-1]}", exc.problem) from None
+    return settings_from_table(ParsimonySettings, _KEYS, where, doc)
 
 
 def select(front: Sequence[_Member], rule: str) -> int:

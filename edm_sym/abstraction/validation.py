@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from edm_sym.abstraction.tables import settings_from_table
 from edm_sym.abstraction.weighting import Weighting
 from edm_sym.data import DataLog
 from edm_sym.errors import ConfigError, DataFormatError
@@ -93,16 +94,7 @@ def parse_validation(where: str, doc: Any) -> ValidationSettings:
     ConfigError
         Unknown key, wrong type or a value out of range.
     """
-    if not isinstance(doc, Mapping):
-        raise ConfigError(where, f"expected a table, found {type(doc).__name__}")
-    for key in doc:
-        if key not in _KEYS:
-            raise ConfigError(f"{where}.{key}", f"unknown key (known: {', '.join(_KEYS)})")
-    try:
-        return ValidationSettings(**dict(doc))
-    except ConfigError as exc:
-        field_name = exc.where.rsplit(".", 1)[-1]
-        raise ConfigError(f"{where}.{field_name}", exc.problem) from None
+    return settings_from_table(ValidationSettings, _KEYS, where, doc)
 
 
 @dataclass(frozen=True)
