@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
@@ -179,6 +180,39 @@ def schema() -> dict[str, Any]:
     """The JSON Schema of result.json that ships inside the package."""
     text = resources.files("edm_sym").joinpath("schema/result.schema.json").read_text("utf-8")
     return json.loads(text)
+
+
+#: Input names: C and Python identifiers (they become macros, struct fields and keys).
+INPUT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def input_name_problem(name: str, others: Sequence[str] = ()) -> str | None:
+    """Why ``name`` cannot be an input of a result, or None when it can.
+
+    An input name becomes a C macro (``EDM_COMP_INPUT_<NAME>``), a C
+    comment and a Python string key, so it must be an ASCII identifier
+    (``^[A-Za-z_][A-Za-z0-9_]*$``, as result.json's schema says) that is no
+    Python keyword, and no two inputs may differ only in case (their macros
+    would be the same).
+
+    Parameters
+    ----------
+    name : str
+    others : sequence of str
+        The inputs before it.
+    """
+    import keyword
+
+    if not INPUT_NAME.fullmatch(name):
+        return ("expected a column name made of ASCII letters, digits and '_', not starting with a "
+                "digit (it names C macros and Python keys); rename the column")
+    if keyword.iskeyword(name):
+        return "expected a column name that is no Python keyword; rename the column"
+    same = [o for o in others if o.upper() == name.upper()]
+    if same:
+        return (f"expected names that differ in more than case, found {same[0]!r} too "
+                f"(both would be the C macro ..._INPUT_{name.upper()})")
+    return None
 
 
 def format_path(parts: Sequence[Any]) -> str:

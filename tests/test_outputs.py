@@ -195,3 +195,23 @@ def test_prefix_that_would_shadow_or_clash_is_refused(prefix: str, why: str, tmp
 def test_an_ordinary_prefix_is_accepted(tmp_path: Path) -> None:
     assert export_main([str(EXAMPLE), "--target", "c", "--prefix", "axis2_comp", "-o", str(tmp_path)]) == 0
     assert (tmp_path / "axis2_comp.h").exists()
+
+
+@pytest.mark.parametrize("inputs,why", [
+    ("ω", "ASCII letters"), ("tau ext", "ASCII letters"), ("1abc", "not starting with a digit"),
+    ("omega,Omega", "differ in more than case"), ("class", "Python keyword"),
+])
+def test_input_names_that_cannot_be_exported_are_refused_up_front(tmp_path: Path, inputs: str, why: str,
+                                                                   capsys) -> None:
+    import numpy as np
+    from conftest import TS
+
+    names = inputs.split(",")
+    t = np.arange(200) * TS
+    cols = {"t": t, **{n: np.sin(t + k) for k, n in enumerate(names)}, "tau_ext": np.sign(np.sin(t))}
+    data = write_csv(tmp_path / "odd.csv", cols)
+    out = tmp_path / "new.json"
+    assert main(["abstract", str(data), "--target", "tau_ext", "--inputs", inputs, "-o", str(out)]) == 2
+    err = _one_line(capsys)
+    assert why in err and repr(names[-1]) in err
+    assert not out.exists()

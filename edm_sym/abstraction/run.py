@@ -45,7 +45,7 @@ from edm_sym.data import DataLog
 from edm_sym.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.errors import ConfigError, NumericsWarning
 from edm_sym.matrix import Compensator, ElementMatrix
-from edm_sym.result import EdmResult, StepRecord
+from edm_sym.result import EdmResult, StepRecord, input_name_problem
 from edm_sym.simulate import fitness, simulate_rows
 
 #: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
@@ -443,6 +443,9 @@ def abstract(
     for k, name in enumerate(inputs):
         if inputs.index(name) != k:
             raise ConfigError("inputs", f"expected each column once, found {name!r} twice")
+        problem = input_name_problem(name, inputs[:k])
+        if problem:
+            raise ConfigError(f"inputs: {name!r}", problem)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
