@@ -215,3 +215,29 @@ def test_input_names_that_cannot_be_exported_are_refused_up_front(tmp_path: Path
     err = _one_line(capsys)
     assert why in err and repr(names[-1]) in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("low,high,scaling", [(-1e308, 1e308, "linear"), (1e-300, 1.0, "log"),
+                                              (0.0, 1e13, "linear")])
+def test_a_range_beyond_the_limit_is_refused_in_config_and_result(tmp_path: Path, low: float, high: float,
+                                                                  scaling: str, capsys) -> None:
+    import json as _json
+
+    from edm_sym.abstraction import load_config
+    from edm_sym.errors import ConfigError
+    from edm_sym.result import load_result
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(f'[ranges.gain]\nlow = {low!r}\nhigh = {high!r}\nscaling = "{scaling}"\n')
+    with pytest.raises(ConfigError, match=r"c.toml: ranges.gain.*1e\+12|c.toml: ranges.gain.*1e-12"):
+        load_config(cfg).resolve_ranges(1e-3, 20.0)  # a partial override is checked with the defaults
+    doc = _json.loads(EXAMPLE.read_text())
+    doc["parameter_ranges"]["gain"] = {"low": low, "high": high, "scaling": scaling}
+    res = tmp_path / "r.json"
+    res.write_text(_json.dumps(doc))
+    assert export_main([str(res), "--target", "c", "-o", str(tmp_path / "g")]) == 2
+    err = _one_line(capsys)
+    assert "parameter_ranges" in err and "gain" in err
+    assert not (tmp_path / "g").exists()
+    with pytest.raises(Exception, match="1e"):
+        load_result(res)

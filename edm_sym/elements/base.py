@@ -36,6 +36,13 @@ from edm_sym.elements.realisation import DelayLine, LinearFilter, Realisation, R
 Scaling = Literal["linear", "log"]
 
 
+#: The largest magnitude of a parameter range's bound, and 1 / it the smallest low
+#: bound of a log range (docs/elements.md): the default ranges of eqs. 6-7 stay
+#: within 1e-6 .. 1e6 for any sensible Ts and T_sum; far beyond, products of
+#: parameters overflow double precision and the generated C would hold INFINITY.
+RANGE_LIMIT = 1e12
+
+
 @dataclass(frozen=True)
 class ParamRange:
     """The range of an element parameter and how ``p`` in [0, 1] maps onto it.
@@ -59,10 +66,13 @@ class ParamRange:
             raise ValueError(f"scaling: expected 'linear' or 'log', found {self.scaling!r}")
         if not (math.isfinite(self.low) and math.isfinite(self.high)):
             raise ValueError(f"range: expected finite bounds, found [{self.low}, {self.high}]")
+        if max(abs(self.low), abs(self.high)) > RANGE_LIMIT:
+            raise ValueError(f"range: expected bounds within +-{RANGE_LIMIT:g} (a parameter beyond makes "
+                             f"the compensator overflow), found [{self.low}, {self.high}]")
         if not self.low < self.high:
             raise ValueError(f"range: expected low < high, found [{self.low}, {self.high}]")
-        if self.scaling == "log" and self.low <= 0:
-            raise ValueError(f"range: a log scaling needs low > 0, found low = {self.low}")
+        if self.scaling == "log" and self.low < 1 / RANGE_LIMIT:
+            raise ValueError(f"range: a log scaling needs low >= {1 / RANGE_LIMIT:g}, found low = {self.low}")
 
     def decode(self, p: float) -> float:
         """Map a normalised parameter ``p`` in [0, 1] to the parameter value ``a``."""

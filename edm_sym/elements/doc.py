@@ -24,6 +24,8 @@ through the element's range and scaling: linear (paper, eq. 4)
 `a = 10^((log10 high - log10 low) p + log10 low)`. Default ranges depend on the
 sample time Ts and the record length T_sum (eqs. 6-7) and can be overridden in
 the abstraction config; result.json stores the ranges it was decoded with.
+Every bound lies within +-1e12, and a log range starts at 1e-12 or above
+(`RANGE_LIMIT`): beyond, products of parameters overflow double precision.
 
 Dynamic elements start from rest (zero state) and run at the sample time Ts;
 the discretisation named here is the one the simulator, the python-control
