@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from edm_sym.errors import TOO_DEEP, EdmError, ResultFormatError, ToolMissingError
+from edm_sym.errors import TOO_DEEP, EdmError, ExternalToolError, ResultFormatError, ToolMissingError
 from edm_sym.fileio import check_outputs
 
 
@@ -440,6 +440,9 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
     except KeyboardInterrupt:
         print(f"{parser.prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except ExternalToolError as exc:  # LaTeX or a compiler failed: the work failed, not edm_sym
+        print(f"{parser.prog}: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_FAILED
     except RecursionError:
         print(f"{parser.prog}: {_files_named(argv)}: {TOO_DEEP}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -65,5 +65,9 @@ class ToolMissingError(EdmError, RuntimeError):
     """An optional external tool (latexmk, arm-none-eabi-gcc, ...) is not installed."""
 
 
+class ExternalToolError(RuntimeError):
+    """An external tool (LaTeX, a compiler) failed on valid input: exit 1, not a bug of edm_sym."""
+
+
 class NumericsWarning(UserWarning):
     """Doubtful numerics: an unstable filter, a parameter at its range limit, ..."""

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from edm_sym.data import is_plant_spec
-from edm_sym.errors import ToolMissingError
+from edm_sym.errors import ExternalToolError, ToolMissingError
 from edm_sym.render import REPORT, render, target_names, write_files
 from edm_sym.render.context import source_of, validate_prefix, validate_real
 
@@ -73,14 +73,19 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     from edm_sym.report import write_report
 
     inputs = report_inputs(result, data=data, eval_data=eval_data, lugre=lugre)
-    # The report validates its inputs before writing anything, so it goes first;
-    # a missing latexmk (raised after the .tex is written) still lets the code land.
+    # The report validates its inputs before writing anything, so it goes first. Each
+    # target is written on its own: a PDF that fails (latexmk missing, LaTeX stopping)
+    # leaves the .tex, the figures and the C and Python in place, and says so.
     try:
         written = write_report(result, out_dir, prefix=prefix, ts=ts, pdf=pdf, model=model,
                                **inputs)
-    except ToolMissingError:
-        write_files(out_dir, files)
-        raise
+    except (ToolMissingError, ExternalToolError) as exc:
+        code = write_files(out_dir, files)
+        if not code:
+            raise
+        landed = ", ".join(p.name for p in code)
+        raise type(exc)(f"target latex (PDF): {exc}; the other targets were written ({landed})") \
+            from None
     return write_files(out_dir, files) + written
 
 

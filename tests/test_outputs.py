@@ -241,3 +241,19 @@ def test_a_range_beyond_the_limit_is_refused_in_config_and_result(tmp_path: Path
     assert not (tmp_path / "g").exists()
     with pytest.raises(Exception, match="1e"):
         load_result(res)
+
+
+def test_a_failing_pdf_leaves_the_other_targets_and_names_its_own(tmp_path: Path, monkeypatch, capsys) -> None:
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    latexmk = fake / "latexmk"
+    latexmk.write_text("#!/bin/sh\necho 'fake latexmk: stopped' >&2\nexit 12\n")
+    latexmk.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{fake}{os.pathsep}{os.environ['PATH']}")
+    out = tmp_path / "gen"
+    assert export_main([str(EXAMPLE), "--target", "all", "--pdf", "-o", str(out)]) == 1
+    err = _one_line(capsys)
+    assert "target latex" in err and "edm_comp.c" in err and "bug" not in err
+    for name in ("edm_comp.h", "edm_comp.c", "edm_comp.py", "edm_comp_report.tex"):
+        assert (out / name).exists(), name
+    assert not (out / "edm_comp_report.pdf").exists()

@@ -16,7 +16,7 @@ import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
-from edm_sym.errors import ToolMissingError
+from edm_sym.errors import ExternalToolError, ToolMissingError
 
 #: The LaTeX packages the report template loads, each with the Debian package that
 #: ships its .sty (checked against ``dpkg -S`` by tests/test_report_pdf.py; ``edm
@@ -61,7 +61,7 @@ _OVERFULL = re.compile(r"^Overfull \\[hv]box \((\d+(?:\.\d+)?)pt too (wide|high)
 _UNDEFINED = re.compile(r"(?:Reference|Citation) `([^']*)' on page \d+ undefined")
 
 
-class LatexError(RuntimeError):
+class LatexError(ExternalToolError):
     """LaTeX stopped with an error; the message holds its first error line and the log's path.
 
     Not an :class:`~edm_sym.errors.EdmError`: the input was valid, the work failed (exit 1).
