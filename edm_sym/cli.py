@@ -60,13 +60,27 @@ def _seed(text: str) -> int:
     return int(text)
 
 
+#: Help of every DATA argument.
+DATA_HELP = "a log: CSV, .npz, .mat, or plant:PRESET/EXCITATION[@SEED] (docs/cli.md#data-files)"
+#: Help of every --ts option.
+TS_HELP = "sample time [s] of a log without a 't' column"
+
+
+def _add_version(parser: argparse.ArgumentParser) -> None:
+    from edm_sym.version import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+
+
 def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("result", metavar="RESULT.json", help="result file to export")
-    p.add_argument("--target", required=True, choices=["c", "python", "latex", "all"])
+    p.add_argument("--target", required=True, choices=["c", "python", "latex", "all"],
+                   help="C header and source, a Python module, the LaTeX report, or all of them")
     p.add_argument("-o", "--out-dir", metavar="DIR",
                    help="output folder (default: generated/<folder holding RESULT>/)")
     p.add_argument("--prefix", default="edm_comp", help="file and symbol prefix (default edm_comp)")
-    p.add_argument("--real", default="double", choices=["float", "double"])
+    p.add_argument("--real", default="double", choices=["float", "double"],
+                   help="the C real type (default double)")
     p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
     p.add_argument("--data", metavar="DATA", help="abstraction log, for the report's figures")
     p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
@@ -112,20 +126,35 @@ def _cmd_describe(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The ``edm`` argument parser with all its subcommands."""
     parser = _Parser(prog="edm", description="Element Description Method compensators for "
-                     "reaction torque observers: abstract, simulate, export.")
+                     "reaction torque observers: abstract, simulate, export.",
+                     epilog="examples:\n"
+                            "  edm plant --preset auger --excitation abstraction -o abs.csv\n"
+                            "  edm abstract abs.csv --target tau_ext --inputs theta_w,omega,alpha -o r.json\n"
+                            "  edm describe r.json\n"
+                            "  edm-export r.json --target c\n"
+                            "docs: docs/cli.md",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
 
     p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
-    p.add_argument("data", metavar="DATA")
-    p.add_argument("--target", required=True, metavar="COL")
-    p.add_argument("--inputs", required=True, metavar="COL[,COL...]")
-    p.add_argument("--config", metavar="FILE.toml")
-    p.add_argument("--seed", type=_seed, default=0)
-    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
-    p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json")
-    p.add_argument("--ts", type=_positive_float)
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--target", required=True, metavar="COL",
+                   help="the column the compensator reproduces (the observer's torque estimate)")
+    p.add_argument("--inputs", required=True, metavar="COL[,COL...]",
+                   help="the columns a row may take as its input, e.g. theta_w,omega,alpha")
+    p.add_argument("--config", metavar="FILE.toml",
+                   help="the schedule and GA settings (default: the default schedule, docs/abstraction.md)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed; the same seed gives the same "
+                   "result.json (default 0)")
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
+                   help="end the search at this wall time and write the best so far (default: none, "
+                        "the config's generation budget)")
+    p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json",
+                   help="the result file (default result.json; a checkpoint is kept beside it)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
@@ -147,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
-    p.add_argument("data", metavar="DATA")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
     p.add_argument("-o", "--output", metavar="OUT.csv",
                    help="output CSV (default: <DATA stem>_sim.csv in the current folder)")
     p.add_argument("--ts", type=_positive_float,
@@ -158,41 +187,51 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
-    p.add_argument("--preset", required=True, metavar="NAME")
-    p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"])
+    p.add_argument("--preset", required=True, metavar="NAME",
+                   help="the plant: auger, ballscrew or lugre (docs/plant.md)")
+    p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"],
+                   help="velocity steps then the chirp of eq. 9 (abstraction), or eq. 17 (evaluation)")
     p.add_argument("-o", "--output", metavar="DATA.csv",
                    help="output CSV (default: <preset>_<excitation>.csv)")
-    p.add_argument("--seed", type=_seed, default=0)
+    p.add_argument("--seed", type=_seed, default=0, help="noise seed (default 0)")
     p.set_defaults(func=_cmd_plant)
 
     p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
-    p.add_argument("pipeline", metavar="PIPELINE.toml")
+    p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--reuse", action="store_true",
                    help="keep an existing lugre.json / result.json (evaluate and export only)")
     p.set_defaults(func=_cmd_pipeline)
 
     p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
-    p.add_argument("data", metavar="DATA")
-    p.add_argument("--position", required=True, metavar="COL")
-    p.add_argument("--force", required=True, metavar="COL")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--position", required=True, metavar="COL", help="the measured position column")
+    p.add_argument("--force", required=True, metavar="COL",
+                   help="the force (torque) command column, or a controller output to scale")
     p.add_argument("--force-gain", default="1", metavar="NUM|NAME",
                    help="number, or name of a scalar stored in DATA (e.g. gtau)")
-    p.add_argument("--nominal-inertia", required=True, type=_finite_float, metavar="M_N")
-    p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ")
-    p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv")
-    p.add_argument("--ts", type=_positive_float)
+    p.add_argument("--nominal-inertia", required=True, type=_finite_float, metavar="M_N",
+                   help="the nominal mass or inertia the observer subtracts times the acceleration")
+    p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ",
+                   help="corner of the zero-phase filter on the position (default 100 Hz)")
+    p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv",
+                   help="output CSV (default observer.csv)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.set_defaults(func=_cmd_observe)
 
     p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
-    p.add_argument("data", metavar="DATA")
-    p.add_argument("--target", required=True, metavar="COL")
-    p.add_argument("--velocity", required=True, metavar="COL")
-    p.add_argument("--seed", type=_seed, default=0)
-    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS")
-    p.add_argument("--method", default="scipy")
-    p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json")
-    p.add_argument("--ts", type=_positive_float)
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--target", required=True, metavar="COL", help="the torque column the model fits")
+    p.add_argument("--velocity", required=True, metavar="COL", help="the velocity column")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed of the global stage (default 0)")
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
+                   help="end the identification at this wall time (default: none)")
+    p.add_argument("--method", default="scipy", choices=["scipy", "ga", "both"],
+                   help="scipy's global + local search, the project's GA, or both compared "
+                        "(default scipy; docs/lugre.md)")
+    p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json",
+                   help="the LuGre file (default lugre.json)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.set_defaults(func=_cmd_lugre)
 
     p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
@@ -469,7 +508,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def export_main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``edm-export`` (the same as ``edm export``)."""
-    parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.")
+    parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.",
+                     epilog="examples:\n  edm-export result.json --target c\n"
+                            "  edm-export result.json --target all --pdf -o gen/\n"
+                            "docs: docs/cli.md#edm-export",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_version(parser)
     _add_export_args(parser)
     return _run(argv, parser)
 

@@ -237,3 +237,20 @@ def test_api_doc_lists_the_public_names() -> None:
     section = _section("api.md", "## Python API")
     missing = [name for name in edm_sym.__all__ if f"`{name}" not in section]
     assert not missing, f"docs/api.md (## Python API) does not describe {missing}"
+
+
+@pytest.mark.parametrize("command", sorted(_subcommands()))
+def test_every_option_has_help_text(command: str) -> None:
+    bare = [a.option_strings or [a.dest] for a in _subcommands()[command]._actions if not a.help]
+    assert not bare, f"edm {command}: options without help text: {bare}"
+
+
+@pytest.mark.parametrize("entry", ["main", "export_main"])
+def test_version_is_printed(entry: str, capsys: pytest.CaptureFixture) -> None:
+    import edm_sym.cli as cli
+    from edm_sym.version import __version__
+
+    with pytest.raises(SystemExit) as info:
+        getattr(cli, entry)(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip().endswith(__version__)

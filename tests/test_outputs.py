@@ -243,7 +243,8 @@ def test_a_range_beyond_the_limit_is_refused_in_config_and_result(tmp_path: Path
         load_result(res)
 
 
-def test_a_failing_pdf_leaves_the_other_targets_and_names_its_own(tmp_path: Path, monkeypatch, capsys) -> None:
+def test_a_failing_pdf_leaves_the_other_targets_and_names_its_own(tmp_path: Path, monkeypatch,
+                                                                  capsys) -> None:
     fake = tmp_path / "bin"
     fake.mkdir()
     latexmk = fake / "latexmk"
