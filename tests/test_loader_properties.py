@@ -87,26 +87,18 @@ def _corrupt(doc, data):  # noqa: ANN001, ANN202
     return doc
 
 
+@pytest.mark.parametrize("source,loader", [(RESULT, load_result), (LUGRE, load_lugre)],
+                         ids=["result.json", "LUGRE.json"])
 @SETTINGS
 @given(data=st.data())
-def test_any_corrupted_result_loads_or_is_refused_in_one_line(tmp_path: Path, data) -> None:
-    p = tmp_path / "r.json"
-    p.write_text(json.dumps(_corrupt(json.loads(RESULT.read_text()), data)))
+def test_any_corrupted_model_file_loads_or_is_refused_in_one_line(tmp_path: Path, source, loader,
+                                                                  data) -> None:
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(_corrupt(json.loads(source.read_text()), data)))
     try:
-        load_result(p)
+        loader(p)
     except ResultFormatError as exc:
-        _one_line(exc, "r.json")
-
-
-@SETTINGS
-@given(data=st.data())
-def test_any_corrupted_lugre_file_loads_or_is_refused_in_one_line(tmp_path: Path, data) -> None:
-    p = tmp_path / "l.json"
-    p.write_text(json.dumps(_corrupt(json.loads(LUGRE.read_text()), data)))
-    try:
-        load_lugre(p)
-    except ResultFormatError as exc:
-        _one_line(exc, "l.json")
+        _one_line(exc, "m.json")
 
 
 def _toml_value(v) -> str:  # noqa: ANN001
