@@ -3,7 +3,7 @@
 Exports a result (default: the shipped auger example) as double-precision C,
 compiles it with -O2 and a timing harness, runs ``<prefix>_step`` over a
 20 000-sample log several times and prints nanoseconds per sample; then
-times the reference simulator (:func:`edm_sym.simulate.simulate`, vectorised
+times the reference simulator (:func:`edm_sym.engines.simulate.simulate`, vectorised
 over the log), the plain per-sample Python loop and the generated Python
 module on the same log and prints each one's per-sample cost as a ratio to
 the C.
@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from edm_sym import load_result
-from edm_sym.exporting import export
-from edm_sym.simulate import plain_loop, simulate
+from edm_sym.application.exporting import export
+from edm_sym.engines.simulate import plain_loop, simulate
 
 REPO = Path(__file__).resolve().parent.parent
 N = 20_000

@@ -1,6 +1,6 @@
 """Decoding time: a 4x5 matrix like the paper's Fig. 21 and a deliberately nasty 8x6 one.
 
-Prints the time of :func:`edm_sym.symbolic.decode` (expressions, bounded
+Prints the time of :func:`edm_sym.engines.symbolic.decode` (expressions, bounded
 simplification, classification and python-control systems) and of its parts,
 against the budgets of the issue (2 s for 4x5, 5 s for the nasty matrix). No
 wall-clock assertions: these are figures to read, not tests.
@@ -14,14 +14,14 @@ import time
 
 from sympy.core.cache import clear_cache
 
-from edm_sym.elements import default_ranges
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.symbolic import build_model, decode
-from edm_sym.symbolic.classify import classify_expression
-from edm_sym.symbolic.decoding import parameter_signs
-from edm_sym.symbolic.lti import row_system, stage_parts
-from edm_sym.symbolic.rowexpr import row_expression
-from edm_sym.symbolic.simplify import simplify_expression
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.symbolic import build_model, decode
+from edm_sym.engines.symbolic.classify import classify_expression
+from edm_sym.engines.symbolic.decoding import parameter_signs
+from edm_sym.engines.symbolic.lti import row_system, stage_parts
+from edm_sym.engines.symbolic.rowexpr import row_expression
+from edm_sym.engines.symbolic.simplify import simplify_expression
 
 TS, T_SUM = 1e-3, 20.0
 NASTY_CHAIN = ["sin_phase", "tan_amp", "asin", "power", "log", "tan_phase", "acos", "sin_amp"]

@@ -31,16 +31,16 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from edm_sym.abstraction import abstract, load_config
-from edm_sym.data import DataLog, load_data
-from edm_sym.observer import (
+from edm_sym.core.data import DataLog, load_data
+from edm_sym.engines.abstraction import abstract, load_config
+from edm_sym.engines.observer import (
     ObserverOptions,
     fit_reference_model,
     observer_view,
     reference_model,
     relative_error,
 )
-from edm_sym.simulate import simulate
+from edm_sym.engines.simulate import simulate
 
 REPO = Path(__file__).resolve().parents[1]
 EMPS = REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat"

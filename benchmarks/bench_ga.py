@@ -3,7 +3,7 @@
 Prints, with ratios rather than verdicts:
 
 1. the batched, cached evaluation of a population of random 4x5 matrices
-   against the plain per-sample Python loop (:func:`edm_sym.simulate.plain_loop`)
+   against the plain per-sample Python loop (:func:`edm_sym.engines.simulate.plain_loop`)
    in element-samples per second;
 2. a GA run on a synthetic Coulomb + viscous log: evaluations, evaluations per
    second, cache hit rate, element-samples per second;
@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from edm_sym.abstraction import Evaluator, GenerationInfo, abstract
-from edm_sym.abstraction.ga import Operators
-from edm_sym.abstraction.schedule import GaSettings
-from edm_sym.data import DataLog
-from edm_sym.elements import default_ranges
-from edm_sym.matrix import Compensator
-from edm_sym.result import EdmResult
-from edm_sym.simulate import fitness, plain_loop, simulate
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator
+from edm_sym.core.result import EdmResult
+from edm_sym.engines.abstraction import Evaluator, GenerationInfo, abstract
+from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.simulate import fitness, plain_loop, simulate
 
 TS = 1e-3
 
@@ -145,9 +145,9 @@ def _print_run(title: str, res, wall: float, ev) -> None:  # noqa: ANN001
 def bench_plant(time_limit: float, workers: int) -> None:
     """The default schedule on the auger preset, judged on the evaluation log."""
     try:
-        from edm_sym.plant import simulate_plant
+        from edm_sym.engines.plant import simulate_plant
     except ImportError:
-        print("== plant: edm_sym.plant is not available; skipped")
+        print("== plant: edm_sym.engines.plant is not available; skipped")
         return
     logs = {}
     for kind in ("abstraction", "evaluation"):
@@ -175,7 +175,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     ap.add_argument("--skip-plant", action="store_true")
     args = ap.parse_args()
-    from edm_sym.abstraction.evaluator import default_workers
+    from edm_sym.engines.abstraction.evaluator import default_workers
 
     workers = args.workers or default_workers()
     log = synthetic_log()

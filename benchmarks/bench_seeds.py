@@ -38,7 +38,7 @@ def _rmse(residual: np.ndarray) -> float:
 
 
 def _logs():  # noqa: ANN202
-    from edm_sym.data import load_data
+    from edm_sym.engines.sources import load_data
 
     return (load_data("plant:auger/abstraction", require=[*INPUTS, TARGET]),
             load_data("plant:auger/evaluation", require=[*INPUTS, TARGET]))
@@ -46,7 +46,7 @@ def _logs():  # noqa: ANN202
 
 def lugre_rmse(lugre_file: Path, log) -> float:  # noqa: ANN001
     """RMSE of the LuGre compensator of ``lugre_file`` on ``log``."""
-    from edm_sym.lugre import load_lugre, simulate_lugre
+    from edm_sym.engines.lugre import load_lugre, simulate_lugre
 
     lugre = load_lugre(lugre_file)
     tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
@@ -56,9 +56,9 @@ def lugre_rmse(lugre_file: Path, log) -> float:  # noqa: ANN001
 def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: int,
              out_dir: str | None = None) -> dict:
     """One run; returns its figures (executed in a worker process)."""
-    from edm_sym.abstraction import abstract, load_config
-    from edm_sym.matrix import Compensator
-    from edm_sym.simulate import simulate
+    from edm_sym.core.matrix import Compensator
+    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.simulate import simulate
 
     abst, evl = _logs()
     cfg = load_config(config)
@@ -87,7 +87,7 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
     wall = time.perf_counter() - w0
     edm = _rmse(y_eval - simulate(res, evl).total)
     if out_dir is not None:
-        from edm_sym.result import save_result
+        from edm_sym.core.result import save_result
 
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         save_result(res, Path(out_dir) / f"result_seed{seed}.json")

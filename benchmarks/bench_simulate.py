@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
-from edm_sym.elements import default_ranges
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.simulate import plain_loop, simulate
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.simulate import plain_loop, simulate
 
 TS, N = 1e-3, 20_000
 

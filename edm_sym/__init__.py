@@ -20,18 +20,19 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from edm_sym.data import DataLog, load_data
-from edm_sym.errors import (
+from edm_sym.core.data import DataLog
+from edm_sym.core.errors import (
     ConfigError,
     DataFormatError,
     EdmError,
     NumericsWarning,
     ResultFormatError,
 )
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
-from edm_sym.result import EdmResult, load_result, save_result
-from edm_sym.simulate import Simulation, simulate
-from edm_sym.version import __version__
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
+from edm_sym.core.result import EdmResult, load_result, save_result
+from edm_sym.core.version import __version__
+from edm_sym.engines.simulate import Simulation, simulate
+from edm_sym.engines.sources import load_data
 
 __all__ = [
     "Compensator",
@@ -66,13 +67,13 @@ def decode(result: EdmResult | Compensator, **options: Any) -> Any:
     result : EdmResult or Compensator
         The model to decode.
     **options
-        Passed to :func:`edm_sym.symbolic.decode`.
+        Passed to :func:`edm_sym.engines.symbolic.decode`.
 
     Returns
     -------
-    edm_sym.symbolic.SymbolicModel
+    edm_sym.engines.symbolic.SymbolicModel
     """
-    from edm_sym.symbolic import decode as _decode  # sympy is imported only here
+    from edm_sym.engines.symbolic import decode as _decode  # sympy is imported only here
 
     return _decode(result, **options)
 
@@ -89,14 +90,14 @@ def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -
         result records (``report_inputs.data``), else none.
     **options
         ``ts``, ``options`` (a ``SignificanceOptions``), ``roles``; see
-        :func:`edm_sym.description.describe`.
+        :func:`edm_sym.engines.description.describe`.
 
     Returns
     -------
-    edm_sym.description.Description
+    edm_sym.engines.description.Description
         ``.table()`` for people, ``.to_json()`` for the shape of docs/describe.md.
     """
-    from edm_sym.description import describe as _describe  # sympy is imported only here
+    from edm_sym.engines.description import describe as _describe  # sympy is imported only here
 
     return _describe(result, data, **options)
 
@@ -114,24 +115,24 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
         The output folder.
     **options
         ``prefix``, ``real`` and the report's options; see
-        :func:`edm_sym.exporting.export`.
+        :func:`edm_sym.application.exporting.export`.
 
     Returns
     -------
     list of pathlib.Path
         The files written.
     """
-    from edm_sym.exporting import export as _export  # jinja2 is imported only here
+    from edm_sym.application.exporting import export as _export  # jinja2 is imported only here
 
     return _export(result, target, out_dir, **options)
 
 
 #: Names resolved on first access, so that their optional dependencies load only then.
-_LAZY = {"EDMRegressor": "edm_sym.estimator"}
+_LAZY = {"EDMRegressor": "edm_sym.application.estimator"}
 
 
 def __getattr__(name: str) -> Any:
-    """``edm_sym.EDMRegressor``: imported from :mod:`edm_sym.estimator` (needs scikit-learn) when used."""
+    """``edm_sym.EDMRegressor``: from :mod:`edm_sym.application.estimator` (needs scikit-learn), on use."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'edm_sym' has no attribute {name!r}")

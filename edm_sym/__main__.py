@@ -2,6 +2,6 @@
 
 import sys
 
-from edm_sym.cli import main
+from edm_sym.application.cli import main
 
 sys.exit(main())

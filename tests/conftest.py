@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from edm_sym.matrix import Compensator, make_matrix
+from edm_sym.core.matrix import Compensator, make_matrix
 
 TS = 1e-3
 N = 20_000
@@ -29,7 +29,7 @@ def signal() -> np.ndarray:
 @pytest.fixture
 def coulomb_viscous() -> Compensator:
     """Step 1 of the paper: Coulomb + viscous, on omega."""
-    from edm_sym.elements import element
+    from edm_sym.core.elements import element
 
     g = element("gain").param.default(TS, 20.0)
     pg = element("power_gain").param.default(TS, 20.0)

@@ -17,9 +17,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import edm_sym
-from edm_sym.elements import default_ranges
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.result import EdmResult, save_result
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.core.result import EdmResult, save_result
 
 TS = 1e-3
 RECORD_LENGTH = 20.0

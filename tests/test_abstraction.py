@@ -10,13 +10,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from edm_sym.abstraction import GenerationInfo, abstract, parse_config
-from edm_sym.abstraction.ga import Operators
-from edm_sym.data import DataLog
-from edm_sym.elements import BY_NAME, default_ranges
-from edm_sym.matrix import Compensator, Gene
-from edm_sym.result import dumps, load_result, matrix_to_json, save_result
-from edm_sym.simulate import fitness, simulate, simulate_row
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import BY_NAME, default_ranges
+from edm_sym.core.matrix import Compensator, Gene
+from edm_sym.core.result import dumps, load_result, matrix_to_json, save_result
+from edm_sym.engines.abstraction import GenerationInfo, abstract, parse_config
+from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
 TS = 1e-3
 COULOMB, VISCOUS, NOISE = 1.0, 0.01, 0.05
@@ -210,7 +210,7 @@ def test_an_interrupt_returns_the_best_so_far_and_resumes(log: DataLog, tmp_path
 
 
 def test_a_checkpoint_of_another_run_is_refused(log: DataLog, tmp_path: Path) -> None:
-    from edm_sym.errors import ConfigError
+    from edm_sym.core.errors import ConfigError
 
     ckpt = tmp_path / "c"
     run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
@@ -351,7 +351,7 @@ def test_the_progress_bar_shows_step_generation_best_and_rate(
 def test_the_config_example_in_the_docs_is_valid() -> None:
     import re
 
-    from edm_sym.abstraction.schedule import tomllib
+    from edm_sym.engines.abstraction.schedule import tomllib
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "abstraction.md").read_text()
     block = re.search(r"```toml\n(.*?)```", text, re.S).group(1)

@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 from test_abstraction import friction_log
 
-from edm_sym.abstract_cli import checkpoint_path
-from edm_sym.cli import main
-from edm_sym.data import write_csv
-from edm_sym.result import load_result
+from edm_sym.application.abstract_cli import checkpoint_path
+from edm_sym.application.cli import main
+from edm_sym.core.data import write_csv
+from edm_sym.core.result import load_result
 
 QUICK = """
 [ga]

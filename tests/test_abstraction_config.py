@@ -9,7 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from edm_sym.abstraction import (
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import ParamRange, default_ranges
+from edm_sym.core.errors import ConfigError
+from edm_sym.engines.abstraction import (
     AbstractionConfig,
     GaSettings,
     StepConfig,
@@ -19,9 +22,6 @@ from edm_sym.abstraction import (
     load_config,
     parse_config,
 )
-from edm_sym.data import DataLog
-from edm_sym.elements import ParamRange, default_ranges
-from edm_sym.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples" / "configs").glob("*.toml"))

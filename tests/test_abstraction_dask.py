@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from test_abstraction import SMALL, friction_log, run
 
-from edm_sym.result import dumps
+from edm_sym.core.result import dumps
 
 distributed = pytest.importorskip("distributed")
 
@@ -20,5 +20,5 @@ def test_a_dask_cluster_gives_the_same_result_as_one_process() -> None:
         assert dumps(res) == want
         # Each worker process received the run's context and simulated rows.
         counts = client.run(lambda: len(__import__(
-            "edm_sym.abstraction.rowsim", fromlist=["_WORKERS"])._WORKERS))
+            "edm_sym.engines.abstraction.rowsim", fromlist=["_WORKERS"])._WORKERS))
         assert sum(counts.values()) >= 1

@@ -11,14 +11,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.signal import cont2discrete
 
-from edm_sym.abstraction import Evaluator, RowCache
-from edm_sym.abstraction.cache import SlotStore
-from edm_sym.abstraction.ga import Operators
-from edm_sym.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
-from edm_sym.abstraction.schedule import GaSettings
-from edm_sym.elements import LinearElement, all_elements, default_ranges, element
-from edm_sym.matrix import Compensator
-from edm_sym.simulate import fitness, simulate, simulate_row
+from edm_sym.core.elements import LinearElement, all_elements, default_ranges, element
+from edm_sym.core.matrix import Compensator
+from edm_sym.engines.abstraction import Evaluator, RowCache
+from edm_sym.engines.abstraction.cache import SlotStore
+from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
+from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
 N = 3000
 NAMES = ["u0", "u1", "u2"]
@@ -207,7 +207,7 @@ def test_row_table_is_canonical() -> None:
 def test_a_sine_reading_an_input_uses_cached_sines_to_rounding(signals, name: str) -> None:
     x, y = signals
     pop = _population(0, p=1, m=1, n=2)
-    from edm_sym.elements import BY_NAME
+    from edm_sym.core.elements import BY_NAME
 
     pop.codes[0, 0] = [BY_NAME[name].code, BY_NAME["gain"].code]
     pop.ps[0, 0] = [0.37, 0.8]

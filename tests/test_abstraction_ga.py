@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from edm_sym.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
-from edm_sym.abstraction.polish import gain_fit, scale_position
-from edm_sym.abstraction.schedule import GaSettings
-from edm_sym.elements import BY_NAME, REGISTRY, default_ranges
-from edm_sym.matrix import make_matrix
+from edm_sym.core.elements import BY_NAME, REGISTRY, default_ranges
+from edm_sym.core.matrix import make_matrix
+from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
+from edm_sym.engines.abstraction.polish import gain_fit, scale_position
+from edm_sym.engines.abstraction.schedule import GaSettings
 
 P, M, N_EL = 40, 3, 4
 

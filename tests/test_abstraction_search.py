@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 from test_abstraction import SMALL, TS, friction_log
 
-from edm_sym.abstraction import GenerationInfo, abstract, parse_config
-from edm_sym.abstraction import run as run_module
-from edm_sym.abstraction.evaluator import Evaluator
-from edm_sym.abstraction.ga import Population
-from edm_sym.abstraction.local_search import free_parameters, tune_parameters
-from edm_sym.data import DataLog
-from edm_sym.elements import BY_NAME, default_ranges
-from edm_sym.errors import ConfigError
-from edm_sym.result import dumps
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import BY_NAME, default_ranges
+from edm_sym.core.errors import ConfigError
+from edm_sym.core.result import dumps
+from edm_sym.engines.abstraction import GenerationInfo, abstract, parse_config
+from edm_sym.engines.abstraction import run as run_module
+from edm_sym.engines.abstraction.evaluator import Evaluator
+from edm_sym.engines.abstraction.ga import Population
+from edm_sym.engines.abstraction.local_search import free_parameters, tune_parameters
 
 
 @pytest.fixture(scope="module")

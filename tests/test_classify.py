@@ -9,10 +9,10 @@ import pytest
 import sympy as sp
 from conftest import TS, smooth_signal
 
-from edm_sym.elements import default_ranges, element
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.simulate import simulate
-from edm_sym.symbolic import (
+from edm_sym.core.elements import default_ranges, element
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.simulate import simulate
+from edm_sym.engines.symbolic import (
     LTI,
     ClassifyOptions,
     Delay,
@@ -23,8 +23,8 @@ from edm_sym.symbolic import (
     input_roles,
     s,
 )
-from edm_sym.symbolic.classify import KINDS
-from edm_sym.symbolic.functions import SymPow
+from edm_sym.engines.symbolic.classify import KINDS
+from edm_sym.engines.symbolic.functions import SymPow
 
 INPUTS = ("theta_w", "theta_uw", "omega", "alpha", "x")
 

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from edm_sym import load_result
-from edm_sym.elements import all_elements
-from edm_sym.exporting import export
-from edm_sym.simulate import simulate
+from edm_sym.application.exporting import export
+from edm_sym.core.elements import all_elements
+from edm_sym.engines.simulate import simulate
 
 
 def _support() -> ModuleType:

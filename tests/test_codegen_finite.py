@@ -17,9 +17,9 @@ from types import ModuleType
 import numpy as np
 import pytest
 
-from edm_sym.elements import all_elements
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.render import render
+from edm_sym.core.elements import all_elements
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.outputs.render import render
 
 REPO = Path(__file__).resolve().parents[1]
 NON_FINITE = re.compile(r"\b(INFINITY|NAN|HUGE_VAL[FL]?|inf|nan|Infinity|NaN)\b|float\(\s*['\"](inf|nan)")

@@ -43,7 +43,7 @@ def assert_same_files(fresh: list[Path], folder: Path, skip: tuple[str, ...] = (
 @pytest.mark.parametrize("case", ug.CASES, ids=[c.name for c in ug.CASES])
 def test_golden(case, tmp_path: Path) -> None:  # noqa: ANN001
     if case.make is not None:  # the generated result file is golden too
-        from edm_sym.result import dumps
+        from edm_sym.core.result import dumps
 
         assert dumps(case.make()) == case.result_file.read_text(), f"{case.result_file} ({HINT})"
     fresh = ug.render_case(case, tmp_path)
@@ -65,7 +65,7 @@ def test_committed_generated_auger_is_up_to_date(tmp_path: Path) -> None:
     """
     from importlib.metadata import version
 
-    from edm_sym.cli import export_main
+    from edm_sym.application.cli import export_main
 
     normalize = _script("update_golden_report").normalize
     assert export_main([str(ug.EXAMPLE), "--target", "all", "-o", str(tmp_path)]) == 0
@@ -90,7 +90,7 @@ def test_handwritten_fixture_is_what_its_script_writes() -> None:
         "edm_handwritten", REPO / "tests" / "make_handwritten_result.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    from edm_sym.result import dumps
+    from edm_sym.core.result import dumps
 
     doc = dumps(module.build())
     committed = (REPO / "tests" / "data" / "handwritten_result.json").read_text()

@@ -11,12 +11,12 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from edm_sym.elements import StaticElement, all_elements
-from edm_sym.elements.ops import SCALAR
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.printing import EdmC99Printer, EdmPythonPrinter
-from edm_sym.symbolic.functions import DeadZone, GAcos, GAsin, GTan, Sat, SymLog, SymPow
-from edm_sym.symbolic.model import X, build_model
+from edm_sym.core.elements import StaticElement, all_elements
+from edm_sym.core.elements.ops import SCALAR
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.symbolic.functions import DeadZone, GAcos, GAsin, GTan, Sat, SymLog, SymPow
+from edm_sym.engines.symbolic.model import X, build_model
+from edm_sym.outputs.printing import EdmC99Printer, EdmPythonPrinter
 
 STATIC = [e for e in all_elements() if issubclass(e, StaticElement)]
 

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from edm_sym import load_result
-from edm_sym.elements import all_elements
-from edm_sym.exporting import export
-from edm_sym.simulate import simulate
+from edm_sym.application.exporting import export
+from edm_sym.core.elements import all_elements
+from edm_sym.engines.simulate import simulate
 
 
 def _support() -> ModuleType:
@@ -121,7 +121,7 @@ def test_random_matrices_match_the_simulator(tmp_path: Path) -> None:
 
 
 def test_no_state_still_resets(tmp_path: Path) -> None:
-    from edm_sym.matrix import Compensator, make_matrix
+    from edm_sym.core.matrix import Compensator, make_matrix
 
     comp = Compensator(make_matrix(cg.INPUTS, [("omega", [("gain", 0.6)])]), 1e-3, {}, 20.0)
     module = generated(cg.as_result(comp), tmp_path)

@@ -17,15 +17,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from edm_sym import load_result
-from edm_sym.elements import all_elements
-from edm_sym.errors import NumericsWarning
-from edm_sym.exporting import export
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
-from edm_sym.render import TARGETS, render
-from edm_sym.render.context import c_context, input_macros, plan, source_of
-from edm_sym.render.environment import environment, template_dir
-from edm_sym.render.writer import OutputError, write_files
-from edm_sym.symbolic.model import build_model
+from edm_sym.application.exporting import export
+from edm_sym.core.elements import all_elements
+from edm_sym.core.errors import NumericsWarning
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
+from edm_sym.engines.symbolic.model import build_model
+from edm_sym.outputs.render import TARGETS, render
+from edm_sym.outputs.render.context import c_context, input_macros, plan, source_of
+from edm_sym.outputs.render.environment import environment, template_dir
+from edm_sym.outputs.render.writer import OutputError, write_files
 
 
 def _support() -> ModuleType:
@@ -68,10 +68,10 @@ def test_targets_write_their_files(target: str, names: list[str], tmp_path: Path
 
 def test_target_all_decodes_once_and_hands_every_target_one_model(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import edm_sym.exporting
-    import edm_sym.report
-    import edm_sym.symbolic
-    from edm_sym.symbolic import decoding
+    import edm_sym.application.exporting
+    import edm_sym.engines.symbolic
+    import edm_sym.outputs.report
+    from edm_sym.engines.symbolic import decoding
 
     calls: dict[str, list] = {"decode": [], "build": [], "render": [], "report": []}
 
@@ -82,11 +82,13 @@ def test_target_all_decodes_once_and_hands_every_target_one_model(
             return out
         return wrapped
 
-    monkeypatch.setattr(edm_sym.symbolic, "decode", spy("decode", edm_sym.symbolic.decode))
+    symbolic, exporting = edm_sym.engines.symbolic, edm_sym.application.exporting
+    report = edm_sym.outputs.report
+    monkeypatch.setattr(symbolic, "decode", spy("decode", symbolic.decode))
     monkeypatch.setattr(decoding, "build_model", spy("build", decoding.build_model))
-    monkeypatch.setattr(edm_sym.symbolic, "build_model", spy("build", edm_sym.symbolic.build_model))
-    monkeypatch.setattr(edm_sym.exporting, "render", spy("render", edm_sym.exporting.render))
-    monkeypatch.setattr(edm_sym.report, "write_report", spy("report", edm_sym.report.write_report))
+    monkeypatch.setattr(symbolic, "build_model", spy("build", symbolic.build_model))
+    monkeypatch.setattr(exporting, "render", spy("render", exporting.render))
+    monkeypatch.setattr(report, "write_report", spy("report", report.write_report))
     export(EXAMPLE, "all", tmp_path)
     assert len(calls["decode"]) == 1 and len(calls["build"]) == 1
     model = calls["decode"][0]
@@ -109,7 +111,7 @@ def test_latex_target_is_the_report(tmp_path: Path) -> None:
     written = export(EXAMPLE, "latex", tmp_path / "x")
     assert written[0].name == "edm_comp_report.tex"
     assert all(p.name.startswith("edm_comp_") for p in written)
-    assert "latex" not in TARGETS  # written by edm_sym.report, not by a code template
+    assert "latex" not in TARGETS  # written by edm_sym.outputs.report, not by a code template
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
@@ -209,7 +211,7 @@ def test_single_precision_warns_about_sensitive_filters(tmp_path: Path) -> None:
 def test_output_is_byte_identical_across_runs_and_processes(tmp_path: Path) -> None:
     first = render(EXAMPLE, "all")
     assert render(EXAMPLE, "all") == first
-    code = ("import sys, edm_sym; from edm_sym.render import render; "
+    code = ("import sys, edm_sym; from edm_sym.outputs.render import render; "
             f"files = render(edm_sym.load_result({str(cg.HANDWRITTEN)!r}), 'all'); "
             "sys.stdout.write(''.join(files[k] for k in sorted(files)))")
     outs = []
@@ -263,7 +265,7 @@ def test_only_the_render_layer_imports_jinja2() -> None:
 
 
 def test_a_result_without_a_file_is_named_by_its_canonical_bytes(tmp_path: Path) -> None:
-    from edm_sym.result import save_result
+    from edm_sym.core.result import save_result
 
     result = cg.as_result(comp_of([("omega", [("lpf", 0.4), ("sign", 0.0)])]))
     fresh = render(result, "c")["edm_comp.h"]
@@ -279,7 +281,7 @@ GENES = st.integers(1, 4).flatmap(lambda n: st.lists(
     min_size=1, max_size=4))
 
 
-@pytest.mark.filterwarnings("ignore::edm_sym.errors.NumericsWarning")
+@pytest.mark.filterwarnings("ignore::edm_sym.core.errors.NumericsWarning")
 @settings(max_examples=40, deadline=None)
 @given(rows=GENES, real=st.sampled_from(["double", "float"]))
 def test_any_valid_matrix_renders_valid_python_and_plausible_c(rows: list, real: str) -> None:
@@ -293,7 +295,7 @@ def test_any_valid_matrix_renders_valid_python_and_plausible_c(rows: list, real:
 
 
 def test_a_failed_write_is_an_output_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import edm_sym.render.writer as writer
+    import edm_sym.outputs.render.writer as writer
 
     def refuse(path, data):  # noqa: ANN001, ANN202
         raise PermissionError(13, "Permission denied")

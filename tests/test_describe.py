@@ -14,13 +14,13 @@ import pytest
 from conftest import smooth_signal
 
 import edm_sym
-from edm_sym.bounds import bound_flags, complexity
-from edm_sym.cli import main
-from edm_sym.data import DataLog
-from edm_sym.elements import default_ranges
-from edm_sym.result import load_result, save_result
-from edm_sym.symbolic.classify import KINDS
-from edm_sym.symbolic.significance import ROW_FLAGS, TERM_FLAGS, SignificanceOptions
+from edm_sym.application.cli import main
+from edm_sym.core.bounds import bound_flags, complexity
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.result import load_result, save_result
+from edm_sym.engines.symbolic.classify import KINDS
+from edm_sym.engines.symbolic.significance import ROW_FLAGS, TERM_FLAGS, SignificanceOptions
 
 ROOT = Path(__file__).resolve().parents[1]
 HANDWRITTEN = ROOT / "tests" / "data" / "handwritten_result.json"
@@ -39,7 +39,7 @@ def _write(doc: dict, path: Path) -> Path:
 def _set(doc: dict, row: int, col: int, name: str, value: float | None = None,
          p: float | None = None) -> dict:
     """Put element ``name`` at rows[row].elements[col] with parameter ``value`` (or ``p``)."""
-    from edm_sym.elements import BY_NAME
+    from edm_sym.core.elements import BY_NAME
 
     if p is None:
         p = RANGES[name].encode(value) if value is not None else 0.0
@@ -125,7 +125,7 @@ def test_negligible_static_term_is_left_out(tmp_path: Path, log: DataLog) -> Non
 def test_bound_margin_in_normalised_p(p: float, flagged: bool) -> None:
     doc = _doc()
     doc["matrix"]["rows"][2]["elements"][1]["p"] = p  # the lpf's corner
-    res = edm_sym.result.parse_result(doc)
+    res = edm_sym.core.result.parse_result(doc)
     flags = bound_flags(res.compensator)
     assert bool(flags) is flagged
     if flagged:
@@ -136,7 +136,7 @@ def test_bound_margin_in_normalised_p(p: float, flagged: bool) -> None:
 def test_periodic_phase_is_never_at_a_bound() -> None:
     doc = _doc()
     doc["matrix"]["rows"][3]["elements"][1]["p"] = 1.0  # sin_phase = pi, the same as -pi
-    assert bound_flags(edm_sym.result.parse_result(doc).compensator) == ()
+    assert bound_flags(edm_sym.core.result.parse_result(doc).compensator) == ()
 
 
 def test_parameter_at_bound_is_flagged_everywhere(tmp_path: Path, log: DataLog) -> None:
@@ -183,7 +183,7 @@ def test_complexity_counts_active_elements_and_state() -> None:
     # 4 rows, 9 active elements; the derivative and the low-pass hold one state each.
     assert complexity(res.compensator) == 4 + 9 + 2
     doc = _set(_doc(), 0, 2, "dead_time", 0.183)
-    res = edm_sym.result.parse_result(doc)
+    res = edm_sym.core.result.parse_result(doc)
     assert complexity(res.compensator) == 4 + 10 + 2 + 183
     row = edm_sym.describe(res).to_json()["rows"][0]
     assert any(f["code"] == "long_delay" and "183 samples" in f["message"] for f in row["flags"])
@@ -297,12 +297,12 @@ def test_abstract_closing_summary_flags_parameters_at_bounds(
 ) -> None:
     import dataclasses
 
-    import edm_sym.abstraction.run as run_module
-    from edm_sym.data import write_csv
+    import edm_sym.engines.abstraction.run as run_module
+    from edm_sym.core.data import write_csv
 
     doc = _doc()
     doc["matrix"]["rows"][2]["elements"][1]["p"] = 1.0  # the lpf's corner at its top
-    found = dataclasses.replace(edm_sym.result.parse_result(doc), fitness=0.5)
+    found = dataclasses.replace(edm_sym.core.result.parse_result(doc), fitness=0.5)
     monkeypatch.setattr(run_module, "abstract", lambda *a, **k: found)
     n = 50
     t = np.arange(n) * 1e-3
@@ -324,8 +324,8 @@ def test_abstract_closing_summary_is_quiet_without_bounds(
 ) -> None:
     import dataclasses
 
-    import edm_sym.abstraction.run as run_module
-    from edm_sym.data import write_csv
+    import edm_sym.engines.abstraction.run as run_module
+    from edm_sym.core.data import write_csv
 
     found = dataclasses.replace(load_result(HANDWRITTEN), fitness=0.5)
     monkeypatch.setattr(run_module, "abstract", lambda *a, **k: found)
@@ -340,7 +340,7 @@ def test_abstract_closing_summary_is_quiet_without_bounds(
 def test_report_names_rows_honestly_and_shows_their_flags(tmp_path: Path) -> None:
     import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
 
-    from edm_sym.report import write_report
+    from edm_sym.outputs.report import write_report
 
     doc = _set(_doc(), 0, 1, "gain", -0.00064)
     doc["matrix"]["rows"][2]["elements"][1]["p"] = 1.0
@@ -371,7 +371,7 @@ def test_recorded_data_that_cannot_be_used_is_a_warning(tmp_path: Path, capsys) 
 
 
 def test_recorded_data_is_the_default(tmp_path: Path, log: DataLog) -> None:
-    from edm_sym.data import write_csv
+    from edm_sym.core.data import write_csv
 
     write_csv(tmp_path / "log.csv", {"t": np.arange(len(log)) * log.ts, **log.columns})
     doc = _doc()
@@ -383,7 +383,7 @@ def test_recorded_data_is_the_default(tmp_path: Path, log: DataLog) -> None:
 
 
 def test_recorded_evaluation_log_is_preferred(tmp_path: Path, log: DataLog) -> None:
-    from edm_sym.data import write_csv
+    from edm_sym.core.data import write_csv
 
     cols = {"t": np.arange(len(log)) * log.ts, **log.columns}
     write_csv(tmp_path / "fit.csv", cols)
@@ -409,9 +409,9 @@ def test_any_valid_matrix_describes_to_the_documented_shape(random_log: DataLog)
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    from edm_sym.elements import REGISTRY
-    from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
-    from edm_sym.result import EdmResult
+    from edm_sym.core.elements import REGISTRY
+    from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+    from edm_sym.core.result import EdmResult
 
     inputs = ("theta_w", "omega", "alpha")
     schema = _describe_schema()

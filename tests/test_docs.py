@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 import edm_sym
-from edm_sym.cli import build_parser
-from edm_sym.elements import doc
+from edm_sym.application.cli import build_parser
+from edm_sym.core.elements import doc
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -23,13 +23,13 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_elements_doc_is_current() -> None:
     committed = (ROOT / "docs" / "elements.md").read_text()
     assert committed == doc.render(), (
-        "docs/elements.md is stale: run python -m edm_sym.elements.doc docs/elements.md"
+        "docs/elements.md is stale: run python -m edm_sym.core.elements.doc docs/elements.md"
     )
 
 
 def test_elements_doc_lists_every_element() -> None:
     text = doc.render()
-    for el in edm_sym.elements.all_elements():
+    for el in edm_sym.core.elements.all_elements():
         assert f"### {el.code} `{el.name}`" in text
 
 
@@ -197,7 +197,7 @@ def _undocumented(fields: list[str], section: str) -> list[str]:
 
 @pytest.mark.parametrize(("schema_file", "heading"), [
     ("edm_sym/schema/result.schema.json", "### result.json fields"),
-    ("edm_sym/lugre/lugre.schema.json", "### LUGRE.json fields"),
+    ("edm_sym/engines/lugre/lugre.schema.json", "### LUGRE.json fields"),
 ])
 def test_result_format_describes_every_schema_field(schema_file: str, heading: str) -> None:
     schema = json.loads((ROOT / schema_file).read_text("utf-8"))
@@ -247,8 +247,8 @@ def test_every_option_has_help_text(command: str) -> None:
 
 @pytest.mark.parametrize("entry", ["main", "export_main"])
 def test_version_is_printed(entry: str, capsys: pytest.CaptureFixture) -> None:
-    import edm_sym.cli as cli
-    from edm_sym.version import __version__
+    import edm_sym.application.cli as cli
+    from edm_sym.core.version import __version__
 
     with pytest.raises(SystemExit) as info:
         getattr(cli, entry)(["--version"])

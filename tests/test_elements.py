@@ -10,7 +10,7 @@ import pytest
 from conftest import TS, N, smooth_signal
 from scipy import signal as sps
 
-from edm_sym.elements import (
+from edm_sym.core.elements import (
     BY_NAME,
     REGISTRY,
     DelayElement,
@@ -21,8 +21,8 @@ from edm_sym.elements import (
     default_ranges,
     element,
 )
-from edm_sym.elements.base import Element, ParamRange
-from edm_sym.elements.base import StaticElement as _Static
+from edm_sym.core.elements.base import Element, ParamRange
+from edm_sym.core.elements.base import StaticElement as _Static
 
 RANGES = default_ranges(TS, N * TS)
 ELEMENTS = all_elements()

@@ -20,9 +20,9 @@ from sklearn.model_selection import TimeSeriesSplit, cross_val_score  # noqa: E4
 from sklearn.utils.estimator_checks import parametrize_with_checks  # noqa: E402
 
 import edm_sym  # noqa: E402
-from edm_sym.abstraction import parse_config  # noqa: E402
-from edm_sym.data import DataLog  # noqa: E402
-from edm_sym.estimator import FIT_SOURCE, EDMRegressor  # noqa: E402
+from edm_sym.application.estimator import FIT_SOURCE, EDMRegressor  # noqa: E402
+from edm_sym.core.data import DataLog  # noqa: E402
+from edm_sym.engines.abstraction import parse_config  # noqa: E402
 
 TS = 1e-3
 #: One step, 2 rows of 2 elements, 16 individuals: a Coulomb + viscous log is found in a fraction of a second.
@@ -63,7 +63,7 @@ def test_sklearn_is_optional_and_imported_on_first_use() -> None:
     # One fresh interpreter (importing edm_sym takes seconds on a loaded machine).
     code = "\n".join([
         "import sys, edm_sym",
-        "assert 'sklearn' not in sys.modules and 'edm_sym.estimator' not in sys.modules",
+        "assert 'sklearn' not in sys.modules and 'edm_sym.application.estimator' not in sys.modules",
         "assert 'EDMRegressor' in dir(edm_sym) and 'EDMRegressor' not in edm_sym.__all__",
         "sys.modules['sklearn'] = None  # as if scikit-learn were not installed",
         "from edm_sym import *",

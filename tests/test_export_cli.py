@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from edm_sym.cli import export_main, main
+from edm_sym.application.cli import export_main, main
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "auger" / "result.json"

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from conftest import TS
 
-from edm_sym.cli import main
-from edm_sym.data import load_data, write_csv
-from edm_sym.errors import DataFormatError, ResultFormatError
-from edm_sym.result import EdmResult, StepRecord, dumps, load_result, save_result
+from edm_sym.application.cli import main
+from edm_sym.core.data import load_data, write_csv
+from edm_sym.core.errors import DataFormatError, ResultFormatError
+from edm_sym.core.result import EdmResult, StepRecord, dumps, load_result, save_result
 
 
 @pytest.fixture

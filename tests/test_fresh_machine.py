@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-from edm_sym.cli import main
-from edm_sym.doctor import TOOLS
-from edm_sym.report.pdf import LATEX_APT, LATEX_PACKAGES, used_packages
+from edm_sym.application.cli import main
+from edm_sym.application.doctor import TOOLS
+from edm_sym.outputs.report.pdf import LATEX_APT, LATEX_PACKAGES, used_packages
 
 ROOT = Path(__file__).resolve().parent.parent
 

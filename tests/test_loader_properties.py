@@ -14,13 +14,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from edm_sym.abstraction import load_config
-from edm_sym.cli import main
-from edm_sym.data import DataLog, load_data
-from edm_sym.errors import ConfigError, DataFormatError, EdmError, ResultFormatError
-from edm_sym.lugre import load_lugre
-from edm_sym.pipeline import load_pipeline
-from edm_sym.result import load_result
+from edm_sym.application.cli import main
+from edm_sym.application.pipeline import load_pipeline
+from edm_sym.core.data import DataLog, load_data
+from edm_sym.core.errors import ConfigError, DataFormatError, EdmError, ResultFormatError
+from edm_sym.core.result import load_result
+from edm_sym.engines.abstraction import load_config
+from edm_sym.engines.lugre import load_lugre
 
 REPO = Path(__file__).resolve().parents[1]
 RESULT = REPO / "examples" / "auger" / "result.json"

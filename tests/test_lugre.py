@@ -1,4 +1,4 @@
-"""Tests of edm_sym.lugre: the LuGre baseline (paper eqs. 8, 10-14)."""
+"""Tests of edm_sym.engines.lugre: the LuGre baseline (paper eqs. 8, 10-14)."""
 
 from __future__ import annotations
 
@@ -17,9 +17,9 @@ from hypothesis import strategies as st
 from scipy import signal
 from scipy.integrate import solve_ivp
 
-import edm_sym.lugre as lugre
-from edm_sym.errors import ResultFormatError
-from edm_sym.lugre import (
+import edm_sym.engines.lugre as lugre
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.engines.lugre import (
     METHODS,
     LuGreParams,
     LuGreResult,
@@ -586,7 +586,7 @@ def test_schema_is_declared_as_package_data():
     config = tomllib.loads(pyproject.read_text())
     package_data = config.get("tool", {}).get("setuptools", {}).get("package-data", {})
     candidates = [(p, "lugre/lugre.schema.json") for p in package_data.get("edm_sym", [])]
-    candidates += [(p, "lugre.schema.json") for p in package_data.get("edm_sym.lugre", [])]
+    candidates += [(p, "lugre.schema.json") for p in package_data.get("edm_sym.engines.lugre", [])]
     assert any(fnmatch.fnmatch(name, pattern) for pattern, name in candidates), (
         "pyproject.toml: [tool.setuptools.package-data] must ship the LuGre schema, e.g. "
         'edm_sym = [..., "lugre/*.json"]'

@@ -15,11 +15,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_lugre import COMPLIANT, SHA, STIFF, TS, paper_profile, synthetic, write_corrupted
 
-import edm_sym.lugre as lugre
-from edm_sym.cli import main
-from edm_sym.data import write_csv
-from edm_sym.errors import ResultFormatError
-from edm_sym.lugre import (
+import edm_sym.engines.lugre as lugre
+from edm_sym.application.cli import main
+from edm_sym.core.data import write_csv
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.engines.lugre import (
     BOTH,
     LUGRE_GA,
     METHODS,
@@ -102,7 +102,7 @@ def test_ga_meets_issue_8_acceptance(truth):
 @pytest.mark.slow
 def test_ga_and_scipy_reach_the_same_optimum_on_the_lugre_plant():
     # plant:lugre/abstraction with the paper's Step-1 weighting (t < 10 s).
-    from edm_sym.data import load_data
+    from edm_sym.engines.sources import load_data
 
     data = load_data("plant:lugre/abstraction")
     weights = (data.columns["t"] < 10.0).astype(float)

@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from edm_sym.lugre import LuGreParams, identify_lugre, simulate_lugre, steady_state
-from edm_sym.plant import PRESETS, simulate_plant
-from edm_sym.plant.excitation import STAIRCASE_LEVELS
+from edm_sym.engines.lugre import LuGreParams, identify_lugre, simulate_lugre, steady_state
+from edm_sym.engines.plant import PRESETS, simulate_plant
+from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS
 
 
 @pytest.mark.slow

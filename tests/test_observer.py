@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from edm_sym.cli import main
-from edm_sym.data import DataLog, load_data
-from edm_sym.observer import (
+from edm_sym.application.cli import main
+from edm_sym.core.data import DataLog, load_data
+from edm_sym.engines.observer import (
     ObserverOptions,
     fit_reference_model,
     observer_view,

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from edm_sym import cli
-from edm_sym.cli import export_main, main
-from edm_sym.data import write_csv
-from edm_sym.result import EdmResult, StepRecord, dumps
+from edm_sym.application import cli
+from edm_sym.application.cli import export_main, main
+from edm_sym.core.data import write_csv
+from edm_sym.core.result import EdmResult, StepRecord, dumps
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
 
@@ -223,9 +223,9 @@ def test_a_range_beyond_the_limit_is_refused_in_config_and_result(tmp_path: Path
                                                                   scaling: str, capsys) -> None:
     import json as _json
 
-    from edm_sym.abstraction import load_config
-    from edm_sym.errors import ConfigError
-    from edm_sym.result import load_result
+    from edm_sym.core.errors import ConfigError
+    from edm_sym.core.result import load_result
+    from edm_sym.engines.abstraction import load_config
 
     cfg = tmp_path / "c.toml"
     cfg.write_text(f'[ranges.gain]\nlow = {low!r}\nhigh = {high!r}\nscaling = "{scaling}"\n')

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from edm_sym.cli import main
-from edm_sym.errors import ConfigError
-from edm_sym.pipeline import load_pipeline
-from edm_sym.result import load_result
+from edm_sym.application.cli import main
+from edm_sym.application.pipeline import load_pipeline
+from edm_sym.core.errors import ConfigError
+from edm_sym.core.result import load_result
 
 QUICK_GA = """
 [ga]
@@ -94,8 +94,8 @@ def test_a_time_limit_that_is_no_duration_is_refused(tmp_path: Path, value: str,
 
 
 def test_a_data_file_where_the_pipeline_writes_is_refused_before_any_work(tmp_path: Path, capsys) -> None:
-    from edm_sym.data import write_csv
-    from edm_sym.plant import simulate_plant
+    from edm_sym.core.data import write_csv
+    from edm_sym.engines.plant import simulate_plant
 
     write_csv(tmp_path / "result.json", simulate_plant("lugre", "abstraction").columns)
     before = (tmp_path / "result.json").read_bytes()
@@ -111,7 +111,7 @@ def test_a_data_file_where_the_pipeline_writes_is_refused_before_any_work(tmp_pa
 def test_an_interrupted_abstraction_stops_the_pipeline_with_130(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
 ) -> None:
-    import edm_sym.abstraction as abstraction
+    import edm_sym.engines.abstraction as abstraction
 
     real = abstraction.abstract
 

@@ -1,4 +1,4 @@
-"""Tests of edm_sym.plant: the servo axis with DOB, velocity loop and RTOB."""
+"""Tests of edm_sym.engines.plant: the servo axis with DOB, velocity loop and RTOB."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import edm_sym.plant as plant
-from edm_sym.plant import (
+import edm_sym.engines.plant as plant
+from edm_sym.engines.plant import (
     COLUMNS,
     EXCITATIONS,
     PRESETS,
@@ -33,7 +33,7 @@ from edm_sym.plant import (
     stribeck_level,
     velocity_from_angle,
 )
-from edm_sym.plant.friction import solve_substep
+from edm_sym.engines.plant.friction import solve_substep
 
 STATS_FILE = Path(__file__).parent / "data" / "plant_stats.json"
 TWO_PI = 2.0 * math.pi

@@ -9,18 +9,18 @@ import numpy as np
 import pytest
 from test_abstraction import TS, friction_log
 
-from edm_sym.abstraction import abstract, parse_config
-from edm_sym.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
-from edm_sym.abstraction.selection import ParsimonySettings, parse_parsimony, select
-from edm_sym.abstraction.validation import Scorer, ValidationSettings, plan_holdout
-from edm_sym.abstraction.weighting import Weighting
-from edm_sym.cli import export_main, main
-from edm_sym.data import DataLog, write_csv
-from edm_sym.elements import default_ranges
-from edm_sym.errors import ConfigError, ResultFormatError
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.result import front_member, load_result, save_result
-from edm_sym.simulate import plain_loop
+from edm_sym.application.cli import export_main, main
+from edm_sym.core.data import DataLog, write_csv
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.errors import ConfigError, ResultFormatError
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.core.result import front_member, load_result, save_result
+from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
+from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony, select
+from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
+from edm_sym.engines.abstraction.weighting import Weighting
+from edm_sym.engines.simulate import plain_loop
 
 INPUTS = ("omega", "alpha")
 
@@ -225,7 +225,7 @@ def test_cli_bad_parsimony_options_exit_2_with_one_line(
 
 
 def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path: Path) -> None:
-    from edm_sym.report import write_report
+    from edm_sym.outputs.report import write_report
 
     res = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
                    config=parse_config(TINY, "t.toml"))
@@ -247,7 +247,7 @@ def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path
 
 def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Path) -> None:
     # The parsimony settings act after the search, so they are not part of the run's identity.
-    from edm_sym.result import dumps
+    from edm_sym.core.result import dumps
 
     ckpt = tmp_path / "r.json.checkpoint"
     cfg = parse_config(TINY, "t.toml")

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from conftest import TS, smooth_signal
 
-from edm_sym.elements import all_elements, default_ranges
-from edm_sym.elements.realisation import (
+from edm_sym.core.elements import all_elements, default_ranges
+from edm_sym.core.elements.realisation import (
     REALISATIONS,
     DelayLine,
     LinearFilter,
@@ -16,10 +16,10 @@ from edm_sym.elements.realisation import (
     StaticMap,
     dispatch,
 )
-from edm_sym.printing import EdmC99Printer, EdmPythonPrinter
-from edm_sym.report.rows import _EQUATIONS
-from edm_sym.symbolic.lti import _PARTS
-from edm_sym.symbolic.rowexpr import OPERATORS
+from edm_sym.engines.symbolic.lti import _PARTS
+from edm_sym.engines.symbolic.rowexpr import OPERATORS
+from edm_sym.outputs.printing import EdmC99Printer, EdmPythonPrinter
+from edm_sym.outputs.report.rows import _EQUATIONS
 
 RANGES = default_ranges(TS, 20.0)
 ELEMENTS = all_elements()

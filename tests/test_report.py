@@ -11,14 +11,14 @@ import sympy as sp
 import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
 
 import edm_sym
-from edm_sym.errors import DataFormatError, ToolMissingError
-from edm_sym.printing.latex import EdmLatexPrinter, escape_text, format_number
-from edm_sym.report import write_report
-from edm_sym.report.blocks import PLACEHOLDER, row_chain
-from edm_sym.report.context import check_report_context
-from edm_sym.report.figures import zoom_window
-from edm_sym.report.pdf import parse_log
-from edm_sym.symbolic.operators import LTI, Delay, Relay, s
+from edm_sym.core.errors import DataFormatError, ToolMissingError
+from edm_sym.engines.symbolic.operators import LTI, Delay, Relay, s
+from edm_sym.outputs.printing.latex import EdmLatexPrinter, escape_text, format_number
+from edm_sym.outputs.report import write_report
+from edm_sym.outputs.report.blocks import PLACEHOLDER, row_chain
+from edm_sym.outputs.report.context import check_report_context
+from edm_sym.outputs.report.figures import zoom_window
+from edm_sym.outputs.report.pdf import parse_log
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +104,7 @@ def test_row_chain_of_a_constant_and_of_a_non_chain() -> None:
 # -- context ---------------------------------------------------------------------------
 
 def test_check_report_context_refuses_unformatted_values() -> None:
-    from edm_sym.report.context import REPORT_KEYS
+    from edm_sym.outputs.report.context import REPORT_KEYS
 
     ctx = {k: [] for k in REPORT_KEYS}
     ctx["rows"] = [{"number": "1"}]
@@ -182,7 +182,7 @@ def test_difference_equations_print_the_simulator_coefficients(tmp_path: Path, e
 
 def test_pdf_without_latexmk_writes_the_tex_then_says_how_to_install(
         tmp_path: Path, example, example_model, monkeypatch) -> None:
-    monkeypatch.setattr("edm_sym.report.pdf.shutil.which", lambda name: None)
+    monkeypatch.setattr("edm_sym.outputs.report.pdf.shutil.which", lambda name: None)
     with pytest.raises(ToolMissingError) as info:
         write_report(example, tmp_path, model=example_model, pdf=True)
     msg = str(info.value)
@@ -208,7 +208,7 @@ def test_bad_inputs_are_refused_before_anything_is_written(tmp_path: Path, examp
 
 
 def test_friction_characteristic_of_the_example(example, example_model) -> None:
-    from edm_sym.report.runs import steady_state
+    from edm_sym.outputs.report.runs import steady_state
 
     st = steady_state(example, [r.role for r in example_model.rows], 5.0)
     assert st.rows == (0, 1, 2) and st.unsettled == ()
@@ -221,9 +221,9 @@ def test_friction_characteristic_of_the_example(example, example_model) -> None:
 
 
 def test_friction_characteristic_flags_a_row_that_never_settles() -> None:
-    from edm_sym.matrix import Compensator, make_matrix
-    from edm_sym.report.runs import steady_state
-    from edm_sym.result import EdmResult
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.core.result import EdmResult
+    from edm_sym.outputs.report.runs import steady_state
 
     m = make_matrix(["omega"], [("omega", [("integral", 0.5)]), ("omega", [("sign", 0.0)])])
     res = EdmResult(Compensator(m, 1e-3, {}, 10.0), "tau_ext")
@@ -233,7 +233,7 @@ def test_friction_characteristic_flags_a_row_that_never_settles() -> None:
 
 
 def test_term_notes_drop_plain_text_copies_of_expressions() -> None:
-    from edm_sym.report.rows import _drop_code
+    from edm_sym.outputs.report.rows import _drop_code
 
     assert _drop_code("not odd (0.0032*GAcos(Max(-0.5, omega))); through a filter") == (
         "not odd; through a filter")
@@ -243,7 +243,7 @@ def test_term_notes_drop_plain_text_copies_of_expressions() -> None:
 
 def test_a_row_that_makes_the_fit_worse_is_pointed_out(tmp_path: Path, example,
                                                        example_model) -> None:
-    from edm_sym.simulate import simulate
+    from edm_sym.engines.simulate import simulate
 
     cols = ugr.log_columns(example, "abstraction", n=2000)
     cols["tau_ext"] = cols["tau_ext"] - 3.0 * simulate(example, cols).rows[2]  # row 3 is wrong

@@ -14,10 +14,10 @@ import pytest
 import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
 
 import edm_sym
-from edm_sym.printing.latex import format_number
-from edm_sym.report import write_report
-from edm_sym.report.context import KIND_TITLES
-from edm_sym.report.pdf import AUX_SUFFIXES, compile_pdf
+from edm_sym.outputs.printing.latex import format_number
+from edm_sym.outputs.report import write_report
+from edm_sym.outputs.report.context import KIND_TITLES
+from edm_sym.outputs.report.pdf import AUX_SUFFIXES, compile_pdf
 
 pytestmark = [
     pytest.mark.toolchain,
@@ -89,8 +89,8 @@ def test_write_report_pdf_keeps_only_tex_figures_and_pdf(tmp_path: Path) -> None
 
 
 def _parameter_free():  # noqa: ANN202
-    from edm_sym.matrix import Compensator, make_matrix
-    from edm_sym.result import EdmResult
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.core.result import EdmResult
 
     m = make_matrix(ugr.INPUTS, [("omega", [("sign", 0.0), ("invert", 0.0)]),
                                  ("theta_w", [("asin", 0.0), ("through", 0.0)])])
@@ -122,7 +122,7 @@ def test_pdf_is_byte_identical_when_rebuilt(tmp_path: Path) -> None:
 
 
 def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None:
-    from edm_sym.report.pdf import LatexError
+    from edm_sym.outputs.report.pdf import LatexError
 
     tex = tmp_path / "x.tex"
     tex.write_text("\\documentclass{article}\\begin{document}\\undefinedmacro\\end{document}\n")
@@ -133,7 +133,7 @@ def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None
 
 def test_shipped_example_report_compiles_and_names_the_four_terms(tmp_path: Path) -> None:
     """examples/auger/result.json with the logs and LuGre file it records (report_inputs)."""
-    from edm_sym.exporting import report_inputs
+    from edm_sym.application.exporting import report_inputs
 
     result = edm_sym.load_result(REPO / "examples" / "auger" / "result.json")
     files = write_report(result, tmp_path, **report_inputs(result))

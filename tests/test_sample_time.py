@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from conftest import TS
 
-from edm_sym.cli import main
-from edm_sym.data import JITTER_RTOL, TIME_RTOL, DataLog, load_data, match_sample_time, write_csv
-from edm_sym.errors import DataFormatError
-from edm_sym.result import EdmResult, StepRecord, dumps
+from edm_sym.application.cli import main
+from edm_sym.core.data import JITTER_RTOL, TIME_RTOL, DataLog, load_data, match_sample_time, write_csv
+from edm_sym.core.errors import DataFormatError
+from edm_sym.core.result import EdmResult, StepRecord, dumps
 
 EMPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "DATA_EMPS.mat"
 

@@ -7,9 +7,9 @@ from conftest import TS, smooth_signal
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from edm_sym.elements import REGISTRY
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.simulate import fitness, plain_loop, simulate, simulate_row
+from edm_sym.core.elements import REGISTRY
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.engines.simulate import fitness, plain_loop, simulate, simulate_row
 
 
 def test_rows_run_left_to_right_and_sum(coulomb_viscous: Compensator) -> None:

@@ -8,11 +8,10 @@ import sympy as sp
 from conftest import TS, smooth_signal
 
 import edm_sym
-from edm_sym.elements import element
-from edm_sym.matrix import Compensator, make_matrix
-from edm_sym.printing.latex import latex
-from edm_sym.simulate import simulate_row
-from edm_sym.symbolic import (
+from edm_sym.core.elements import element
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.simulate import simulate_row
+from edm_sym.engines.symbolic import (
     LTI,
     Delay,
     Relay,
@@ -22,10 +21,11 @@ from edm_sym.symbolic import (
     simulate_system,
     to_tf,
 )
-from edm_sym.symbolic.functions import NUMPY_FUNCTIONS, GTan, Sat
-from edm_sym.symbolic.lti import z_polynomials
-from edm_sym.symbolic.operators import s
-from edm_sym.symbolic.simplify import minreal
+from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS, GTan, Sat
+from edm_sym.engines.symbolic.lti import z_polynomials
+from edm_sym.engines.symbolic.operators import s
+from edm_sym.engines.symbolic.simplify import minreal
+from edm_sym.outputs.printing.latex import latex
 
 OMEGA = sp.Symbol("omega", real=True)
 THETA_W = sp.Symbol("theta_w", real=True)
@@ -98,7 +98,7 @@ def test_unclassifiable_chain_decodes_to_its_composition() -> None:
     comp = comp_of([("omega", [("tan_amp", enc("tan_amp", 1.5)), ("log", enc("log", 0.2)),
                                ("acos", 0), ("power", enc("power", 2.0))])])
     row = decode(comp).rows[0]
-    from edm_sym.symbolic.functions import GAcos, SymLog, SymPow
+    from edm_sym.engines.symbolic.functions import GAcos, SymLog, SymPow
     assert row.expr == SymPow(GAcos(SymLog(a(1) * GTan(OMEGA), a(2))), a(4))
 
 
@@ -145,7 +145,7 @@ def test_guards_vanish_when_the_argument_stays_inside() -> None:
     assert simp(Sat(Sat(x, -1.0, 1.0), -0.5, 0.5)) == Sat(x, -0.5, 0.5)
     assert simp(Sat(sp.sign(x), -3.0, 3.0)) == sp.sign(x)
     assert simp(Sat(sp.sign(x), -0.3, 0.3)) == sp.Float(0.3) * sp.sign(x)
-    from edm_sym.symbolic.functions import GAsin
+    from edm_sym.engines.symbolic.functions import GAsin
     assert simp(GAsin(sp.sin(x))) == sp.asin(sp.sin(x))
     assert simp(GTan(sp.atan(2.0 * x))) == Sat(2.0 * x, -1e6, 1e6)
 
@@ -203,7 +203,7 @@ def test_latex_of_the_operators() -> None:
 
 
 def test_existing_fields_are_kept(coulomb_viscous: Compensator) -> None:
-    from edm_sym.symbolic import build_model
+    from edm_sym.engines.symbolic import build_model
     base = build_model(coulomb_viscous)
     full = edm_sym.decode(coulomb_viscous)
     for rb, rf in zip(base.rows, full.rows, strict=True):
@@ -310,7 +310,7 @@ def test_nasty_matrix_decodes() -> None:
 
 def test_decode_of_a_result_through_the_package_api(coulomb_viscous: Compensator,
                                                       tmp_path) -> None:
-    from edm_sym.result import EdmResult, load_result, save_result
+    from edm_sym.core.result import EdmResult, load_result, save_result
 
     prov = {"seed": 3, "package_version": "0.1.0", "data_sha256": "0" * 64}
     path = save_result(EdmResult(coulomb_viscous, "tau_ext", (), prov), tmp_path / "result.json")

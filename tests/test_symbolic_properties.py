@@ -18,12 +18,12 @@ from conftest import TS, smooth_signal
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from edm_sym.elements import REGISTRY, StaticElement
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.simulate import simulate_row
-from edm_sym.symbolic import PhysicalTerm, decode, simulate_system
-from edm_sym.symbolic.classify import KINDS
-from edm_sym.symbolic.functions import NUMPY_FUNCTIONS
+from edm_sym.core.elements import REGISTRY, StaticElement
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.engines.simulate import simulate_row
+from edm_sym.engines.symbolic import PhysicalTerm, decode, simulate_system
+from edm_sym.engines.symbolic.classify import KINDS
+from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
 
 INPUTS = ("theta_w", "omega", "alpha")
 STATIC = sorted(c for c, el in REGISTRY.items() if issubclass(el, StaticElement))

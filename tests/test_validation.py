@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from test_abstraction import TS, friction_log
 
-from edm_sym.abstraction import abstract, parse_config
-from edm_sym.abstraction.validation import ValidationSettings, parse_validation
-from edm_sym.cli import main
-from edm_sym.data import DataLog, write_csv
-from edm_sym.errors import ConfigError
-from edm_sym.result import dumps, load_result, matrix_to_json, parse_result, save_result
-from edm_sym.simulate import plain_loop
+from edm_sym.application.cli import main
+from edm_sym.core.data import DataLog, write_csv
+from edm_sym.core.errors import ConfigError
+from edm_sym.core.result import dumps, load_result, matrix_to_json, parse_result, save_result
+from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
+from edm_sym.engines.simulate import plain_loop
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
@@ -109,7 +109,7 @@ def test_a_share_from_the_config_or_the_call(log: DataLog) -> None:
 def test_a_second_log_is_held_out_whole(log: DataLog, tmp_path: Path) -> None:
     other, _ = friction_log(1.0, seed=9)
     path = write_csv(tmp_path / "val.csv", other.columns)
-    from edm_sym.data import load_data
+    from edm_sym.core.data import load_data
 
     val = load_data(path)
     res = run(log, validate=val)

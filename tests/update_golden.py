@@ -26,8 +26,8 @@ GENERATED = REPO / "generated" / "auger"
 
 def _kinds_result():  # noqa: ANN202  (imports edm_sym lazily)
     """A hand-written 4x4 matrix with every stage kind and every guard helper."""
-    from edm_sym.matrix import Compensator, make_matrix
-    from edm_sym.result import EdmResult
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.core.result import EdmResult
 
     rows = [
         ("omega", [("notch", 0.6), ("dead_time", 0.2), ("hysteresis", 0.5), ("gain", 0.55)]),
@@ -65,7 +65,7 @@ def render_case(case: Case, out_dir: Path) -> list[Path]:
     import warnings
 
     from edm_sym import load_result
-    from edm_sym.exporting import export
+    from edm_sym.application.exporting import export
 
     result = load_result(case.result_file)
     written: list[Path] = []
@@ -78,8 +78,8 @@ def render_case(case: Case, out_dir: Path) -> list[Path]:
 
 def main() -> int:
     """Rewrite every golden folder and generated/auger; print what was written."""
-    from edm_sym.exporting import export
-    from edm_sym.result import load_result, save_result
+    from edm_sym.application.exporting import export
+    from edm_sym.core.result import load_result, save_result
 
     for case in CASES:
         folder = GOLDEN / case.name

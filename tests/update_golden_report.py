@@ -48,7 +48,7 @@ def _profile(t: np.ndarray, kind: str) -> np.ndarray:
 
 def log_columns(result, kind: str, n: int = 10_000) -> dict[str, np.ndarray]:  # noqa: ANN001
     """A free-motion log whose target is ``result``'s own compensator plus a small unmodelled part."""
-    from edm_sym.simulate import simulate
+    from edm_sym.engines.simulate import simulate
 
     t = np.arange(n) * TS
     omega = _profile(t, kind)
@@ -79,7 +79,7 @@ def write_log(path: Path, columns: dict[str, np.ndarray]) -> Path:
 
 def write_lugre(path: Path, data: Path) -> Path:
     """A LUGRE.json with fixed, plausible parameters (not identified: the report only reads it)."""
-    from edm_sym.lugre import LuGreParams, LuGreResult, save_lugre
+    from edm_sym.engines.lugre import LuGreParams, LuGreResult, save_lugre
 
     params = LuGreParams(v_s=0.05, tau_c=0.9, tau_s=1.1, z0=0.0, sigma0=2.0e3, sigma1=1.0,
                          sigma2=0.006)
@@ -91,15 +91,15 @@ def write_lugre(path: Path, data: Path) -> Path:
 
 def example_result():  # noqa: ANN201
     """The hand-written auger fixture (tests/data/handwritten_result.json): known content."""
-    from edm_sym.result import load_result
+    from edm_sym.core.result import load_result
 
     return load_result(EXAMPLE)
 
 
 def steps_result():  # noqa: ANN201
     """A 1-row result (Coulomb friction) with two recorded hierarchical steps."""
-    from edm_sym.matrix import Compensator, make_matrix
-    from edm_sym.result import EdmResult, StepRecord
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.core.result import EdmResult, StepRecord
 
     m1 = make_matrix(INPUTS, [("omega", [("sign", 0.0), ("gain", 0.5475)])])
     comp = Compensator(m1, TS, {}, 10.0)
@@ -117,8 +117,8 @@ def steps_result():  # noqa: ANN201
 
 def eight_row_result():  # noqa: ANN201
     """An 8x5 matrix with every kind of stage, nested functions and long expressions."""
-    from edm_sym.matrix import Compensator, make_matrix
-    from edm_sym.result import EdmResult
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.core.result import EdmResult
 
     rows = [
         ("omega", [("sign", 0.0), ("gain", 0.55), ("through", 0.0), ("through", 0.0),
@@ -184,7 +184,7 @@ def normalize(text: str) -> str:
 
 def render_case(case: Case, folder: Path) -> str:
     """Write the case's report (no PDF) into ``folder`` and return its normalized .tex."""
-    from edm_sym.report import write_report
+    from edm_sym.outputs.report import write_report
 
     result, kw = case_inputs(case, folder)
     files = write_report(result, folder, **kw)

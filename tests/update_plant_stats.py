@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from edm_sym.plant import EXCITATIONS, PRESETS, simulate_plant
+from edm_sym.engines.plant import EXCITATIONS, PRESETS, simulate_plant
 
 STATS_FILE = Path(__file__).parent / "data" / "plant_stats.json"
 SEED = 0

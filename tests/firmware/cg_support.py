@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from edm_sym.elements import all_elements, default_ranges, element
-from edm_sym.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
-from edm_sym.result import EdmResult
+from edm_sym.core.elements import all_elements, default_ranges, element
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
+from edm_sym.core.result import EdmResult
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent

@@ -1,0 +1,179 @@
+"""``edm abstract``: the command-line side of the abstraction (docs/cli.md#edm-abstract).
+
+Bad input (config, columns, options) raises :class:`~edm_sym.core.errors.ConfigError`
+or :class:`~edm_sym.core.errors.DataFormatError`, which ``edm`` prints as one line
+with exit status 2. A time limit ends the run with exit 0, Ctrl-C (or
+SIGTERM) with exit 1; both write the best result found so far, and the
+checkpoint ``<output>.checkpoint`` lets ``--resume`` continue the run to the
+result an uninterrupted run gives.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from edm_sym.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from edm_sym.core.result import EdmResult
+
+
+def checkpoint_path(output: str | Path) -> Path:
+    """The checkpoint next to an output file: ``<output>.checkpoint``."""
+    out = Path(output)
+    return out.with_name(out.name + ".checkpoint")
+
+
+def _raise_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def _warn_bounds(result: EdmResult, output: Path) -> None:
+    """The closing summary's flags: parameters at their range bounds (docs/describe.md)."""
+    from edm_sym.core.bounds import bound_summary
+
+    lines = bound_summary(result.compensator)
+    for line in lines:
+        print(f"edm abstract: warning: {line}", file=sys.stderr)
+    if lines:
+        print(f"edm abstract: see `edm describe {output}` for every row's flags", file=sys.stderr)
+
+
+def run_cli(args: argparse.Namespace) -> int:
+    """Run ``edm abstract`` with parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
+        ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
+        ``workers``, ``validation_share``, ``validate``, ``select``,
+        ``prune_tolerance``, ``no_prune``.
+
+    Returns
+    -------
+    int
+        0 when done (also at the time limit), 130 when interrupted (the best
+        result so far is written anyway, and the checkpoint kept).
+    """
+    from edm_sym.core.result import save_result
+    from edm_sym.engines.abstraction.run import abstract
+    from edm_sym.engines.abstraction.schedule import default_config, load_config
+    from edm_sym.engines.abstraction.validation import ValidationSettings
+    from edm_sym.engines.sources import load_data
+
+    config = load_config(args.config) if args.config else default_config()
+    inputs = [name.strip() for name in str(args.inputs).split(",")]
+    if not all(inputs):
+        raise ConfigError("--inputs", f"expected comma-separated column names, found "
+                                      f"{args.inputs!r}")
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError("--workers", f"expected an integer >= 1, found {args.workers}")
+    if args.seed < 0:
+        raise ConfigError("--seed", f"expected an integer >= 0, found {args.seed}")
+    share = getattr(args, "validation_share", None)
+    validate_path = getattr(args, "validate", None)
+    if share is not None and validate_path is not None:
+        raise ConfigError("--validation-share", f"expected no share with --validate (the "
+                                                f"second log is held out whole), found {share}")
+    if share is not None:
+        try:
+            config = replace(config, validation=ValidationSettings(share, config.validation.unit))
+        except ConfigError as exc:
+            raise ConfigError("--validation-share", exc.problem) from None
+    config = _parsimony_options(config, args)
+    data = load_data(args.data, ts=args.ts)
+    data.column(args.target, role="target column")
+    data.stack(inputs)
+    validate = None
+    if validate_path is not None:
+        validate = load_data(validate_path, ts=args.ts, require=[args.target, *inputs])
+    output = Path(args.output)
+    ckpt = checkpoint_path(output)
+    if args.resume and not ckpt.exists():
+        print(f"edm abstract: no checkpoint {ckpt}; starting from the beginning",
+              file=sys.stderr)
+    progress = not args.quiet and sys.stderr.isatty()
+    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        result = abstract(data, target=args.target, inputs=inputs, config=config,
+                          seed=args.seed, time_limit=args.time_limit, progress=progress,
+                          checkpoint=ckpt, resume=args.resume, workers=args.workers,
+                          validate=validate, select=getattr(args, "select", None))
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    save_result(result, output)
+    reason = result.provenance.get("stop_reason")
+    if reason == "interrupted":
+        print(f"edm abstract: interrupted; wrote the best so far to {output} "
+              f"(continue with --resume)", file=sys.stderr)
+    elif reason == "time_limit":
+        print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
+    print(f"wrote {output}")
+    print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")
+    for line in summary_lines(result.validation):
+        print(line)
+    par = result.parsimony
+    if par:
+        member = par["front"][par["selected"] - 1]
+        print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
+              f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
+    _warn_bounds(result, output)
+    return 130 if reason == "interrupted" else 0
+
+
+def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
+    from edm_sym.engines.abstraction.selection import ParsimonySettings, check_select
+
+    par = config.parsimony
+    tol = getattr(args, "prune_tolerance", None)
+    if tol is not None:
+        try:
+            par = ParsimonySettings(par.prune, tol, par.select)
+        except ConfigError as exc:
+            raise ConfigError("--prune-tolerance", exc.problem) from None
+    if getattr(args, "no_prune", False):
+        par = ParsimonySettings(False, par.tolerance, par.select)
+    if getattr(args, "select", None) is not None:
+        check_select(args.select, "--select")
+    return replace(config, parsimony=par)
+
+
+def summary_lines(validation: dict) -> list[str]:
+    """Closing lines of ``edm abstract``: what was held out and both scores.
+
+    Parameters
+    ----------
+    validation : dict
+        The ``validation`` entry of a result.
+
+    Returns
+    -------
+    list of str
+        E.g. ``held out: rows 800-1000 of the log (last 20 %)`` and one line
+        per part with eq. 8 and the RMSE.
+    """
+    if not validation:
+        return []
+    held = validation["held_out"]
+    if held["kind"] == "segment":
+        out = [f"held out: rows {held['rows'][0]}-{held['rows'][1]} of the log "
+               f"(last {100 * held['share']:g} %)"]
+    elif held["kind"] == "file":
+        out = [f"held out: {held['file']} ({held['samples']} samples)"]
+    else:
+        out = ["held out: nothing (training scores only)"]
+    for part in ("training", "validation"):
+        score = validation.get(part)
+        if score is None:
+            continue
+        (fit, unit), (rmse, _) = score["fitness"], score["rmse"]
+        fit_text = "n/a (Lambda = 0 there)" if fit is None else f"{fit:.6g} {unit}"
+        rmse_text = "inf" if rmse is None else f"{rmse:.6g} {unit}"
+        out.append(f"{part}: fitness (eq. 8) {fit_text}, rmse {rmse_text}")
+    return out

@@ -1,0 +1,524 @@
+"""Command line: ``edm`` and ``edm-export`` (docs/cli.md).
+
+Exit status: 0 done; 1 the work itself failed; 2 bad input or usage. Bad input
+prints one line naming the file and field, row or column, with what was
+expected and what was found; no traceback reaches the user (set EDM_DEBUG=1 to
+see one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import traceback
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ResultFormatError, ToolMissingError
+from edm_sym.core.fileio import check_outputs
+
+
+class UsageError(EdmError):
+    """Bad command-line usage (exit 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2: docs/cli.md#exit-status
+        raise UsageError(f"{self.prog}: {message}")
+
+
+def _shown(text: str) -> str:
+    """An option's value for a message: quoted, and cut when it is very long."""
+    return repr(text) if len(text) <= 40 else f"{text[:20]!r}... ({len(text)} characters)"
+
+
+def _finite_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, found {_shown(text)}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, found {_shown(text)}")
+    return v
+
+
+def _positive_float(text: str) -> float:
+    v = _finite_float(text)
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, found {_shown(text)}")
+    return v
+
+
+def _seed(text: str) -> int:
+    """A random seed: an integer in [0, 2**32), which numpy's generators take."""
+    if not (text.isascii() and text.isdigit() and len(text) <= 10 and int(text) < 2**32):
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0 and < {2**32}, found {_shown(text)}")
+    return int(text)
+
+
+#: Help of every DATA argument.
+DATA_HELP = "a log: CSV, .npz, .mat, or plant:PRESET/EXCITATION[@SEED] (docs/cli.md#data-files)"
+#: Help of every --ts option.
+TS_HELP = "sample time [s] of a log without a 't' column"
+
+
+def _add_version(parser: argparse.ArgumentParser) -> None:
+    from edm_sym.core.version import __version__
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+
+
+def _add_export_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("result", metavar="RESULT.json", help="result file to export")
+    p.add_argument("--target", required=True, choices=["c", "python", "latex", "all"],
+                   help="C header and source, a Python module, the LaTeX report, or all of them")
+    p.add_argument("-o", "--out-dir", metavar="DIR",
+                   help="output folder (default: generated/<folder holding RESULT>/)")
+    p.add_argument("--prefix", default="edm_comp", help="file and symbol prefix (default edm_comp)")
+    p.add_argument("--real", default="double", choices=["float", "double"],
+                   help="the C real type (default double)")
+    p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
+    p.add_argument("--data", metavar="DATA", help="abstraction log, for the report's figures")
+    p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
+    p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
+    p.add_argument("--ts", type=_positive_float, help="sample time of logs without a 't' column")
+    p.add_argument("--front-member", type=int, metavar="K",
+                   help="export member K (1-based) of the result's parsimony front instead of "
+                        "the selected one")
+    p.set_defaults(func=_cmd_export)
+
+
+def _percent(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a percentage, found {text!r}") from None
+    if not 0 <= v < 100:
+        raise argparse.ArgumentTypeError(f"expected a percentage in [0, 100), found {text}")
+    return v
+
+
+def _add_describe_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("result", metavar="RESULT.json", help="result file to describe")
+    p.add_argument("--data", metavar="DATA", help="log to measure the contributions on "
+                   "(default: the evaluation, else the abstraction log the result records)")
+    p.add_argument("--json", action="store_true", help="print the stable JSON of docs/describe.md")
+    p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
+                   help="a row below this share of the target's RMS is negligible (default 1)")
+    p.add_argument("--ts", type=_positive_float, help="sample time of a log without a 't' column")
+    p.set_defaults(func=_cmd_describe)
+
+
+def _cmd_describe(args: argparse.Namespace) -> int:
+    from edm_sym.engines.description import describe
+    from edm_sym.engines.symbolic.significance import SignificanceOptions
+
+    desc = describe(args.result, data=args.data, ts=args.ts,
+                    options=SignificanceOptions(threshold=args.threshold / 100))
+    print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``edm`` argument parser with all its subcommands."""
+    parser = _Parser(prog="edm", description="Element Description Method compensators for "
+                     "reaction torque observers: abstract, simulate, export.",
+                     epilog="examples:\n"
+                            "  edm plant --preset auger --excitation abstraction -o abs.csv\n"
+                            "  edm abstract abs.csv --target tau_ext --inputs theta_w,omega,alpha -o r.json\n"
+                            "  edm describe r.json\n"
+                            "  edm-export r.json --target c\n"
+                            "docs: docs/cli.md",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_version(parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
+
+    p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--target", required=True, metavar="COL",
+                   help="the column the compensator reproduces (the observer's torque estimate)")
+    p.add_argument("--inputs", required=True, metavar="COL[,COL...]",
+                   help="the columns a row may take as its input, e.g. theta_w,omega,alpha")
+    p.add_argument("--config", metavar="FILE.toml",
+                   help="the schedule and GA settings (default: the default schedule, docs/abstraction.md)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed; the same seed gives the same "
+                   "result.json (default 0)")
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
+                   help="end the search at this wall time and write the best so far (default: none, "
+                        "the config's generation budget)")
+    p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json",
+                   help="the result file (default result.json; a checkpoint is kept beside it)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--validation-share", type=float, metavar="SHARE",
+                   help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
+    p.add_argument("--validate", metavar="FILE",
+                   help="a second log held out as a whole (the GA fits all of DATA)")
+    p.add_argument("--select", metavar="RULE",
+                   help="exported member of the pruned front: best, knee or simplest-within=PCT "
+                        "(default: simplest-within=<tolerance>, 1 %%)")
+    p.add_argument("--prune-tolerance", type=float, metavar="REL",
+                   help="relative worsening a simplification may cost (default 0.01)")
+    p.add_argument("--no-prune", action="store_true",
+                   help="export the search's model as it is (no pruning, no front)")
+    p.set_defaults(func=_cmd_abstract)
+
+    _add_describe_args(sub.add_parser(
+        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
+
+    p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
+    p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("-o", "--output", metavar="OUT.csv",
+                   help="output CSV (default: <DATA stem>_sim.csv in the current folder)")
+    p.add_argument("--ts", type=_positive_float,
+                   help="sample time [s] of a log without a 't' column (default: the model's)")
+    p.add_argument("--resample", action="store_true",
+                   help="resample a log whose sample time differs from the model's by more than "
+                        "0.1 %% onto the model's grid (default: refuse it)")
+    p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
+    p.add_argument("--preset", required=True, metavar="NAME",
+                   help="the plant: auger, ballscrew or lugre (docs/plant.md)")
+    p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"],
+                   help="velocity steps then the chirp of eq. 9 (abstraction), or eq. 17 (evaluation)")
+    p.add_argument("-o", "--output", metavar="DATA.csv",
+                   help="output CSV (default: <preset>_<excitation>.csv)")
+    p.add_argument("--seed", type=_seed, default=0, help="noise seed (default 0)")
+    p.set_defaults(func=_cmd_plant)
+
+    p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
+    p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--reuse", action="store_true",
+                   help="keep an existing lugre.json / result.json (evaluate and export only)")
+    p.set_defaults(func=_cmd_pipeline)
+
+    p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--position", required=True, metavar="COL", help="the measured position column")
+    p.add_argument("--force", required=True, metavar="COL",
+                   help="the force (torque) command column, or a controller output to scale")
+    p.add_argument("--force-gain", default="1", metavar="NUM|NAME",
+                   help="number, or name of a scalar stored in DATA (e.g. gtau)")
+    p.add_argument("--nominal-inertia", required=True, type=_finite_float, metavar="M_N",
+                   help="the nominal mass or inertia the observer subtracts times the acceleration")
+    p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ",
+                   help="corner of the zero-phase filter on the position (default 100 Hz)")
+    p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv",
+                   help="output CSV (default observer.csv)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    p.set_defaults(func=_cmd_observe)
+
+    p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
+    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("--target", required=True, metavar="COL", help="the torque column the model fits")
+    p.add_argument("--velocity", required=True, metavar="COL", help="the velocity column")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed of the global stage (default 0)")
+    p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
+                   help="end the identification at this wall time (default: none)")
+    p.add_argument("--method", default="scipy", choices=["scipy", "ga", "both"],
+                   help="scipy's global + local search, the project's GA, or both compared "
+                        "(default scipy; docs/lugre.md)")
+    p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json",
+                   help="the LuGre file (default lugre.json)")
+    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    p.set_defaults(func=_cmd_lugre)
+
+    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
+    p.add_argument("--json", action="store_true",
+                   help="print a JSON list of {kind, name, apt, purpose, found, location} instead")
+    p.set_defaults(func=_cmd_doctor)
+    return parser
+
+
+def _cmd_doctor(args: argparse.Namespace) -> int:
+    from dataclasses import asdict
+
+    from edm_sym.application.doctor import checks, report
+
+    found = checks()
+    if args.json:
+        print(json.dumps([dict(asdict(c), found=c.found) for c in found], indent=2, sort_keys=True))
+    else:
+        print(report(found))
+    return 0
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from edm_sym.core.result import load_result
+
+    result = load_result(args.result)
+    if args.front_member is not None:
+        from edm_sym.core.result import front_member
+
+        result = front_member(result, args.front_member)
+    try:
+        from edm_sym.application.exporting import export
+    except ImportError:
+        raise ToolMissingError("edm export: code generation is not available in this build") from None
+    out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
+    inputs = [args.result, args.data, args.eval_data, args.lugre]
+    check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
+                  option="-o" if args.out_dir else "output folder")
+    written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
+                     data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
+    for path in written:
+        print(path)
+    return 0
+
+
+def _export_names(args: argparse.Namespace) -> list[str]:
+    """The files an export writes into its folder (the report's figures aside)."""
+    names = {"c": [f"{args.prefix}.h", f"{args.prefix}.c"], "python": [f"{args.prefix}.py"],
+             "latex": [f"{args.prefix}_report.tex"] + ([f"{args.prefix}_report.pdf"] if args.pdf else [])}
+    targets = list(names) if args.target == "all" else [args.target]
+    return [n for t in targets for n in names[t]]
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from edm_sym.core.data import write_csv
+    from edm_sym.core.fitness import rms
+    from edm_sym.engines.sources import load_data
+
+    model_path = Path(args.model)
+    out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
+    check_outputs([out], [args.model, args.data])
+    # The model is validated completely before the data is read.
+    if _model_kind(model_path) == "edm-lugre":
+        from edm_sym.engines.lugre import load_lugre, simulate_lugre
+
+        lugre = load_lugre(model_path)
+        target, velocity = lugre.target_name, lugre.velocity_name
+        data = load_data(args.data, ts=args.ts, require=[velocity], default_ts=lugre.sample_time)
+        data = _match_ts(model_path.name, lugre.sample_time, data, args.resample)
+        cols = {"t": _time_column(data)}
+        cols["tau_cmp"] = simulate_lugre(lugre.params, data.columns[velocity], data.ts)
+    else:
+        from edm_sym.core.result import load_result
+        from edm_sym.engines.simulate import simulate
+
+        result = load_result(model_path)
+        target = result.target
+        data = load_data(args.data, ts=args.ts, require=result.inputs, default_ts=result.sample_time)
+        data = _match_ts(model_path.name, result.sample_time, data, args.resample)
+        sim = simulate(result, data)
+        cols = {"t": _time_column(data)}
+        cols.update({f"row_{j}": row for j, row in enumerate(sim.rows, start=1)})
+        cols["tau_cmp"] = sim.total
+    rmse = None
+    if target in data.columns:
+        cols["residual"] = data.columns[target] - cols["tau_cmp"]
+        rmse = rms(cols["residual"])
+    write_csv(out, cols)
+    print(f"wrote {out}")
+    print(f"rmse {rmse:.10g}" if rmse is not None else f"rmse nan (no column {target!r} in DATA)")
+    return 0
+
+
+def _match_ts(name: str, ts: float, data, resample: bool):  # noqa: ANN001, ANN202
+    """The log on the model's sample time (docs/data.md, "Sample time"); says what it assumed."""
+    from edm_sym.core.data import match_sample_time
+
+    out = match_sample_time(data, ts, model=name, resample=resample)
+    if out is not data:
+        print(f"resampled {data.source} from {data.ts:.9g} s to {ts:.9g} s", file=sys.stderr)
+    elif data.ts != ts:
+        print(f"sample time: {data.ts:.9g} s in {data.source}, {ts:.9g} s in {name} "
+              f"(relative drift {abs(data.ts - ts) / ts:.2g}, accepted)", file=sys.stderr)
+    return out
+
+
+def _time_column(data):  # noqa: ANN001, ANN202
+    """The log's own time column, or one built from its sample time (the output starts with t)."""
+    import numpy as np
+
+    return data.columns["t"] if "t" in data.columns else np.arange(len(data)) * data.ts
+
+
+def _model_kind(path: Path) -> str:
+    try:
+        doc = json.loads(path.read_text("utf-8"))
+    except OSError as exc:
+        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
+    if not isinstance(doc, dict):
+        raise ResultFormatError(f"{path.name}: (top level)",
+                                f"expected a JSON object, found {type(doc).__name__}")
+    kind = doc.get("format")
+    if kind not in ("edm-result", "edm-lugre"):
+        raise ResultFormatError(f"{path.name}: format",
+                                f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')
+    return kind
+
+
+def _cmd_plant(args: argparse.Namespace) -> int:
+    from edm_sym.core.data import write_csv
+    from edm_sym.engines.plant import PRESETS, simulate_plant
+
+    if args.preset not in PRESETS:
+        raise UsageError(f"edm plant: --preset: expected one of {', '.join(sorted(PRESETS))}, "
+                         f"found {args.preset!r}")
+    out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
+    check_outputs([out])
+    log = simulate_plant(args.preset, args.excitation, seed=args.seed)
+    write_csv(out, log.columns)
+    print(f"wrote {out}")
+    return 0
+
+
+def _cmd_pipeline(args: argparse.Namespace) -> int:
+    from edm_sym.application.pipeline import run_pipeline
+
+    run_pipeline(args.pipeline, progress=not args.quiet and sys.stderr.isatty(), reuse=args.reuse)
+    return 0
+
+
+def _cmd_observe(args: argparse.Namespace) -> int:
+    from edm_sym.core.data import write_csv
+    from edm_sym.engines.observer import ObserverOptions, observer_view
+    from edm_sym.engines.sources import load_data
+
+    try:
+        gain: float | str = float(args.force_gain)
+    except ValueError:
+        gain = args.force_gain
+    opts = ObserverOptions(args.position, args.force, args.nominal_inertia, gain, args.cutoff)
+    check_outputs([args.output], [args.data])
+    view = observer_view(load_data(args.data, ts=args.ts), opts)
+    write_csv(args.output, view.columns)
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _cmd_lugre(args: argparse.Namespace) -> int:
+    from edm_sym.engines.lugre import identify_lugre, save_lugre
+    from edm_sym.engines.sources import load_data
+
+    check_outputs([args.output], [args.data])
+    data = load_data(args.data, ts=args.ts, require=[args.target, args.velocity])
+    res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
+                         method=args.method, seed=args.seed, time_limit=args.time_limit)
+    save_lugre(args.output, res, target=args.target, velocity=args.velocity,
+               data_sha256=data.sha256, seed=args.seed)
+    print(f"wrote {args.output}")
+    for name, score in (res.comparison or {}).items():
+        print(f"{name} fitness {score.fitness:.10g} ({score.evaluations} evaluations)")
+    print(f"rmse {res.rmse:.10g}")
+    return 0
+
+
+def _cmd_abstract(args: argparse.Namespace) -> int:
+    try:
+        from edm_sym.application.abstract_cli import run_cli
+    except ImportError:
+        raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
+    out = Path(args.output)
+    # The checkpoint beside the output is written and, at the end, deleted: never an input.
+    check_outputs([out, out.with_name(out.name + ".checkpoint")], [args.data, args.config] if args.config
+                  else [args.data])
+    return run_cli(args)
+
+
+#: Exit statuses of every command (docs/cli.md#exit-status).
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+#: Where a bug is reported (exit 1 says so).
+REPORT_BUG = "this is a bug of edm_sym: please report it with the output of EDM_DEBUG=1"
+
+
+def _raise_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
+    def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
+        print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+
+    import signal
+
+    # SIGTERM (a job scheduler, `kill`) ends a command like Ctrl-C: cleanly, exit 130.
+    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line
+            return _dispatch(argv, parser)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _files_named(argv: Sequence[str] | None) -> str:
+    """The command's arguments that name existing files, for a message that has no file of its own."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    files = [a for a in args if not a.startswith("-") and Path(a).is_file()]
+    return ", ".join(files) or "input"
+
+
+def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
+    try:
+        args = parser.parse_args(argv)
+        return int(args.func(args) or 0)
+    except (EdmError, ValueError) as exc:
+        if isinstance(exc, ToolMissingError):
+            print(f"{parser.prog}: {exc}", file=sys.stderr)
+            return EXIT_FAILED
+        if os.environ.get("EDM_DEBUG"):
+            traceback.print_exc()
+        # ValueError here comes from validation inside the library: bad input.
+        line = " ".join(str(exc).split())
+        print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"{parser.prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except ExternalToolError as exc:  # LaTeX or a compiler failed: the work failed, not edm_sym
+        print(f"{parser.prog}: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_FAILED
+    except RecursionError:
+        print(f"{parser.prog}: {_files_named(argv)}: {TOO_DEEP}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except MemoryError:
+        print(f"{parser.prog}: {_files_named(argv)}: the work does not fit in this machine's memory; "
+              "use a shorter log or smaller sizes", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # a file the command could not read or write
+        where = exc.filename if exc.filename else _files_named(argv)
+        print(f"{parser.prog}: {where}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # the work itself failed: one line, exit 1
+        if os.environ.get("EDM_DEBUG"):
+            traceback.print_exc()
+        print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              f"({REPORT_BUG})", file=sys.stderr)
+        return EXIT_FAILED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``edm``."""
+    return _run(argv, build_parser())
+
+
+def export_main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``edm-export`` (the same as ``edm export``)."""
+    parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.",
+                     epilog="examples:\n  edm-export result.json --target c\n"
+                            "  edm-export result.json --target all --pdf -o gen/\n"
+                            "docs: docs/cli.md#edm-export",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_version(parser)
+    _add_export_args(parser)
+    return _run(argv, parser)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,119 @@
+"""Export: a result as code and report, from one symbolic model (the application layer).
+
+:func:`export` checks the options, makes the result's symbolic model once --
+the full :func:`~edm_sym.engines.symbolic.decode` when the LaTeX report is among the
+targets, else only the stages the code needs -- and hands that same model to
+the code renderer (:mod:`edm_sym.outputs.render`) and to the report
+(:mod:`edm_sym.outputs.report`). ``edm_sym.export`` and ``edm export`` call it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from edm_sym.core.data import is_plant_spec
+from edm_sym.core.errors import ExternalToolError, ToolMissingError
+from edm_sym.outputs.render import REPORT, render, target_names, write_files
+from edm_sym.outputs.render.context import source_of, validate_prefix, validate_real
+
+__all__ = ["export", "report_inputs"]
+
+
+def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_comp",
+           real: str = "double", pdf: bool = False, data: Any = None, eval_data: Any = None,
+           lugre: Any = None, ts: float | None = None) -> list[Path]:
+    """Render ``result`` as C, Python, the LaTeX report or all of them into ``out_dir``.
+
+    Parameters
+    ----------
+    result : EdmResult
+        The model to export (``edm_sym.load_result``).
+    target : {"c", "python", "latex", "all"}
+        ``"c"`` writes ``<prefix>.h`` and ``<prefix>.c``; ``"python"`` writes
+        ``<prefix>.py``; ``"latex"`` writes the report ``<prefix>_report.tex``
+        and its figures; ``"all"`` writes every target from one decoding.
+    out_dir : path-like
+        The output folder; created when missing.
+    prefix : str
+        A C identifier; default ``"edm_comp"``.
+    real : {"float", "double"}
+        The C real type; default ``"double"``.
+    pdf, data, eval_data, lugre, ts
+        Options of the LaTeX report (see :func:`edm_sym.outputs.report.write_report`);
+        unused by the C and Python targets.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in order.
+
+    Raises
+    ------
+    ValueError
+        On a bad ``target``, ``prefix`` or ``real``; nothing is written.
+    ToolMissingError
+        With ``pdf=True`` and no latexmk; the .tex, figures and code are written.
+    OutputError
+        When ``out_dir`` or a file in it cannot be written.
+    """
+    validate_prefix(prefix)
+    validate_real(real)
+    names = target_names(target)
+    from edm_sym.engines.symbolic import build_model, decode  # sympy only when exporting
+
+    source = source_of(result)
+    if REPORT in names:
+        model = decode(result)
+    else:
+        model = build_model(result.compensator, sha256=source.sha256, target=result.target)
+    files = render(result, target, prefix=prefix, real=real, model=model)
+    if REPORT not in names:
+        return write_files(out_dir, files)
+    from edm_sym.outputs.report import write_report
+
+    inputs = report_inputs(result, data=data, eval_data=eval_data, lugre=lugre)
+    # The report validates its inputs before writing anything, so it goes first. Each
+    # target is written on its own: a PDF that fails (latexmk missing, LaTeX stopping)
+    # leaves the .tex, the figures and the C and Python in place, and says so.
+    try:
+        written = write_report(result, out_dir, prefix=prefix, ts=ts, pdf=pdf, model=model,
+                               **inputs)
+    except (ToolMissingError, ExternalToolError) as exc:
+        code = write_files(out_dir, files)
+        if not code:
+            raise
+        landed = ", ".join(p.name for p in code)
+        raise type(exc)(f"target latex (PDF): {exc}; the other targets were written ({landed})") \
+            from None
+    return write_files(out_dir, files) + written
+
+
+def report_inputs(result: Any, *, data: Any = None, eval_data: Any = None,
+                  lugre: Any = None) -> dict[str, Any]:
+    """The report's logs and LuGre file: the options given, else the result's ``report_inputs``.
+
+    Paths stored in the result are relative to the folder holding it; a
+    ``plant:...`` data spec is used as it is.
+
+    Parameters
+    ----------
+    result : EdmResult
+    data, eval_data, lugre : path-like or str, optional
+        Override the stored abstraction log, evaluation log and LuGre file.
+
+    Returns
+    -------
+    dict
+        ``data``, ``eval_data`` and ``lugre``, each a path, a plant spec or None.
+    """
+    given = {"data": data, "eval_data": eval_data, "lugre": lugre}
+    stored = getattr(result, "report_inputs", None) or {}
+    base = Path(result.source).parent if getattr(result, "source", None) else Path(".")
+    out = {}
+    for key, value in given.items():
+        if value is None and key in stored:
+            spec = stored[key]
+            value = spec if is_plant_spec(spec) else base / spec
+        out[key] = value
+    return out

@@ -1,0 +1,264 @@
+"""The whole flow in one command: data -> LuGre -> EDM -> evaluation -> export.
+
+``edm pipeline PIPELINE.toml`` reproduces the paper's experiment (section IV)
+from a small TOML file of data (never code)::
+
+    [data]
+    abstraction = "plant:auger/abstraction"   # a file, or a simulated plant log
+    evaluation = "plant:auger/evaluation"
+
+    [abstraction]                             # edm abstract
+    config = "abstraction.toml"
+    target = "tau_ext"
+    inputs = ["theta_w", "theta_uw", "omega", "alpha"]
+    seed = 1
+
+    [lugre]                                   # edm lugre (the baseline)
+    velocity = "omega"
+    weighting = { windows = [[0.0, 10.0, 1.0]], otherwise = 0.0 }
+
+    [export]                                  # edm-export
+    target = "all"
+    pdf = true
+
+It writes ``lugre.json``, ``result.json`` and ``evaluation.json`` beside the
+TOML file, and exports into ``generated/<folder of the TOML file>/``. The
+result records its data and LuGre file (``report_inputs``), so a plain
+``edm-export result.json --target all`` reproduces the same report.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from edm_sym.core.data import DataLog, is_plant_spec
+from edm_sym.core.errors import TOO_DEEP, ConfigError
+from edm_sym.core.fileio import check_outputs, write_atomic
+from edm_sym.core.fitness import rms
+from edm_sym.engines.sources import load_data
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SECTIONS = {
+    "data": {"abstraction", "evaluation"},
+    "abstraction": {"config", "target", "inputs", "seed", "time_limit"},
+    "lugre": {"velocity", "method", "seed", "time_limit", "weighting"},
+    "export": {"target", "pdf", "out_dir", "prefix", "real"},
+}
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """A parsed pipeline file; paths are resolved against its folder."""
+
+    folder: Path
+    abstraction_data: str
+    evaluation_data: str | None
+    target: str
+    inputs: tuple[str, ...]
+    config: Path | None = None
+    seed: int = 0
+    time_limit: float | None = None
+    lugre: Mapping[str, Any] | None = None
+    export: Mapping[str, Any] = field(default_factory=dict)
+
+    def data_path(self, spec: str) -> str | Path:
+        """A data spec as :func:`~edm_sym.core.data.load_data` takes it."""
+        return spec if is_plant_spec(spec) else self.folder / spec
+
+
+def _get(where: str, table: Mapping[str, Any], key: str, kind: type | tuple, default: Any = ...) -> Any:
+    if key not in table:
+        if default is ...:
+            raise ConfigError(f"{where}.{key}", "expected this key, found it missing")
+        return default
+    value = table[key]
+    if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
+        names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+        raise ConfigError(f"{where}.{key}", f"expected {names}, found {value!r}")
+    return value
+
+
+def load_pipeline(path: str | Path) -> Pipeline:
+    """Read and validate a pipeline TOML file.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file and key, with what was expected and found.
+    """
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text("utf-8"))
+    except OSError as exc:
+        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "expected UTF-8 TOML text, found binary data") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(str(path), f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise ConfigError(str(path), TOO_DEEP) from None
+    name = path.name
+    for section, table in doc.items():
+        if section not in SECTIONS:
+            raise ConfigError(f"{name}: {section}",
+                              f"expected one of the sections {', '.join(SECTIONS)}, found {section!r}")
+        if not isinstance(table, dict):
+            raise ConfigError(f"{name}: {section}", f"expected a table, found {table!r}")
+        for key in table:
+            if key not in SECTIONS[section]:
+                raise ConfigError(f"{name}: {section}.{key}", f"expected one of "
+                                  f"{', '.join(sorted(SECTIONS[section]))}, found {key!r}")
+    data, abst = doc.get("data", {}), doc.get("abstraction", {})
+    abstraction_data = _get(f"{name}: data", data, "abstraction", str)
+    evaluation_data = _get(f"{name}: data", data, "evaluation", str, None)
+    inputs = _get(f"{name}: abstraction", abst, "inputs", list)
+    if not inputs or not all(isinstance(i, str) for i in inputs):
+        raise ConfigError(f"{name}: abstraction.inputs", f"expected column names, found {inputs!r}")
+    config = _get(f"{name}: abstraction", abst, "config", str, None)
+    limit = _get(f"{name}: abstraction", abst, "time_limit", (int, float), None)
+    if limit is not None and not (math.isfinite(limit) and limit > 0):
+        raise ConfigError(f"{name}: abstraction.time_limit",
+                          f"expected a number of seconds > 0, found {limit}")
+    seed = _get(f"{name}: abstraction", abst, "seed", int, 0)
+    if not 0 <= seed < 2**32:
+        raise ConfigError(f"{name}: abstraction.seed", f"expected an integer >= 0 and < 2**32, found {seed}")
+    return Pipeline(
+        folder=path.resolve().parent,
+        abstraction_data=abstraction_data,
+        evaluation_data=evaluation_data,
+        target=_get(f"{name}: abstraction", abst, "target", str),
+        inputs=tuple(inputs),
+        config=path.resolve().parent / config if config else None,
+        seed=seed,
+        time_limit=float(limit) if limit is not None else None,
+        lugre=doc.get("lugre"),
+        export=doc.get("export", {}),
+    )
+
+
+
+
+def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
+    if spec is None:
+        return None
+    from edm_sym.engines.abstraction.weighting import parse_weighting
+
+    weighting = parse_weighting(where, spec)
+    t = data.columns.get("t", np.arange(len(data)) * data.ts)
+    w = weighting.weights(t, data.columns[target])
+    return np.broadcast_to(np.asarray(w, dtype=float), (len(data),)).copy()
+
+
+def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False,
+                 out: Any = None) -> dict[str, Any]:
+    """Run the whole flow of a pipeline file.
+
+    Parameters
+    ----------
+    path : path-like
+        The pipeline TOML file.
+    progress : bool
+        Show the genetic algorithm's progress bar.
+    reuse : bool
+        Keep an existing ``lugre.json`` / ``result.json`` beside the file
+        instead of identifying again (evaluation and export still run).
+    out : file, optional
+        Where the summary is printed (default: standard output).
+
+    Returns
+    -------
+    dict
+        The evaluation summary (also written to ``evaluation.json``).
+    """
+    from edm_sym.application.exporting import export
+    from edm_sym.core.result import load_result, save_result
+    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
+    from edm_sym.engines.simulate import simulate
+
+    out = out if out is not None else sys.stdout
+    pipe = load_pipeline(path)
+    name = Path(path).name
+    logs = {"abstraction": load_data(pipe.data_path(pipe.abstraction_data),
+                                     require=[*pipe.inputs, pipe.target])}
+    if pipe.evaluation_data:
+        logs["evaluation"] = load_data(pipe.data_path(pipe.evaluation_data),
+                                       require=[*pipe.inputs, pipe.target])
+    abst = logs["abstraction"]
+    lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
+    ex = pipe.export
+    out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
+        Path("generated") / pipe.folder.name
+    # Every output is checked before the long work: none may be an input, all must be writable.
+    data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
+    check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
+                  [path, pipe.config, *data_files], option="pipeline output")
+
+    lugre = None
+    if pipe.lugre is not None:
+        velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
+        if not (reuse and lugre_file.exists()):
+            seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
+            res = identify_lugre(
+                abst.columns[pipe.target], abst.column(velocity, role="velocity column"), abst.ts,
+                method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"), seed=seed,
+                time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
+                weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
+                                       f"{name}: lugre.weighting"))
+            save_lugre(lugre_file, res, target=pipe.target, velocity=velocity,
+                       data_sha256=abst.sha256, seed=seed)
+        lugre = load_lugre(lugre_file)
+        print(f"lugre: {lugre_file}", file=out)
+
+    if not (reuse and result_file.exists()):
+        config = load_config(pipe.config) if pipe.config else None
+        result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
+                          seed=pipe.seed, time_limit=pipe.time_limit, progress=progress)
+        stored = {"data": pipe.abstraction_data}
+        if pipe.evaluation_data:
+            stored["eval_data"] = pipe.evaluation_data
+        if lugre is not None:
+            stored["lugre"] = lugre_file.name
+        from dataclasses import replace
+
+        save_result(replace(result, report_inputs=stored), result_file)
+        if result.provenance.get("stop_reason") == "interrupted":
+            # The best result so far is saved; the rest of the flow must not run on it.
+            raise KeyboardInterrupt
+    result = load_result(result_file)
+    print(f"result: {result_file}", file=out)
+
+    summary: dict[str, Any] = {}
+    for label, log in logs.items():
+        row = {"edm": rms(log.columns[pipe.target] - simulate(result, log).total)}
+        if lugre is not None:
+            tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
+            row["lugre"] = rms(log.columns[pipe.target] - tau)
+            row["ratio"] = row["edm"] / row["lugre"]
+        summary[label] = row
+    write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
+    print(f"{'log':<12} {'EDM RMSE':>12} {'LuGre RMSE':>12} {'EDM/LuGre':>10}", file=out)
+    for label, row in summary.items():
+        lug = f"{row['lugre']:12.4g} {row['ratio']:10.3f}" if "lugre" in row else ""
+        print(f"{label:<12} {row['edm']:12.4g} {lug}", file=out)
+
+    written = export(result, _get(f"{name}: export", ex, "target", str, "all"), out_dir,
+                     prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
+                     real=_get(f"{name}: export", ex, "real", str, "double"),
+                     pdf=_get(f"{name}: export", ex, "pdf", bool, False))
+    for p in written:
+        print(f"wrote {p}", file=out)
+    return summary

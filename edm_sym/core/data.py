@@ -1,0 +1,402 @@
+"""Data logs: CSV, .npz and MATLAB .mat (docs/cli.md#data-files).
+
+A log is a set of equally long numeric columns with a uniform sample time.
+Every defect (missing file or column, empty file, non-numeric cell, NaN or
+Inf, non-uniform time) is refused with a :class:`~edm_sym.core.errors.DataFormatError`
+that names the file and the row or column.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from edm_sym.core.errors import DataFormatError
+from edm_sym.core.fileio import write_atomic
+
+#: Clock drift accepted between two sample times of one drive (relative): a log's
+#: time column and ``--ts``, or a model's sample time and a second log's
+#: (docs/data.md, "Sample time").
+TIME_RTOL = 1e-3
+#: Jitter accepted on single time stamps: every step within this share of the
+#: median step. A longer step is a gap (missing samples), a shorter one a burst.
+JITTER_RTOL = 0.25
+#: A data spec ``plant:PRESET/EXCITATION[@SEED]`` names a simulated plant log.
+PLANT_SCHEME = "plant:"
+
+
+def is_plant_spec(spec: object) -> bool:
+    """True for a ``plant:PRESET/EXCITATION[@SEED]`` data spec."""
+    return isinstance(spec, str) and spec.startswith(PLANT_SCHEME)
+
+
+@dataclass(frozen=True)
+class DataLog:
+    """A uniformly sampled log.
+
+    Parameters
+    ----------
+    columns : mapping of str to numpy.ndarray
+        Equally long float columns, in file order.
+    ts : float
+        Sample time [s].
+    source : str
+        The file name (for messages).
+    sha256 : str
+        Digest of the file's bytes (provenance).
+    scalars : mapping of str to float
+        Scalar values stored beside the columns (.mat and .npz files).
+    """
+
+    columns: Mapping[str, np.ndarray]
+    ts: float
+    source: str = "<memory>"
+    sha256: str | None = None
+    scalars: Mapping[str, float] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(next(iter(self.columns.values())))
+
+    @property
+    def record_length(self) -> float:
+        """T_sum = N Ts [s]."""
+        return len(self) * self.ts
+
+    def column(self, name: str, *, role: str = "column") -> np.ndarray:
+        """A column by name, refusing a missing one with the available names."""
+        try:
+            return self.columns[name]
+        except KeyError:
+            have = ", ".join(self.columns)
+            raise DataFormatError(
+                f"{self.source}: column {name!r}",
+                f"expected a {role} named {name!r}, found only: {have}",
+            ) from None
+
+    def window(self, start: int, stop: int | None = None) -> DataLog:
+        """Samples ``start:stop`` as a log of their own (e.g. to hold part of a log out)."""
+        cols = {k: np.ascontiguousarray(v[start:stop]) for k, v in self.columns.items()}
+        if not len(next(iter(cols.values()))):
+            raise DataFormatError(f"{self.source}: rows {start}:{stop}", "expected samples, found none")
+        digest = hashlib.sha256(f"{self.sha256}[{start}:{stop}]".encode()).hexdigest()
+        return DataLog(cols, self.ts, f"{self.source}[{start}:{stop}]", digest, dict(self.scalars))
+
+    def stack(self, names: Iterable[str]) -> np.ndarray:
+        """The named columns as a (len(names), N) array."""
+        return np.vstack([self.column(n, role="input column") for n in names])
+
+
+def load_data(
+    path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
+    default_ts: float | None = None,
+) -> DataLog:
+    """Read a log from CSV, .npz or .mat.
+
+    Parameters
+    ----------
+    path : path-like or str
+        The file; the suffix picks the reader (``.npz``, ``.mat``, else CSV).
+        A ``plant:`` spec is not a file: :func:`edm_sym.engines.sources.load_data`
+        simulates it (this layer never imports the plant).
+    ts : float, optional
+        Sample time [s] when the log has no ``t`` column; with a ``t`` column
+        it must agree with it.
+    require : iterable of str
+        Column names that must be present.
+    default_ts : float, optional
+        Sample time [s] for a log with neither a ``t`` column nor ``ts``: the
+        one a model file records, so a user need not give it again.
+
+    Returns
+    -------
+    DataLog
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file and the row or column at fault.
+    """
+    if is_plant_spec(path):
+        raise DataFormatError(str(path), "expected a file; a plant: spec is simulated by "
+                              "edm_sym.engines.sources.load_data (or edm_sym.load_data)")
+    path = Path(path)
+    name = path.name
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise DataFormatError(str(path), f"cannot be read ({exc.strerror})") from None
+    if not raw.strip():
+        raise DataFormatError(name, "expected a header row and data, found an empty file")
+    suffix = path.suffix.lower()
+    scalars: dict[str, float] = {}
+    if suffix == ".npz":
+        columns, scalars = _read_arrays(name, _load_npz(name, raw))
+    elif suffix == ".mat":
+        columns, scalars = _read_arrays(name, _load_mat(name, raw))
+    else:
+        columns = _read_csv(name, raw)
+    # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
+    if ts is None and "t" not in columns:
+        ts = default_ts
+    log_ts = _sample_time(name, columns, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
+    log = DataLog(columns, log_ts, name, hashlib.sha256(raw).hexdigest(), scalars)
+    for col in require:
+        log.column(col)
+    return log
+
+
+def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise DataFormatError(name, "expected UTF-8 text, found binary data") from None
+    reader = csv.reader(io.StringIO(text))
+    try:
+        return _parse_csv(name, reader)
+    except csv.Error as exc:  # an unterminated quote, a cell beyond the csv module's size limit
+        raise DataFormatError(f"{name}: row {reader.line_num}",
+                              f"expected CSV cells of numbers, found unreadable text ({exc})") from None
+
+
+def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
+    header = next(reader, None)
+    if not header or not any(h.strip() for h in header):
+        raise DataFormatError(f"{name}: row 1", "expected a header row of column names, found none")
+    header = [h.strip() for h in header]
+    for k, h in enumerate(header):
+        if not h:
+            raise DataFormatError(f"{name}: row 1, column {k + 1}", "expected a column name, found nothing")
+        if header.index(h) != k:
+            raise DataFormatError(f"{name}: row 1, column {h!r}", "expected unique names, found it twice")
+    values: list[list[float]] = []
+    for lineno, cells in enumerate(reader, start=2):
+        if not cells or all(not c.strip() for c in cells):
+            continue
+        if len(cells) != len(header):
+            raise DataFormatError(f"{name}: row {lineno}",
+                                  f"expected {len(header)} values, found {len(cells)}")
+        row = []
+        for col, cell in zip(header, cells, strict=True):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
+                                      f"expected a number, found {cell.strip()[:30]!r}") from None
+            if not math.isfinite(v):
+                raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
+                                      f"expected a finite number, found {cell.strip()}")
+            row.append(v)
+        values.append(row)
+    if not values:
+        raise DataFormatError(name, "expected data rows below the header, found none")
+    arr = np.array(values, dtype=float)
+    return {h: np.ascontiguousarray(arr[:, k]) for k, h in enumerate(header)}
+
+
+def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    try:
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+            return {k: np.asarray(z[k]) for k in z.files}
+    except Exception as exc:  # numpy raises several types for a bad archive
+        raise DataFormatError(name, f"expected an .npz archive, found unreadable data ({exc})") from None
+
+
+#: The signature of an HDF5 file; MATLAB v7.3 files carry it after a 512-byte header.
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+#: MATLAB classes of numeric arrays (others, such as char, cell or struct, are skipped).
+_MATLAB_NUMERIC = {"double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+                   "int64", "uint64", "logical"}
+
+
+def _is_mat73(raw: bytes) -> bool:
+    return raw[512:520] == _HDF5_SIGNATURE or raw[:8] == _HDF5_SIGNATURE
+
+
+def _load_mat73(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    """Top-level numeric arrays of a MATLAB v7.3 (HDF5) file, in MATLAB's orientation."""
+    try:
+        import h5py
+    except ImportError:
+        raise DataFormatError(name, "expected a MATLAB file scipy can read, found a v7.3 (HDF5) file; "
+                              "install the extra 'edm_sym[mat73]' (h5py) to read it") from None
+    out: dict[str, np.ndarray] = {}
+    try:
+        with h5py.File(io.BytesIO(raw), "r") as f:
+            for key in f:
+                obj = f[key]
+                cls = obj.attrs.get("MATLAB_class", b"double") if isinstance(obj, h5py.Dataset) else b""
+                cls = cls.decode() if isinstance(cls, bytes) else str(cls)
+                if key.startswith("#") or cls not in _MATLAB_NUMERIC:
+                    continue
+                # MATLAB writes column-major: an N x 1 column is stored as 1 x N.
+                out[key] = np.asarray(obj[()]).T
+    except (OSError, ValueError) as exc:
+        raise DataFormatError(name, f"expected a MATLAB v7.3 (HDF5) file, found unreadable data ({exc})") \
+            from None
+    return out
+
+
+def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
+    from scipy import io as sio
+
+    if _is_mat73(raw):
+        return _load_mat73(name, raw)
+    try:
+        doc = sio.loadmat(io.BytesIO(raw))
+    except Exception as exc:  # scipy raises several types for a bad file
+        raise DataFormatError(name, f"expected a MATLAB .mat file, found unreadable data ({exc})") from None
+    return {k: v for k, v in doc.items() if not k.startswith("__") and isinstance(v, np.ndarray)}
+
+
+def _read_arrays(
+    name: str, arrays: Mapping[str, np.ndarray]
+) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    columns: dict[str, np.ndarray] = {}
+    scalars: dict[str, float] = {}
+    for key, arr in arrays.items():
+        if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
+            continue
+        if arr.size == 1:
+            scalars[key] = float(arr.reshape(()))
+        elif arr.ndim == 1 or (arr.ndim == 2 and 1 in arr.shape):
+            columns[key] = np.ascontiguousarray(arr.reshape(-1), dtype=float)
+    if not columns:
+        raise DataFormatError(name, "expected one or more 1-D numeric arrays, found none")
+    n = max(len(c) for c in columns.values())
+    for key, col in columns.items():
+        if len(col) != n:
+            raise DataFormatError(f"{name}: column {key!r}",
+                                  f"expected {n} samples like the longest column, found {len(col)}")
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise DataFormatError(f"{name}: row {bad[0] + 1}, column {key!r}",
+                                  f"expected a finite number, found {col[bad[0]]}")
+    return columns, scalars
+
+
+def _sample_time(
+    name: str, columns: Mapping[str, np.ndarray], ts: float | None, *, row_offset: int
+) -> float:
+    if ts is not None and not (math.isfinite(ts) and ts > 0):
+        raise DataFormatError(f"{name}: --ts", f"expected a positive sample time, found {ts}")
+    t = columns.get("t")
+    if t is None:
+        if ts is None:
+            raise DataFormatError(f"{name}: column 't'",
+                                  "expected a time column 't' or the option --ts SECONDS, found neither")
+        return float(ts)
+    if len(t) < 2:
+        raise DataFormatError(f"{name}: column 't'", f"expected at least 2 samples, found {len(t)}")
+    dt = np.diff(t)
+    back = np.flatnonzero(dt <= 0)
+    if back.size:
+        k = int(back[0])
+        what = "a repeated" if dt[k] == 0 else "a decreasing"
+        raise DataFormatError(f"{name}: row {k + 1 + row_offset}, column 't'",
+                              f"expected increasing time stamps, found {what} one "
+                              f"({t[k + 1]:.9g} s after {t[k]:.9g} s)")
+    step = float(np.median(dt))
+    bad = np.flatnonzero(np.abs(dt - step) > JITTER_RTOL * step)
+    if bad.size:
+        k = int(bad[0])
+        kind = f"a gap of {dt[k] / step - 1:.3g} samples" if dt[k] > step else "a short step"
+        raise DataFormatError(
+            f"{name}: row {k + 1 + row_offset}, column 't'",
+            f"expected uniform sampling (step {step:g} s, jitter up to {JITTER_RTOL:.0%}), "
+            f"found a step of {dt[k]:g} s ({kind})",
+        )
+    # The sample time is the mean step: exact on a uniform grid and, unlike the
+    # median, unbiased by per-stamp jitter (its error shrinks as 1/N).
+    step = float(t[-1] - t[0]) / (len(t) - 1)
+    if ts is not None and abs(ts - step) > TIME_RTOL * step:
+        raise DataFormatError(f"{name}: --ts", f"expected the step of column 't' ({step:g} s), found {ts:g}")
+    return step
+
+
+def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = False) -> DataLog:
+    """Check a log against a model's sample time; resample it onto the model's grid if asked.
+
+    A second recording of the same drive never has exactly the model's sample
+    time: the logger's clock drifts. A relative difference up to
+    :data:`TIME_RTOL` is accepted and the log is used as it is (its own sample
+    time stays in ``data.ts``; callers report both). A larger one is refused,
+    unless ``resample`` is true: then every column is resampled onto the
+    model's grid with a polyphase anti-aliasing filter
+    (:func:`scipy.signal.resample_poly`, the ratio as a fraction of integers
+    below 1000) and the time column is rebuilt.
+
+    Parameters
+    ----------
+    data : DataLog
+    ts : float
+        The model's sample time [s].
+    model : str
+        The model file's name, for messages.
+    resample : bool
+        Resample a log whose sample time differs by more than the tolerance.
+
+    Returns
+    -------
+    DataLog
+        ``data`` itself, or its resampled copy (``ts`` = the model's).
+
+    Raises
+    ------
+    DataFormatError
+        When the sample times differ by more than :data:`TIME_RTOL` and
+        ``resample`` is false, or no integer ratio below 1000 reaches the
+        model's sample time within the tolerance.
+    """
+    if abs(data.ts - ts) <= TIME_RTOL * ts:
+        return data
+    where = f"{data.source}: sample time"
+    if not resample:
+        raise DataFormatError(where, f"expected {ts:g} s as in {model} (within {TIME_RTOL:g} relative), "
+                              f"found {data.ts:g} s; --resample resamples the log onto the model's grid")
+    from fractions import Fraction
+
+    from scipy import signal
+
+    ratio = Fraction(data.ts / ts).limit_denominator(1000)  # up / down
+    up, down = ratio.numerator, ratio.denominator
+    if abs(data.ts * down / up - ts) > TIME_RTOL * ts:
+        raise DataFormatError(where, f"expected a ratio of small integers to the model's {ts:g} s, "
+                              f"found {data.ts:g} s (best {up}/{down})")
+    cols = {}
+    for key, col in data.columns.items():
+        if key == "t":
+            continue
+        cols[key] = np.ascontiguousarray(signal.resample_poly(col, up, down, padtype="line"))
+    n = len(next(iter(cols.values()))) if cols else 0
+    if n < 2:
+        raise DataFormatError(where, f"expected at least 2 samples after resampling, found {n}")
+    t0 = float(data.columns["t"][0]) if "t" in data.columns else 0.0
+    out = {"t": t0 + ts * np.arange(n)} if "t" in data.columns else {}
+    out.update(cols)
+    digest = hashlib.sha256(f"{data.sha256}@resample:{up}/{down}".encode()).hexdigest()
+    return DataLog(out, ts, f"{data.source} (resampled {up}/{down})", digest, dict(data.scalars))
+
+
+def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:
+    """Write columns as CSV atomically, with round-trip float precision.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.
+    columns : mapping of str to array
+        Equally long columns, written in mapping order.
+    """
+    names = list(columns)
+    arr = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    np.savetxt(buf, arr, delimiter=",", fmt="%.17g")
+    return write_atomic(path, buf.getvalue())

@@ -1,0 +1,151 @@
+"""Output files: checked before the work starts, written atomically, never over an input.
+
+A regular file is either fully written or not there at all (a temporary file
+and a rename). A device, a FIFO or a terminal (``-o /dev/null``, ``-o
+/dev/stdout``) is written directly: renaming over it would replace it with a
+regular file. A symbolic link is followed, so its target is written and the
+link stays. :func:`check_outputs` refuses, before any long work, an output that
+is an input (also through a link) or that cannot be written.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+
+from edm_sym.core.errors import OutputError
+
+
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_UMASK = _current_umask()
+
+
+def _is_special(path: Path) -> bool:
+    """True for an existing non-regular, non-folder file: a device, FIFO, socket or terminal."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
+def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file and a rename.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination file. Its folder is created when missing. A symbolic link
+        is followed; a device or FIFO is written directly.
+    data : str or bytes
+        Text (written as UTF-8 with ``\\n`` newlines) or raw bytes.
+
+    Returns
+    -------
+    pathlib.Path
+        The written path.
+
+    Raises
+    ------
+    OutputError
+        When the file or its folder cannot be created or written (the path
+        and the system's reason named).
+    """
+    path = Path(path)
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    if _is_special(path):
+        try:
+            with open(path, "wb") as fh:
+                fh.write(raw)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
+        return path
+    if path.is_dir():
+        raise OutputError(f"{path}: expected a file to write, found a folder")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot create the file ({exc.strerror})") from None
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+        # mkstemp makes the file private (0600); give it the usual mode for new files.
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
+        raise
+    return path
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist yet
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _writable(path: Path) -> str | None:
+    """Why ``path`` cannot be written, or None when it can (nothing is created)."""
+    if path.is_dir():
+        return "expected a file to write, found a folder"
+    if path.exists():
+        if _is_special(path):
+            return None if os.access(path, os.W_OK) else "cannot write it (permission denied)"
+        if not os.access(path, os.W_OK):
+            return "cannot write it (permission denied)"
+    folder = path.parent
+    while not folder.exists():  # the first folder that exists must let us create the rest
+        if folder.parent == folder:
+            break
+        folder = folder.parent
+    if not folder.is_dir():
+        return f"cannot create the output folder ({folder} is a file)"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"cannot write in {folder} (permission denied)"
+    return None
+
+
+def check_outputs(outputs: Iterable[str | os.PathLike], inputs: Iterable[object] = (), *,
+                  option: str = "-o") -> None:
+    """Refuse, before any work, outputs that would harm an input or cannot be written.
+
+    Parameters
+    ----------
+    outputs : iterable of path-like
+        Every file the command will write (a folder output: the files in it).
+    inputs : iterable of path-like or str
+        Every file the command reads; strings that are not paths (``plant:``
+        specs) are skipped.
+    option : str
+        The option that named the outputs, for messages.
+
+    Raises
+    ------
+    OutputError
+        Naming the output and the input it is, or why it cannot be written.
+    """
+    ins = [Path(i) for i in inputs if isinstance(i, str | os.PathLike)
+           and not str(i).startswith("plant:") and Path(i).exists()]
+    for out in (Path(o) for o in outputs):
+        for src in ins:
+            if _same_file(out, src):
+                raise OutputError(f"{option} {out}: expected a new file, found the input {src} "
+                                  "(writing would destroy it); choose another output name")
+        why = _writable(out)
+        if why:
+            raise OutputError(f"{option} {out}: {why}")

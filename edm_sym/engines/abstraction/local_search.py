@@ -1,0 +1,132 @@
+"""Local search: the elite's continuous parameters tuned by least squares.
+
+The GA finds structures (which elements, which inputs) and rough parameters;
+its parameter shift (Fig. 7a) is a random walk, slow to settle a filter's
+cut-off, a sine's phase or a dead zone's width, and the gain fit only sets
+scales. When a step stagnates, :func:`tune_parameters` runs
+:func:`scipy.optimize.least_squares` (trust-region reflective, bounds
+[0, 1]) on the normalised parameters ``p`` of one individual, residual
+``sqrt(Lambda) * (target - sum of rows)`` (so its cost is eq. 8 squared).
+Jacobians are forward differences whose perturbed individuals are evaluated
+in one batch of the evaluator (each perturbation changes one row; the others
+come from the row cache), so the search uses the workers and is a pure
+function of the genes: no random numbers, the same result whatever the
+number of workers.
+
+Parameters that only exist on a grid (a dead time in samples) get a zero or
+a crude derivative and are left where they are, which is the GA's job.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from edm_sym.core.elements import REGISTRY
+from edm_sym.engines.abstraction.evaluator import Evaluator
+from edm_sym.engines.abstraction.ga import Population
+
+#: Element codes with a continuous parameter.
+PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not None)
+
+#: Forward-difference step in p (a parameter near its upper bound steps down).
+STEP = 1e-4
+
+
+class _Budget(Exception):
+    pass
+
+
+def free_parameters(codes: np.ndarray) -> list[tuple[int, int]]:
+    """(row, element) of every gene of one individual that has a parameter."""
+    m, n = codes.shape
+    return [(j, i) for j in range(m) for i in range(n) if int(codes[j, i]) in PARAMETRIC]
+
+
+def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
+                    max_evaluations: int) -> tuple[Population, float, int]:
+    """Least-squares tuning of the parameters of one individual.
+
+    Parameters
+    ----------
+    evaluator : Evaluator
+        With the step's weighting set.
+    best : Population
+        One individual.
+    fitness : float
+        Its eq. 8 value.
+    max_evaluations : int
+        Most individuals evaluated (residuals and Jacobian columns together).
+
+    Returns
+    -------
+    individual : Population
+        The best individual seen (``best`` itself when nothing was better).
+    fitness : float
+        Its eq. 8 value.
+    evaluations : int
+        Individuals evaluated.
+    """
+    free = free_parameters(best.codes[0])
+    if not free or not np.isfinite(fitness) or max_evaluations < len(free) + 2:
+        return best, fitness, 0
+    jj = np.array([j for j, _ in free])
+    ii = np.array([i for _, i in free])
+    y = evaluator.target
+    w = evaluator.weights
+    sw = np.sqrt(w) if np.isscalar(w) else np.sqrt(np.asarray(w, dtype=float))
+    state = {"evals": 0, "best_p": best.ps[0, jj, ii].copy(), "best_f": float(fitness),
+             "residual": {}}
+
+    def batch(points: np.ndarray) -> tuple[np.ndarray, list]:
+        count = len(points)
+        if state["evals"] + count > max_evaluations:
+            raise _Budget
+        state["evals"] += count
+        ps = np.repeat(best.ps, count, axis=0)
+        ps[:, jj, ii] = points
+        rows: list = []
+        fit = evaluator.evaluate(np.repeat(best.inputs, count, axis=0),
+                                 np.repeat(best.codes, count, axis=0), ps, rows_out=rows)
+        for k in range(count):
+            if fit[k] < state["best_f"]:
+                state["best_f"], state["best_p"] = float(fit[k]), points[k].copy()
+        return fit, rows
+
+    def residual(p: np.ndarray) -> np.ndarray:
+        key = p.tobytes()
+        if key not in state["residual"]:
+            _, rows = batch(p[None, :])
+            # Copies: the evaluator's row views are valid until its next call only.
+            outs = [np.array(r) for r in rows[0][1]]
+            with np.errstate(over="ignore", invalid="ignore"):
+                state["residual"] = {key: (sw * (y - np.sum(outs, axis=0)), outs)}
+        return state["residual"][key][0]
+
+    def jacobian(p: np.ndarray) -> np.ndarray:
+        res = residual(p)
+        base_rows = state["residual"][p.tobytes()][1]
+        h = np.where(p + STEP <= 1.0, STEP, -STEP)
+        pts = np.repeat(p[None, :], len(p), axis=0)
+        pts[np.arange(len(p)), np.arange(len(p))] += h
+        _, rows = batch(pts)
+        jac = np.empty((res.shape[0], len(p)))
+        with np.errstate(over="ignore", invalid="ignore"):
+            for k in range(len(p)):
+                j = jj[k]
+                jac[:, k] = -(sw * (rows[k][1][j] - base_rows[j])) / h[k]
+        jac[~np.isfinite(jac)] = 0.0
+        return jac
+
+    x0 = best.ps[0, jj, ii].astype(float)
+    try:
+        if np.all(np.isfinite(residual(x0))):
+            least_squares(residual, x0, jac=jacobian, bounds=(0.0, 1.0), method="trf",
+                          x_scale=1.0, max_nfev=max_evaluations)
+    except _Budget:
+        pass
+    if not state["best_f"] < fitness:
+        return best, fitness, state["evals"]
+    out = best.take([0])
+    out.ps[0, jj, ii] = state["best_p"]
+    return out, state["best_f"], state["evals"]

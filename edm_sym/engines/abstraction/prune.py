@@ -1,0 +1,276 @@
+"""Parsimony: prune the search's model and keep the complexity-vs-fitness front.
+
+After the search, a deterministic greedy backward elimination starts from the
+last step's best matrix. At every stage it tries each simplification:
+
+* replace one element by ``through``;
+* drop one row, or two rows on the same input together (rows that cancel);
+* merge two rows of the same input and structure into one (the sum of their
+  gains at the row's scale position, exact when only the gain differs);
+* halve a delay (``dead_time``, ``shift``): a delay the data cannot support
+  shrinks towards zero, and a filter it cannot support becomes ``through``;
+
+scores every candidate by the **criterion** (eq. 8 on the held-out part
+with the final step's weighting; its RMSE there when that weighting is 0 on
+every held-out sample; the training eq. 8 when nothing is held out), takes
+the best one, then refits the row gains of the result by weighted least
+squares on the **training** part (kept when it lowers the criterion), and
+goes on until one row with nothing to drop is left. Every model on the way
+is a candidate member of the front; the front keeps, for each complexity,
+the best criterion, and only members no simpler member beats or equals.
+
+**Complexity** = rows + active elements (every element but ``through``) +
+state size (the values the firmware keeps between samples: 1 per
+first-order filter state, the delay length in samples for a dead time).
+
+**Selection** (``select``): ``best`` the lowest criterion; ``knee`` the
+largest drop of ln(criterion) per unit of complexity against the next
+simpler member, among members within 1.5 times the best criterion (PySR's
+rule); ``simplest-within=PCT`` the simplest member within PCT % of the best
+criterion. The default is ``simplest-within=`` the tolerance (1 %): every
+element and row whose removal worsens the criterion by less than that goes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from edm_sym.core.bounds import complexity
+from edm_sym.core.elements import BY_NAME
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.engines.abstraction.polish import scale_position
+from edm_sym.engines.abstraction.selection import ParsimonySettings, check_select, select
+from edm_sym.engines.abstraction.validation import Scorer
+
+THROUGH = BY_NAME["through"].code
+COMPLEXITY = ("rows + active elements (all but through) + state size (values kept between "
+              "samples; a delay's length in samples)")
+
+
+@dataclass(frozen=True)
+class Member:
+    """A model of the front."""
+
+    matrix: ElementMatrix
+    complexity: int
+    criterion: float
+    change: str
+
+
+def _with(comp: Compensator, matrix: ElementMatrix) -> Compensator:
+    return replace(comp, matrix=matrix)
+
+
+def _gene_value(comp: Compensator, g: Gene) -> float | None:
+    return comp.value(g) if g.element.has_param() else None
+
+
+def _set_value(comp: Compensator, g: Gene, a: float) -> Gene | None:
+    rng = comp.ranges[g.element.name]
+    if not (rng.low <= a <= rng.high) or (rng.scaling == "log" and not a > 0):
+        return None
+    return Gene(g.code, rng.encode(a))
+
+
+def _candidates(comp: Compensator, m: ElementMatrix) -> list[tuple[str, ElementMatrix]]:
+    rows, out = m.rows, []
+    drop = lambda *js: tuple(r for k, r in enumerate(rows) if k not in js)  # noqa: E731
+    for j, row in enumerate(rows):
+        for i, g in enumerate(row.genes):
+            if g.code == THROUGH:
+                continue
+            genes = list(row.genes)
+            genes[i] = Gene(THROUGH, 0.0)
+            out.append((f"row {j + 1}: {g.element.name} replaced by through",
+                        ElementMatrix(m.inputs, rows[:j] + (Row(row.input, genes),) + rows[j + 1:])))
+            if g.element.kind == "delay" and g.element.state_size(comp.value(g), comp.sample_time) > 1:
+                half = _set_value(comp, g, 0.5 * comp.value(g))
+                if half is not None and half != g:
+                    genes[i] = half
+                    out.append((f"row {j + 1}: {g.element.name} halved",
+                                ElementMatrix(m.inputs,
+                                              rows[:j] + (Row(row.input, genes),) + rows[j + 1:])))
+    if len(rows) > 1:
+        for j in range(len(rows)):
+            out.append((f"drop row {j + 1}", ElementMatrix(m.inputs, drop(j))))
+    for j in range(len(rows)):
+        for k in range(j + 1, len(rows)):
+            rj, rk = rows[j], rows[k]
+            if rj.input != rk.input:
+                continue
+            if len(rows) > 2:
+                out.append((f"drop rows {j + 1} and {k + 1}", ElementMatrix(m.inputs, drop(j, k))))
+            merged = _merge(comp, rj, rk)
+            if merged is not None:
+                keep = tuple(merged if q == j else r for q, r in enumerate(rows) if q != k)
+                out.append((f"merge rows {j + 1} and {k + 1}", ElementMatrix(m.inputs, keep)))
+    return out
+
+
+def _merge(comp: Compensator, rj: Row, rk: Row) -> Row | None:
+    codes = [g.code for g in rj.genes]
+    if codes != [g.code for g in rk.genes]:
+        return None
+    place = scale_position(codes, gain_allowed=False)
+    if place is None:
+        return None
+    i = place[0]
+    a = comp.value(rj.genes[i]) + comp.value(rk.genes[i])
+    gene = _set_value(comp, rj.genes[i], a)
+    if gene is None:
+        return None
+    genes = list(rj.genes)
+    genes[i] = gene
+    return Row(rj.input, genes)
+
+
+def _refit(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix | None:
+    """Row gains by weighted least squares on the training part (None: nothing to refit)."""
+    part = scorer.parts["training"]
+    sl = part.sl
+    lam = scorer.weights("training")
+    places = [scale_position([g.code for g in r.genes], gain_allowed=False) for r in m.rows]
+    free = [j for j, pl in enumerate(places) if pl is not None]
+    if not free:
+        return None
+    outs = [scorer.row_output(comp, "training", r)[sl] for r in m.rows]
+    fixed = sum((outs[j] for j in range(len(outs)) if j not in free), np.zeros_like(part.y[sl]))
+    a = np.array([outs[j] for j in free])
+    b = part.y[sl] - fixed
+    w = np.broadcast_to(np.asarray(lam, dtype=float), b.shape)
+    with np.errstate(all="ignore"):
+        # einsum, not BLAS: the same bytes whatever the thread settings.
+        gram = np.einsum("in,jn,n->ij", a, a, w)
+        rhs = np.einsum("in,n,n->i", a, b, w)
+        if not (np.all(np.isfinite(gram)) and np.all(np.isfinite(rhs))):
+            return None
+        try:
+            c = np.linalg.solve(gram + 1e-12 * np.trace(gram) * np.eye(len(free)), rhs)
+        except np.linalg.LinAlgError:
+            return None
+    rows = list(m.rows)
+    for q, j in enumerate(free):
+        i = places[j][0]
+        g = rows[j].genes[i]
+        gene = _set_value(comp, g, comp.value(g) * float(c[q]))
+        if gene is not None and math.isfinite(float(c[q])):
+            genes = list(rows[j].genes)
+            genes[i] = gene
+            rows[j] = Row(rows[j].input, genes)
+    new = ElementMatrix(m.inputs, rows)
+    return None if new == m else new
+
+
+def prune(comp: Compensator, scorer: Scorer) -> list[Member]:
+    """The greedy backward elimination from ``comp``'s matrix; returns the front.
+
+    Parameters
+    ----------
+    comp : Compensator
+        The search's model (its ranges and sample time serve every member).
+    scorer : Scorer
+        Scores on the training and held-out parts.
+
+    Returns
+    -------
+    list of Member
+        The Pareto front, simplest first: for each complexity the lowest
+        criterion, keeping only members that beat every simpler one.
+    """
+    cur = comp.matrix
+    seen = {cur: Member(cur, complexity(comp, cur), scorer.criterion(comp), "search")}
+    while True:
+        c_cur = seen[cur].complexity
+        best: Member | None = None
+        for change, m in _candidates(comp, cur):
+            if m in seen:
+                cand = seen[m]
+            else:
+                cand = Member(m, complexity(comp, m), scorer.criterion(_with(comp, m)), change)
+                seen[m] = cand
+            if cand.complexity >= c_cur:
+                continue
+            if best is None or (cand.criterion, cand.complexity) < (best.criterion,
+                                                                      best.complexity):
+                best = cand
+        if best is None:
+            break
+        refit = _refit(comp, best.matrix, scorer)
+        if refit is not None and refit not in seen:
+            r = Member(refit, complexity(comp, refit), scorer.criterion(_with(comp, refit)),
+                       best.change + ", gains refitted")
+            seen[refit] = r
+            if r.criterion < best.criterion and r.complexity <= best.complexity:
+                best = r
+        cur = best.matrix
+    return pareto(list(seen.values()))
+
+
+def pareto(members: list[Member]) -> list[Member]:
+    """Members no simpler (or equally complex) member matches or beats, simplest first."""
+    order = sorted(members, key=lambda mb: (mb.complexity, _key(mb.criterion)))
+    out: list[Member] = []
+    for mb in order:
+        if not math.isfinite(mb.criterion):
+            continue
+        if out and (mb.complexity == out[-1].complexity or mb.criterion >= out[-1].criterion):
+            continue
+        out.append(mb)
+    return out
+
+
+def _key(v: float) -> float:
+    return v if math.isfinite(v) else math.inf
+
+
+def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettings,
+                    rule: str | None = None) -> tuple[Compensator, dict[str, Any]]:
+    """Prune ``comp``, choose the exported member and describe the front for result.json.
+
+    Parameters
+    ----------
+    comp : Compensator
+        The search's model.
+    scorer : Scorer
+        Training and held-out scores.
+    settings : ParsimonySettings
+        Whether to prune, the tolerance and the configured rule.
+    rule : str, optional
+        A selection rule overriding the settings' (``--select``).
+
+    Returns
+    -------
+    comp : Compensator
+        The chosen model (``comp`` itself when pruning is off).
+    record : dict
+        The ``parsimony`` entry of result.json (empty when pruning is off or
+        no model has a finite criterion).
+    """
+    if not settings.prune:
+        return comp, {}
+    rule = check_select(rule, "select") if rule is not None else settings.selection
+    from edm_sym.core.result import matrix_to_json
+
+    front = prune(comp, scorer)
+    if not front:  # no model with a finite criterion: nothing to choose from
+        return comp, {}
+    k = select(front, rule)
+    unit = scorer.holdout.unit
+    members = []
+    for q, mb in enumerate(front, start=1):
+        c = _with(comp, mb.matrix)
+        members.append({
+            "member": q, "complexity": mb.complexity, "criterion": [mb.criterion, unit],
+            "change": mb.change, "matrix": matrix_to_json(mb.matrix),
+            "training": scorer.score(c, "training"),
+            "validation": (scorer.score(c, "validation") if "validation" in scorer.parts
+                           else None),
+        })
+    record = {"complexity": COMPLEXITY, "criterion": scorer.criterion_name,
+              "tolerance": settings.tolerance, "select": rule, "selected": k + 1,
+              "search_complexity": complexity(comp, comp.matrix), "front": members}
+    return _with(comp, front[k].matrix), record

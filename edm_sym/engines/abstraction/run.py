@@ -1,0 +1,534 @@
+"""Hierarchical abstraction (paper, Figs. 8 and 19): steps of Algorithm 1.
+
+Each step runs the genetic algorithm on a matrix of its own size and with its
+own weighting Lambda; its initial population holds the previous step's best
+(or, for the first step, the human model of the config) with new random rows,
+beside fully random individuals. Elite preservation keeps the best, so a
+step's best never gets worse from one generation to the next.
+
+A run is a pure function of the data, the config and the seed: every random
+number comes from one generator, the evaluation never draws any, and the
+state at each generation boundary is checkpointed, so a resumed run ends with
+the same result as an uninterrupted one. Only ``time_limit`` depends on the
+clock, and it ends a run at a generation boundary.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
+from edm_sym.core.errors import ConfigError, NumericsWarning
+from edm_sym.core.matrix import Compensator, ElementMatrix
+from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
+from edm_sym.engines.abstraction.checkpoint import (
+    FinishedStep,
+    RunState,
+    StepState,
+    load_checkpoint,
+    save_checkpoint,
+)
+from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
+from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
+from edm_sym.engines.abstraction.local_search import tune_parameters
+from edm_sym.engines.abstraction.polish import GAIN, gain_fit
+from edm_sym.engines.abstraction.prune import apply_parsimony
+from edm_sym.engines.abstraction.schedule import AbstractionConfig, StepConfig, default_config
+from edm_sym.engines.abstraction.validation import Scorer, plan_holdout
+from edm_sym.engines.simulate import fitness, simulate_rows
+
+#: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
+#: those whose output is a f(x).
+_ZERO_ELEMENTS = tuple(el.name for el in all_elements() if el.scales_output)
+
+
+@dataclass(frozen=True)
+class GenerationInfo:
+    """What a ``callback`` is told after every generation.
+
+    Attributes
+    ----------
+    step : int
+        1-based step number.
+    generation : int
+        Generations done in this step (0: the initial population).
+    best : float
+        Best fitness of the step so far.
+    evaluations : int
+        Individuals evaluated in this step.
+    elapsed : float
+        Seconds since the run (or the resumed run) started.
+    stats : EvalStats
+        The evaluator's counters so far (rows requested and simulated, cache
+        hit rate, element-samples and seconds in simulation).
+    best_matrix : ElementMatrix
+        The step's best individual so far.
+    """
+
+    step: int
+    generation: int
+    best: float
+    evaluations: int
+    elapsed: float
+    stats: EvalStats
+    best_matrix: ElementMatrix | None = None
+
+
+class _Stop(Exception):
+    def __init__(self, reason: str):
+        super().__init__(reason)
+        self.reason = reason
+
+
+def _fingerprint(cfg: AbstractionConfig, target: str, inputs: Sequence[str], seed: int,
+                 x: np.ndarray, y: np.ndarray, ts: float) -> str:
+    h = hashlib.sha256()
+    h.update(json.dumps({"config": cfg.to_json(), "target": target, "inputs": list(inputs),
+                         "seed": seed, "ts": ts, "shape": list(x.shape)},
+                        sort_keys=True).encode())
+    h.update(np.ascontiguousarray(x).tobytes())
+    h.update(np.ascontiguousarray(y).tobytes())
+    return h.hexdigest()
+
+
+def _human_rows(cfg: AbstractionConfig, inputs: Sequence[str], ranges: dict[str, ParamRange]
+                ) -> Population | None:
+    if not cfg.initial:
+        return None
+    n = max(len(r.elements) for r in cfg.initial)
+    ins, codes, ps = [], [], []
+    for j, row in enumerate(cfg.initial):
+        where = f"{cfg.source}: initial.rows[{j}]"
+        if row.input not in inputs:
+            raise ConfigError(f"{where}.input",
+                              f"expected one of the inputs ({', '.join(inputs)}), "
+                              f"found {row.input!r}")
+        ins.append(inputs.index(row.input))
+        rc, rp = [], []
+        for i, (name, value) in enumerate(row.elements):
+            rc.append(BY_NAME[name].code)
+            if value is None:
+                rp.append(0.0)
+                continue
+            rng = ranges[name]
+            if not (rng.low <= value <= rng.high):
+                raise ConfigError(f"{where}.elements[{i}]",
+                                  f"expected a value in the range of {name!r} [{rng.low:g}, "
+                                  f"{rng.high:g}], found {value:g} (widen [ranges.{name}])")
+            rp.append(rng.encode(value))
+        rc += [THROUGH] * (n - len(rc))
+        rp += [0.0] * (n - len(rp))
+        codes.append(rc)
+        ps.append(rp)
+    return Population(np.array([ins], dtype=np.int64), np.array([codes], dtype=np.int64),
+                      np.array([ps], dtype=float))
+
+
+def _zero_gene(step: StepConfig, ranges: dict[str, ParamRange]) -> tuple[int, float] | None:
+    allowed = set(allowed_codes(step.ga.elements).tolist())
+    for name in _ZERO_ELEMENTS:
+        el = BY_NAME[name]
+        if el.code in allowed:
+            p = ranges[name].encode(0.0)
+            if ranges[name].decode(p) == 0.0:
+                return el.code, p
+    return None
+
+
+class _Runner:
+    """One run: its data, evaluator, generator and committed state."""
+
+    def __init__(self, *, cfg: AbstractionConfig, x: np.ndarray, y: np.ndarray, t: np.ndarray,
+                 ts: float, ranges: dict[str, ParamRange], human: Population | None,
+                 inputs: Sequence[str],
+                 evaluator: Evaluator, state: RunState, rng: np.random.Generator,
+                 checkpoint: Path | None, time_limit: float | None, progress: bool,
+                 callback: Callable[[GenerationInfo], bool | None] | None):
+        self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
+        self.ranges, self.human, self.evaluator = ranges, human, evaluator
+        self.inputs = tuple(inputs)
+        self.state, self.rng, self.checkpoint = state, rng, checkpoint
+        self.time_limit, self.callback = time_limit, callback
+        self.start = time.monotonic()
+        self.bar = None
+        if progress:
+            from tqdm import tqdm
+
+            self.bar = tqdm(unit="gen", file=sys.stderr, dynamic_ncols=True, leave=True,
+                            bar_format="{desc} [{elapsed}]")
+
+    # -- commit -------------------------------------------------------------
+    def _commit(self, current: StepState | None, finished: FinishedStep | None = None) -> None:
+        st = self.state
+        new = RunState(st.fingerprint, self.rng.bit_generator.state,
+                       st.finished + ([finished] if finished else []), current)
+        self.state = new
+        if self.checkpoint is not None:
+            save_checkpoint(self.checkpoint, new)
+
+    def _after_generation(self, cur: StepState) -> None:
+        elapsed = time.monotonic() - self.start
+        best = float(np.min(cur.fitness))
+        if self.bar is not None:
+            step = self.cfg.steps[cur.step]
+            rate = self.evaluator.stats.individuals / elapsed if elapsed > 0 else 0.0
+            self.bar.set_description_str(
+                f"step {cur.step + 1}/{len(self.cfg.steps)} {step.n_elements}x{step.n_rows}"
+                f" | gen {cur.generation} | best {best:.6g} | {rate:.0f} eval/s", refresh=False)
+            self.bar.update(1)
+        if self.callback is not None:
+            info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
+                                  replace(self.evaluator.stats),
+                                  cur.population.matrix(int(np.argmin(cur.fitness)),
+                                                        self.inputs))
+            if self.callback(info):
+                raise _Stop("stopped")
+        if self.time_limit is not None and elapsed >= self.time_limit:
+            raise _Stop("time_limit")
+
+    # -- steps ------------------------------------------------------------------
+    def run(self) -> None:
+        steps = self.cfg.steps
+        k0 = self.state.current.step if self.state.current else len(self.state.finished)
+        for k in range(k0, len(steps)):
+            step = steps[k]
+            lam = step.weighting.weights(self.t, self.y)
+            if not np.any(np.asarray(lam) > 0):
+                raise ConfigError(f"{self.cfg.source}: step[{k}].weighting",
+                                  "expected a positive weight for some sample of the data, "
+                                  "found all zero")
+            self.evaluator.set_weights(lam)
+            ops = Operators(step.ga, self.x.shape[0])
+            cur = self.state.current
+            if cur is None or cur.step != k:
+                cur = self._init_step(k, step, ops)
+                self._commit(cur)
+                self._after_generation(cur)
+            while not cur.done:
+                cur = self._generation(cur, step, ops)
+                self._commit(cur)
+                self._after_generation(cur)
+            best = int(np.argmin(cur.fitness))
+            done = FinishedStep(k + 1, cur.population.take([best]), float(cur.fitness[best]),
+                                cur.history, cur.generation, cur.evaluations,
+                                step.weighting.to_json())
+            self._commit(None, done)
+
+    def _init_step(self, k: int, step: StepConfig, ops: Operators) -> StepState:
+        ga = step.ga
+        p, m, n = ga.population, step.n_rows, step.n_elements
+        pop = ops.random_population(self.rng, p, m, n)
+        seed = self.state.finished[-1].best if k > 0 else self.human
+        if seed is not None:
+            m0, n0 = seed.codes.shape[1], seed.codes.shape[2]
+            count = max(1, int(round(ga.inherit_fraction * p)))
+            pop.inputs[:count, :m0] = seed.inputs[0]
+            pop.codes[:count, :m0, :n0] = seed.codes[0]
+            pop.ps[:count, :m0, :n0] = seed.ps[0]
+            pop.codes[:count, :m0, n0:] = THROUGH
+            pop.ps[:count, :m0, n0:] = 0.0
+            zero = _zero_gene(step, self.ranges)
+            if zero is not None and m0 < m:
+                # The inherited model with new rows that output 0 (through ... through,
+                # gain 0): a step starts where the previous one ended.
+                pop.codes[0, m0:], pop.ps[0, m0:] = THROUGH, 0.0
+                pop.codes[0, m0:, -1], pop.ps[0, m0:, -1] = zero
+        # Individual 0 is the seed as it is: the gain fit improves copies of it later.
+        fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
+        best = float(np.min(fit))
+        return StepState(step=k, generation=0, blocks=0, block_start_best=best, ref_best=best,
+                         since_improvement=0, done=False, population=pop, fitness=fit,
+                         history=[best], evaluations=p + extra)
+
+    def _evaluate(self, pop: Population, ops: Operators, keep_first: bool = False
+                  ) -> tuple[np.ndarray, int]:
+        """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
+        if not ops.ga.gain_fit:
+            return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
+        rows: list = []
+        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        if keep_first:
+            rows[0] = None
+        idx, cand = gain_fit(pop, rows, fit, len(self.y), self.evaluator.gram, self.ranges,
+                             gain_allowed=GAIN in ops.allowed)
+        del rows
+        if len(idx):
+            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
+            better = cfit < fit[idx]
+            sel, src = idx[better], np.flatnonzero(better)
+            pop.inputs[sel], pop.codes[sel], pop.ps[sel] = (
+                cand.inputs[src], cand.codes[src], cand.ps[src])
+            fit[sel] = cfit[src]
+        return fit, len(idx)
+
+    def _generation(self, cur: StepState, step: StepConfig, ops: Operators) -> StepState:
+        ga = step.ga
+        pop, fit = cur.population, cur.fitness
+        keys = self.evaluator.individual_keys(pop.inputs, pop.codes, pop.ps)
+        order = rank(fit, keys)
+        ranked, rfit = pop.take(order), fit[order]
+        size = len(pop)
+        kids = ops.offspring(self.rng, ranked, size - ga.elites)
+        kfit, extra = self._evaluate(kids, ops)
+        new_pop = Population.concat([ranked.take(np.arange(ga.elites)), kids])
+        new_fit = np.concatenate([rfit[:ga.elites], kfit])
+        best = float(np.min(new_fit))
+        before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
+                          cur.since_improvement)
+        prog = before.after(ga, best)
+        if ga.local_search and prog.since_improvement and (
+                prog.done or prog.since_improvement % ga.local_search == 0):
+            # Stagnation: tune the best individual's parameters; the result takes the
+            # place of the worst individual, so the original stays in the population.
+            k = int(np.argmin(new_fit))
+            tuned, tfit, used = tune_parameters(self.evaluator, new_pop.take([k]),
+                                                float(new_fit[k]),
+                                                max_evaluations=ga.local_search_evaluations)
+            extra += used
+            if tfit < best:
+                worst = int(np.argmax(new_fit))
+                new_pop.inputs[worst], new_pop.codes[worst], new_pop.ps[worst] = (
+                    tuned.inputs[0], tuned.codes[0], tuned.ps[0])
+                new_fit[worst] = tfit
+                best = tfit
+                prog = before.after(ga, best)
+        restarts = cur.restarts
+        if prog.done and restarts < ga.restarts:
+            restarts += 1
+            new_pop, new_fit, used = self._restart(new_pop, new_fit, ops)
+            extra += used
+            best = float(np.min(new_fit))
+            prog = replace(Progress.start(best), generation=prog.generation)
+        return StepState(step=cur.step, generation=prog.generation, blocks=prog.blocks,
+                         block_start_best=prog.block_start_best, ref_best=prog.ref_best,
+                         since_improvement=prog.since_improvement,
+                         done=prog.done, population=new_pop, fitness=new_fit,
+                         history=[*cur.history, best],
+                         evaluations=cur.evaluations + len(kids) + extra, restarts=restarts)
+
+    def _restart(self, pop: Population, fit: np.ndarray, ops: Operators
+                 ) -> tuple[Population, np.ndarray, int]:
+        """A stagnating step's new population: its elites, the best with one row anew, random."""
+        ga = ops.ga
+        p, m, n = pop.shape
+        keys = self.evaluator.individual_keys(pop.inputs, pop.codes, pop.ps)
+        order = rank(fit, keys)[:ga.elites]
+        elites = pop.take(order)
+        fresh = ops.random_population(self.rng, p - ga.elites, m, n)
+        count = max(1, int(round(ga.inherit_fraction * p)))
+        redraw = self.rng.integers(m, size=count)
+        for i in range(count):
+            keep = np.arange(m) != redraw[i]
+            fresh.inputs[i, keep] = elites.inputs[0, keep]
+            fresh.codes[i, keep] = elites.codes[0, keep]
+            fresh.ps[i, keep] = elites.ps[0, keep]
+        ffit, extra = self._evaluate(fresh, ops)
+        return (Population.concat([elites, fresh]), np.concatenate([fit[order], ffit]),
+                len(fresh) + extra)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    # -- result -------------------------------------------------------------------
+    def records(self) -> list[FinishedStep]:
+        """Finished steps plus the step in progress (at its last boundary)."""
+        out = list(self.state.finished)
+        cur = self.state.current
+        if cur is not None:
+            best = int(np.argmin(cur.fitness))
+            out.append(FinishedStep(cur.step + 1, cur.population.take([best]),
+                                    float(cur.fitness[best]), cur.history, cur.generation,
+                                    cur.evaluations,
+                                    self.cfg.steps[cur.step].weighting.to_json()))
+        return out
+
+
+def abstract(
+    data: DataLog,
+    *,
+    target: str,
+    inputs: Sequence[str],
+    config: AbstractionConfig | None = None,
+    seed: int = 0,
+    time_limit: float | None = None,
+    executor: Executor | None = None,
+    progress: bool = False,
+    checkpoint: Path | None = None,
+    resume: bool = False,
+    workers: int | None = None,
+    callback: Callable[[GenerationInfo], bool | None] | None = None,
+    validate: DataLog | None = None,
+    validation_share: float | None = None,
+    select: str | None = None,
+) -> EdmResult:
+    """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
+
+    Parameters
+    ----------
+    data : DataLog
+        The abstraction log (free motion).
+    target : str
+        The column to compensate (the RTOB's estimated external torque).
+    inputs : sequence of str
+        The columns the rows may select as their input.
+    config : AbstractionConfig, optional
+        Schedule, GA settings, ranges, human model; None: the default schedule.
+    seed : int
+        Seed of the random generator (>= 0): equal seeds give equal results.
+    time_limit : float, optional
+        Wall-clock seconds; the run ends at the first generation boundary
+        after it and returns the best so far.
+    executor : concurrent.futures.Executor, optional
+        Where rows are simulated (e.g. ``dask.distributed.Client(...).get_executor()``);
+        it is not shut down. None: a process pool over ``workers`` cores.
+    progress : bool
+        Show a tqdm progress bar on stderr.
+    checkpoint : pathlib.Path, optional
+        Where to write the run's state after every generation (removed when
+        the run completes).
+    resume : bool
+        Continue from ``checkpoint`` when that file exists.
+    workers : int, optional
+        Processes of the default pool (default: every usable core; 1: no pool).
+    callback : callable, optional
+        Called with a :class:`GenerationInfo` after every generation; a true
+        return value ends the run there, like a time limit.
+    validate : DataLog, optional
+        A second log held out as a whole (the GA then fits all of ``data``).
+    validation_share : float, optional
+        Share of ``data`` held out at its end, in [0, 0.9]; None: the
+        config's ``[validation] share`` (default 0.2). See
+        :mod:`edm_sym.engines.abstraction.validation`.
+    select : str, optional
+        Which member of the complexity-vs-fitness front is exported:
+        ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
+        config's ``[parsimony]`` rule (default: the simplest member within
+        its tolerance, 1 %). See :mod:`edm_sym.engines.abstraction.prune`.
+
+    Returns
+    -------
+    EdmResult
+        The final compensator, every step's record and the provenance
+        (``seed``, ``package_version``, ``data_sha256``, ``stop_reason``: one of
+        ``"completed"``, ``"time_limit"``, ``"stopped"``, ``"interrupted"``).
+
+    Raises
+    ------
+    ConfigError
+        Bad inputs or config (unknown input in the human model, a weighting
+        that is zero everywhere, a checkpoint of another run).
+    DataFormatError
+        A missing target or input column.
+    KeyboardInterrupt
+        Only when interrupted before the first population was evaluated.
+    """
+    from edm_sym.core.version import __version__
+
+    cfg = config if config is not None else default_config()
+    inputs = tuple(inputs)
+    if not inputs:
+        raise ConfigError("inputs", "expected at least one input column, found none")
+    for k, name in enumerate(inputs):
+        if inputs.index(name) != k:
+            raise ConfigError("inputs", f"expected each column once, found {name!r} twice")
+        problem = input_name_problem(name, inputs[:k])
+        if problem:
+            raise ConfigError(f"inputs: {name!r}", problem)
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
+    if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
+        raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
+    if validation_share is not None:
+        cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
+    hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
+                        validate=validate)
+    # The GA sees the training samples only (causal rows: they do not depend on later ones).
+    part = hold.training
+    x = np.ascontiguousarray(part.x[:, :hold.n_train])
+    y, t = part.y[:hold.n_train], part.t[:hold.n_train]
+    ts = float(data.ts)
+    n = len(data)
+    ranges = cfg.resolve_ranges(ts, n * ts)
+    human = _human_rows(cfg, inputs, ranges)
+    fingerprint = _fingerprint(cfg, target, inputs, int(seed), x, y, ts)
+    rng = np.random.default_rng(int(seed))
+    checkpoint = Path(checkpoint) if checkpoint is not None else None
+    if resume and checkpoint is not None and checkpoint.exists():
+        state = load_checkpoint(checkpoint, fingerprint)
+        rng.bit_generator.state = state.rng_state
+    else:
+        state = RunState(fingerprint, rng.bit_generator.state)
+    batch = max(s.ga.population * s.n_rows for s in cfg.steps)
+    evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
+                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
+    evaluator.start()
+    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
+                     evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
+                     time_limit=time_limit, progress=progress, callback=callback)
+    reason = "completed"
+    try:
+        runner.run()
+    except _Stop as stop:
+        reason = stop.reason
+    except KeyboardInterrupt:
+        reason = "interrupted"
+        evaluator.abort()
+        if not runner.records():
+            raise
+    finally:
+        runner.close()
+        evaluator.close()
+    steps = []
+    for r in runner.records():
+        matrix = r.best.matrix(0, inputs)
+        lam = cfg.steps[r.step - 1].weighting.weights(t, y)
+        steps.append(StepRecord(step=r.step, matrix=matrix,
+                                fitness=_reference_fitness(matrix, ts, ranges, x, y, lam,
+                                                           r.fitness, r.step),
+                                history=tuple(r.history), generations=r.generations,
+                                evaluations=r.evaluations, weighting=r.weighting))
+    comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
+    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting)
+    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select)
+    final = scorer.report(comp)
+    fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
+    provenance = {"seed": int(seed), "package_version": __version__,
+                  "data_sha256": data.sha256, "stop_reason": reason}
+    if reason == "completed" and checkpoint is not None and checkpoint.exists():
+        checkpoint.unlink()
+    return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
+                     parsimony=parsimony)
+
+
+def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
+                       x: np.ndarray, y: np.ndarray, lam: np.ndarray | float, ga_value: float,
+                       step: int) -> float:
+    """Eq. 8 of a step's best by the reference simulator, the numeric truth.
+
+    The GA ranks with a faster realisation of the same difference equations;
+    the two agree to rounding unless a row amplifies rounding (a tangent of a
+    huge argument, say), which is worth a warning.
+    """
+    comp = Compensator(matrix, ts, ranges, len(y) * ts)
+    with np.errstate(over="ignore", invalid="ignore"):
+        value = fitness(y - simulate_rows(comp, matrix.rows, x).sum(axis=0), lam)
+    if not np.isfinite(value):
+        value = float("inf")
+    if abs(value - ga_value) > 1e-6 * max(abs(value), 1e-300):
+        warnings.warn(NumericsWarning(
+            f"step {step}: the best matrix's fitness is {value:.10g} by the reference "
+            f"simulator but {ga_value:.10g} in the GA; one of its rows amplifies rounding"),
+            stacklevel=3)
+    return float(value)

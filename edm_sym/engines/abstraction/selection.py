@@ -1,0 +1,128 @@
+"""Parsimony settings and the rules that choose a member of the front.
+
+``[parsimony]`` in the config: ``prune`` (run the pruning pass, default
+true), ``tolerance`` (default 0.01) and ``select``. The rules, applied to a
+front sorted by complexity (see :mod:`edm_sym.engines.abstraction.prune`):
+
+* ``best``: the lowest criterion;
+* ``knee``: the largest drop of ln(criterion) per unit of complexity
+  against the next simpler member, among members within 1.5 times the best
+  criterion (PySR's choice of its "best" equation);
+* ``simplest-within=PCT``: the simplest member whose criterion is within
+  PCT % of the best.
+
+The default is ``simplest-within=`` the tolerance in percent (1 %).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from edm_sym.core.errors import ConfigError
+from edm_sym.engines.abstraction.tables import settings_from_table
+
+KNEE_WITHIN = 1.5
+_KEYS = ("prune", "tolerance", "select")
+_SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+))$")
+
+
+class _Member(Protocol):
+    complexity: int
+    criterion: float
+
+
+@dataclass(frozen=True)
+class ParsimonySettings:
+    """The ``[parsimony]`` table of the config.
+
+    Parameters
+    ----------
+    prune : bool
+        Run the pruning pass (False: export the search's model, no front).
+    tolerance : float
+        Relative worsening of the criterion a simplification may cost
+        (default 0.01); the default selection is ``simplest-within=`` it.
+    select : str or None
+        ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
+        simplest member within ``tolerance``.
+    """
+
+    prune: bool = True
+    tolerance: float = 0.01
+    select: str | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.prune, bool):
+            raise ConfigError("parsimony.prune", f"expected true or false, found {self.prune!r}")
+        t = self.tolerance
+        if isinstance(t, bool) or not isinstance(t, int | float) or not (
+                math.isfinite(t) and 0 <= t <= 1):
+            raise ConfigError("parsimony.tolerance", f"expected a number in [0, 1], found {t!r}")
+        object.__setattr__(self, "tolerance", float(t))
+        if self.select is not None:
+            check_select(self.select, "parsimony.select")
+
+    @property
+    def selection(self) -> str:
+        """The selection rule in force."""
+        return self.select or f"simplest-within={100 * self.tolerance:g}"
+
+    def to_json(self) -> dict[str, Any]:
+        """The settings as a config table."""
+        return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection}
+
+
+def check_select(text: Any, where: str) -> str:
+    """Refuse a selection rule other than ``best``, ``knee``, ``simplest-within=PCT``."""
+    if not isinstance(text, str) or not _SELECT.match(text):
+        raise ConfigError(where, f"expected best, knee or simplest-within=PCT, found {text!r}")
+    return text
+
+
+def parse_parsimony(where: str, doc: Any) -> ParsimonySettings:
+    """Read the ``[parsimony]`` table of a config.
+
+    Parameters
+    ----------
+    where : str
+        ``"<file>: parsimony"``, for messages.
+    doc : mapping
+        The parsed table.
+
+    Returns
+    -------
+    ParsimonySettings
+
+    Raises
+    ------
+    ConfigError
+        Unknown key, wrong type or a value out of range.
+    """
+    return settings_from_table(ParsimonySettings, _KEYS, where, doc)
+
+
+def select(front: Sequence[_Member], rule: str) -> int:
+    """Index of the front member chosen by ``rule`` (see the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        An unknown rule.
+    """
+    check_select(rule, "select")
+    crit = [m.criterion for m in front]
+    best = min(crit)
+    if rule == "best":
+        return crit.index(best)
+    if rule == "knee":
+        score = [0.0] + [
+            -(math.log(max(crit[k], 1e-300)) - math.log(max(crit[k - 1], 1e-300)))
+            / (front[k].complexity - front[k - 1].complexity) for k in range(1, len(front))]
+        ok = [k for k in range(len(front)) if crit[k] <= KNEE_WITHIN * best]
+        return max(ok, key=lambda k: (score[k], -k))
+    pct = float(rule.split("=", 1)[1])
+    return next(k for k in range(len(front)) if crit[k] <= best * (1 + pct / 100) + 1e-300)

@@ -1,0 +1,313 @@
+"""Held-out validation: the part of the data the genetic algorithm never fits.
+
+By default the **last** ``share`` (20 %) of the abstraction log is held out
+as one contiguous segment. The last end, because the compensator is causal:
+the samples before the segment do not depend on it, so the GA runs on the
+first part alone and provably never sees the held-out samples, and the
+held-out samples are scored after a warm-up on the training part (filters,
+derivatives and delays start from the state the real log gives them, not
+from rest). Holding out the first part instead would score a cold start.
+
+Scores of a model are computed by simulating the **whole** log with the
+reference simulator (:mod:`edm_sym.engines.simulate`) and scoring only the samples
+of one part: the training part ``[0, n_train)`` and the held-out part
+``[n_train, N)``. With a second log (``validate=``, ``--validate FILE``) the
+GA fits the whole abstraction log and every sample of the second log is
+scored (it is simulated from rest, like the abstraction log).
+
+Each score is eq. 8 with the final step's weighting Lambda (its windows in
+seconds of the log scored) and the plain RMSE, both in the unit of the
+target.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from edm_sym.core.data import DataLog
+from edm_sym.core.errors import ConfigError, DataFormatError
+from edm_sym.core.matrix import Compensator, Row
+from edm_sym.engines.abstraction.tables import settings_from_table
+from edm_sym.engines.abstraction.weighting import Weighting
+from edm_sym.engines.simulate import simulate_row
+
+#: Largest share of a log that may be held out.
+MAX_SHARE = 0.9
+#: Memory bound of the row outputs a :class:`Scorer` keeps [bytes].
+CACHE_BYTES = 128 * 2**20
+_KEYS = ("share", "unit")
+
+
+@dataclass(frozen=True)
+class ValidationSettings:
+    """What to hold out (the ``[validation]`` table of the config).
+
+    Parameters
+    ----------
+    share : float
+        Share of the abstraction log held out at its end, in [0, 0.9]
+        (0: nothing held out; ignored when a second log is given).
+    unit : str
+        Unit of the target column, written beside every fitness value.
+    """
+
+    share: float = 0.2
+    unit: str = "N m"
+
+    def __post_init__(self) -> None:
+        s = self.share
+        if isinstance(s, bool) or not isinstance(s, int | float) or not (
+                math.isfinite(s) and 0.0 <= s <= MAX_SHARE):
+            raise ConfigError("validation.share",
+                              f"expected a number in [0, {MAX_SHARE:g}], found {s!r}")
+        object.__setattr__(self, "share", float(s))
+        if not isinstance(self.unit, str) or not self.unit.strip():
+            raise ConfigError("validation.unit", f"expected a non-empty unit, found {self.unit!r}")
+
+    def to_json(self) -> dict[str, Any]:
+        """The settings as a config table."""
+        return {"share": self.share, "unit": self.unit}
+
+
+def parse_validation(where: str, doc: Any) -> ValidationSettings:
+    """Read the ``[validation]`` table of a config.
+
+    Parameters
+    ----------
+    where : str
+        ``"<file>: validation"``, for messages.
+    doc : mapping
+        The parsed table.
+
+    Returns
+    -------
+    ValidationSettings
+
+    Raises
+    ------
+    ConfigError
+        Unknown key, wrong type or a value out of range.
+    """
+    return settings_from_table(ValidationSettings, _KEYS, where, doc)
+
+
+@dataclass(frozen=True)
+class Part:
+    """Samples to score: ``sl`` of the simulation of the whole ``x``.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Inputs (n_inputs, N) of the log simulated (from rest).
+    y : numpy.ndarray
+        Its target (N,).
+    t : numpy.ndarray
+        Its sample times [s] (for the weighting windows).
+    sl : slice
+        The samples that count.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    t: np.ndarray
+    sl: slice
+
+    @property
+    def samples(self) -> int:
+        """Number of samples scored."""
+        return len(range(*self.sl.indices(len(self.y))))
+
+
+@dataclass(frozen=True)
+class Holdout:
+    """The training data of the GA and the held-out part.
+
+    Attributes
+    ----------
+    n_train : int
+        The GA fits samples ``[0, n_train)`` of the abstraction log.
+    training : Part
+        The training samples.
+    validation : Part or None
+        The held-out samples (None: nothing held out).
+    record : dict
+        What was held out, as written to result.json (``held_out``).
+    unit : str
+        Unit of the target.
+    """
+
+    n_train: int
+    training: Part
+    validation: Part | None
+    record: dict[str, Any]
+    unit: str
+
+
+def _times(data: DataLog) -> np.ndarray:
+    n = len(data)
+    return (np.asarray(data.columns["t"], dtype=float) if "t" in data.columns
+            else np.arange(n) * float(data.ts))
+
+
+def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
+                 settings: ValidationSettings, validate: DataLog | None = None) -> Holdout:
+    """Split the data into what the GA fits and what is held out.
+
+    Parameters
+    ----------
+    data : DataLog
+        The abstraction log.
+    target : str
+        The target column.
+    inputs : sequence of str
+        The input columns.
+    settings : ValidationSettings
+        The share held out at the end of ``data`` (unused with ``validate``).
+    validate : DataLog, optional
+        A second log held out as a whole; the GA then fits all of ``data``.
+
+    Returns
+    -------
+    Holdout
+
+    Raises
+    ------
+    DataFormatError
+        A missing column in ``validate`` or a sample time unlike ``data``'s.
+    ConfigError
+        A share that leaves no sample on one side.
+    """
+    x = data.stack(inputs)
+    y = np.asarray(data.column(target, role="target column"), dtype=float)
+    t = _times(data)
+    n = len(y)
+    unit = settings.unit
+    if validate is not None:
+        if abs(float(validate.ts) - float(data.ts)) > 1e-6 * float(data.ts):
+            raise DataFormatError(f"{validate.source}: sample time",
+                                  f"expected {data.ts:g} s as in {data.source}, "
+                                  f"found {validate.ts:g} s")
+        vx = validate.stack(inputs)
+        vy = np.asarray(validate.column(target, role="target column"), dtype=float)
+        record = {"kind": "file", "file": validate.source, "sha256": validate.sha256,
+                  "samples": len(vy)}
+        return Holdout(n, Part(x, y, t, slice(0, n)), Part(vx, vy, _times(validate),
+                                                           slice(0, len(vy))), record, unit)
+    if settings.share == 0.0:
+        return Holdout(n, Part(x, y, t, slice(0, n)), None, {"kind": "none"}, unit)
+    n_train = int(round(n * (1.0 - settings.share)))
+    if not 1 <= n_train < n:
+        raise ConfigError("validation.share",
+                          f"expected a share that leaves samples on both sides of a log of "
+                          f"{n} samples, found {settings.share:g}")
+    record = {"kind": "segment", "end": "last", "share": settings.share,
+              "rows": [n_train, n], "t": [float(t[n_train]), float(t[-1])]}
+    return Holdout(n_train, Part(x, y, t, slice(0, n_train)), Part(x, y, t, slice(n_train, n)),
+                   record, unit)
+
+
+class Scorer:
+    """Training and validation scores of models, with row outputs cached.
+
+    Parameters
+    ----------
+    holdout : Holdout
+        The parts to score.
+    weighting : Weighting
+        Lambda of eq. 8 (the final step's).
+    """
+
+    def __init__(self, holdout: Holdout, weighting: Weighting):
+        self.holdout, self.weighting = holdout, weighting
+        self.parts = {"training": holdout.training}
+        if holdout.validation is not None:
+            self.parts["validation"] = holdout.validation
+        self._lam = {k: weighting.weights(p.t, p.y) for k, p in self.parts.items()}
+        self._rows: OrderedDict[tuple[str, Any], np.ndarray] = OrderedDict()
+        longest = max(len(p.y) for p in self.parts.values())
+        self._max_rows = max(16, CACHE_BYTES // (8 * longest))
+
+    def row_output(self, comp: Compensator, part: str, row: Row) -> np.ndarray:
+        """One row simulated over the whole log of ``part`` (cached by its genes)."""
+        p = self.parts[part]
+        key = (part if p.x is not self.holdout.training.x else "training", row)
+        out = self._rows.get(key)
+        if out is None:
+            with np.errstate(all="ignore"):
+                out = simulate_row(comp, row, p.x[row.input])
+            self._rows[key] = out
+            if len(self._rows) > self._max_rows:
+                self._rows.popitem(last=False)
+        else:
+            self._rows.move_to_end(key)
+        return out
+
+    def outputs(self, comp: Compensator, part: str) -> np.ndarray:
+        """The matrix output over the whole log of ``part``."""
+        total = np.zeros(len(self.parts[part].y))
+        for row in comp.matrix.rows:
+            total = total + self.row_output(comp, part, row)
+        return total
+
+    def weights(self, part: str) -> np.ndarray | float:
+        """Lambda on the scored samples of ``part`` (a float when constant)."""
+        lam = self._lam[part]
+        return lam[self.parts[part].sl] if isinstance(lam, np.ndarray) else lam
+
+    def score(self, comp: Compensator, part: str) -> dict[str, Any]:
+        """Eq. 8 (weighted) and the plain RMSE of ``comp`` on the samples of ``part``.
+
+        Returns
+        -------
+        dict
+            ``{"fitness": [value or None, unit], "rmse": [value, unit],
+            "samples": count}``; the weighted value is None when Lambda is
+            0 on every sample of the part. Non-finite values become None too.
+        """
+        p = self.parts[part]
+        e = (p.y - self.outputs(comp, part))[p.sl]
+        lam = self.weights(part)
+        with np.errstate(all="ignore"):
+            rmse = float(np.sqrt(np.mean(e * e)))
+            weighted = (float(np.sqrt(np.mean(np.asarray(lam) * e * e)))
+                        if np.any(np.asarray(lam) > 0) else None)
+        return {"fitness": [_finite(weighted), self.holdout.unit],
+                "rmse": [_finite(rmse), self.holdout.unit], "samples": p.samples}
+
+    def criterion(self, comp: Compensator) -> float:
+        """The number a simpler model must not worsen: validation eq. 8, else its RMSE.
+
+        Without held-out data, the training eq. 8. Non-finite: ``inf``.
+        """
+        part = "validation" if "validation" in self.parts else "training"
+        s = self.score(comp, part)
+        value = s["fitness"][0] if s["fitness"][0] is not None else s["rmse"][0]
+        return float("inf") if value is None else float(value)
+
+    @property
+    def criterion_name(self) -> str:
+        """What :meth:`criterion` measures, as recorded in result.json."""
+        part = "validation" if "validation" in self.parts else "training"
+        lam = self.weights(part)
+        kind = "fitness" if np.any(np.asarray(lam) > 0) else "rmse"
+        return f"{part}.{kind}"
+
+    def report(self, comp: Compensator) -> dict[str, Any]:
+        """The ``validation`` entry of result.json for the exported model."""
+        return {
+            "held_out": dict(self.holdout.record),
+            "weighting": self.weighting.to_json(),
+            "training": self.score(comp, "training"),
+            "validation": (self.score(comp, "validation") if "validation" in self.parts
+                           else None),
+        }
+
+
+def _finite(v: float | None) -> float | None:
+    return v if v is not None and math.isfinite(v) else None

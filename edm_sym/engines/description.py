@@ -1,0 +1,305 @@
+"""``edm describe``: what a model found, without building a PDF.
+
+:func:`describe` decodes a result, simulates its rows on a data log (the one
+given, else the one the result records), and judges every row
+(:mod:`edm_sym.engines.symbolic.significance`): its contribution, the physical terms
+it may honestly be named by, and its flags. :class:`Description` prints as a
+table for people and converts to the stable JSON shape of ``docs/describe.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from edm_sym.core.bounds import complexity
+from edm_sym.core.data import DataLog, is_plant_spec
+from edm_sym.core.errors import DataFormatError
+from edm_sym.core.result import EdmResult, load_result
+from edm_sym.engines.sources import load_data
+
+
+@dataclass(frozen=True)
+class RowDescription:
+    """One row as ``edm describe`` shows it.
+
+    Attributes
+    ----------
+    index : int
+        Row number, 1-based.
+    input, role : str, str or None
+        The row's input and its physical role.
+    expression : str
+        The simplified expression with numbers (4 significant digits).
+    contribution : float or None
+        RMS of the row's output / RMS of the target on the data (None without data).
+    terms : tuple of JudgedTerm
+        The physical terms it may be named by (none when negligible).
+    flags : tuple of Flag
+    """
+
+    index: int
+    input: str
+    role: str | None
+    expression: str
+    contribution: float | None
+    terms: tuple[Any, ...]
+    flags: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Description:
+    """What a model found: rows, fitness and complexity (``edm describe``).
+
+    Attributes
+    ----------
+    rows : tuple of RowDescription
+    fitness : dict
+        ``training``, ``validation`` (as the result records them, or None) and
+        ``data`` (measured here on the data log, or None).
+    complexity : int
+        Active (non-``through``) elements plus state size (:func:`edm_sym.core.bounds.complexity`).
+    source : str
+        The result described.
+    threshold : float
+        The significance threshold used (share of the target's RMS).
+    """
+
+    rows: tuple[RowDescription, ...]
+    fitness: Mapping[str, Any]
+    complexity: int
+    source: str = "<memory>"
+    threshold: float = 0.01
+    notes: tuple[str, ...] = field(default=())
+
+    def to_json(self) -> dict[str, Any]:
+        """The stable JSON shape of ``edm describe --json`` (docs/describe.md)."""
+        from edm_sym.engines.symbolic.significance import JudgedRow, judged_json
+
+        rows = []
+        for r in self.rows:
+            terms = judged_json(JudgedRow(r.index - 1, r.contribution, r.terms, r.flags))
+            rows.append({"index": r.index, "input": r.input, "expression": r.expression,
+                         "contribution": r.contribution, "terms": terms,
+                         "flags": [f.to_json() for f in r.flags]})
+        return {"rows": rows, "fitness": _plain(self.fitness), "complexity": self.complexity}
+
+    def table(self) -> str:
+        """The description for people: a summary table, then each row's terms and flags."""
+        lines = [f"{self.source}: {len(self.rows)} row(s), complexity {self.complexity} "
+                 "(rows + active elements + state size)"]
+        lines += ["fitness: " + _fitness_text(self.fitness)]
+        lines += [f"note: {n}" for n in self.notes]
+        head = f"{'row':>3}  {'input':<10} {'contribution':>12}  named as"
+        lines += ["", head, "-" * len(head)]
+        for r in self.rows:
+            share = "-" if r.contribution is None else f"{100 * r.contribution:.3g} %"
+            lines.append(f"{r.index:>3}  {r.input:<10} {share:>12}  {_names(r)}")
+        for r in self.rows:
+            lines += ["", f"row {r.index}: {r.input} ({r.role or 'no role'})", f"  {r.expression}"]
+            for jt in r.terms:
+                params = ", ".join(f"{k.replace('_', ' ')} {v:.4g}" + (f" {unit}" if unit != "1"
+                                                                           else "")
+                                   for k, (v, unit) in jt.term.parameters.items())
+                lines.append(f"  -> {jt.term.kind}" + (f": {params}" if params else ""))
+                lines += [f"     ! {f.code}: {f.message}" for f in jt.flags]
+            # Without data the header says so once; the per-row flag stays in the JSON.
+            lines += [f"  ! {f.code}: {f.message}" for f in r.flags if f.code != "unmeasured"]
+        return "\n".join(lines)
+
+
+def _names(r: RowDescription) -> str:
+    if any(f.code == "negligible" for f in r.flags) and not r.terms:
+        return "negligible"
+    kinds = [jt.term.kind for jt in r.terms]
+    text = ", ".join(dict.fromkeys(kinds)) or "nothing"
+    others = sorted({f.code for f in r.flags} - {"negligible", "unmeasured"})
+    return text + (f"  [{', '.join(others)}]" if others else "")
+
+
+def _fitness_text(fit: Mapping[str, Any]) -> str:
+    parts = []
+    for key in ("training", "validation"):
+        v = fit.get(key)
+        parts.append(f"{key} " + ("-" if not v else ", ".join(
+            f"{k} {_value_text(x)}" for k, x in v.items())))
+    d = fit.get("data")
+    if d:
+        parts.append(f"on {d['source']}: RMSE {d['rmse'][0]:.4g} N m, target RMS "
+                     f"{d['target_rms'][0]:.4g} N m")
+    else:
+        parts.append("no data: contributions not measured (pass --data)")
+    return "; ".join(parts)
+
+
+def _value_text(x: Any) -> str:
+    if isinstance(x, list) and len(x) == 2 and isinstance(x[1], str):
+        return f"{_value_text(x[0])} {x[1]}"
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    if isinstance(x, Mapping):
+        return "{" + ", ".join(f"{k} {_value_text(v)}" for k, v in x.items()) + "}"
+    return str(x)
+
+
+def _plain(value: Any) -> Any:
+    """A JSON-safe deep copy (finite floats only; other values as text)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return str(value)
+
+
+def _raw_document(result: EdmResult) -> dict[str, Any]:
+    """The result file's JSON, to read keys EdmResult does not hold (read defensively)."""
+    if not result.source:
+        return {}
+    try:
+        doc = json.loads(Path(result.source).read_text("utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+def recorded_fitness(result: EdmResult) -> dict[str, Any]:
+    """The training and validation scores the result records (docs/abstraction.md#held-out-validation).
+
+    ``training`` and ``validation`` are the ``{fitness, rmse, samples}`` scores
+    of result.json's ``validation`` entry, and ``held_out`` says what was held
+    out; a result written without held-out validation has only its training
+    eq. 8 (``{"fitness": [value, "N m"]}``) and ``validation`` null.
+    """
+    val = result.validation if isinstance(result.validation, Mapping) else {}
+    training = val.get("training")
+    if not isinstance(training, Mapping):
+        training = {"fitness": [result.fitness, "N m"]} if result.fitness is not None else None
+    validation = val.get("validation")
+    held = val.get("held_out")
+    return {"training": _plain(training) if training else None,
+            "validation": _plain(validation) if isinstance(validation, Mapping) else None,
+            "held_out": _plain(held) if isinstance(held, Mapping) else None}
+
+
+def recorded_data(result: EdmResult) -> str | Path | None:
+    """The data log a result records, resolved, or None.
+
+    The evaluation log (``report_inputs.eval_data``: data the search did not
+    fit) when there is one, else the abstraction log (``report_inputs.data``).
+    """
+    stored = getattr(result, "report_inputs", None) or {}
+    spec = stored.get("eval_data", stored.get("data"))
+    if spec is None:
+        return None
+    if is_plant_spec(spec):
+        return spec
+    base = Path(result.source).parent if result.source else Path(".")
+    return base / spec
+
+
+def _load(spec: Any, result: EdmResult, ts: float | None) -> DataLog:
+    log = spec if isinstance(spec, DataLog) else load_data(
+        spec, ts=ts, require=[*result.inputs, result.target])
+    if isinstance(spec, DataLog):
+        log.stack(result.inputs)
+        log.column(result.target, role="target column")
+    if abs(log.ts - result.sample_time) > 1e-6 * result.sample_time:
+        raise DataFormatError(f"{log.source}: sample time",
+                              f"expected {result.sample_time:g} s as in the result, "
+                              f"found {log.ts:g} s")
+    return log
+
+
+def describe(
+    result: EdmResult | str | Path,
+    data: DataLog | str | Path | None = None,
+    *,
+    ts: float | None = None,
+    options: Any = None,
+    roles: Mapping[str, str | None] | None = None,
+) -> Description:
+    """Describe what a model found: per row its terms, contribution and flags.
+
+    Parameters
+    ----------
+    result : EdmResult or path-like
+        The result (a path is loaded with :func:`edm_sym.load_result`).
+    data : DataLog, path-like or str, optional
+        The log the contributions are measured on (a file or a
+        ``plant:PRESET/EXCITATION`` spec). Default: the data the result records
+        (:func:`recorded_data`: its evaluation log, else its abstraction log);
+        without any, nothing is measured and every row is flagged ``unmeasured``.
+    ts : float, optional
+        Sample time of a log without a time column.
+    options : SignificanceOptions, optional
+        Thresholds (:class:`edm_sym.engines.symbolic.significance.SignificanceOptions`).
+    roles : mapping, optional
+        Input roles over the defaults, as for :func:`edm_sym.decode`.
+
+    Returns
+    -------
+    Description
+
+    Raises
+    ------
+    ResultFormatError, DataFormatError
+        A bad result file or data log (the CLI prints one line, exit 2).
+    """
+    from edm_sym.engines.simulate import simulate_rows
+    from edm_sym.engines.symbolic import decode
+    from edm_sym.engines.symbolic.significance import judge_rows
+
+    if not isinstance(result, EdmResult):
+        result = load_result(result)
+    notes = []
+    log = None
+    if data is not None:
+        log = _load(data, result, ts)
+    elif (spec := recorded_data(result)) is not None:
+        try:
+            log = _load(spec, result, ts)
+        except (OSError, ValueError) as exc:
+            msg = f"the data the result records cannot be used ({' '.join(str(exc).split())})"
+            warnings.warn(msg, stacklevel=2)
+            notes.append(msg)
+    model = decode(result, roles=roles, systems=False)
+    comp = result.compensator
+    outputs = target = inputs = None
+    data_fit = None
+    if log is not None:
+        x = log.stack(comp.matrix.inputs)
+        outputs = simulate_rows(comp, comp.matrix.rows, x)
+        target = log.column(result.target, role="target column")
+        inputs = [x[row.input] for row in comp.matrix.rows]
+        resid = target - outputs.sum(axis=0)
+        data_fit = {"source": str(log.source), "samples": len(log),
+                    "target_rms": [float(np.sqrt(np.mean(target ** 2))), "N m"],
+                    "rmse": [float(np.sqrt(np.mean(resid ** 2))), "N m"]}
+    judged = judge_rows(model, outputs, target, inputs, options=options)
+    rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
+                                j.contribution, j.terms, j.flags)
+                 for row, j in zip(model.rows, judged, strict=True))
+    fitness = {**recorded_fitness(result), "data": data_fit}
+    threshold = getattr(options, "threshold", 0.01) if options is not None else 0.01
+    return Description(rows, fitness, complexity(comp), result.source or "<memory>",
+                       threshold, tuple(notes))
+
+
+def _expression(expr: Any) -> str:
+    import sympy as sp
+
+    if expr is None:
+        return "0"
+    short = expr.xreplace({f: sp.Float(f, 4) for f in expr.atoms(sp.Float)})
+    return sp.sstr(short, full_prec=False)

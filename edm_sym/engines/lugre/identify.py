@@ -1,0 +1,446 @@
+"""Identification of the LuGre model on a free-motion log (fitness: eq. 8).
+
+Methods are looked up in :data:`METHODS` (name -> function); a new one (like
+the project's genetic algorithm, ``"ga"`` in :mod:`edm_sym.engines.lugre.ga`)
+registers itself with :func:`register_method` and receives a
+:class:`LuGreProblem`. ``method="both"`` runs the methods of :data:`BOTH` and
+returns the better result, with every method's score in its ``comparison``.
+
+The ``"scipy"`` method uses variable projection: the friction torque is linear
+in ``(tau_c, sigma1, sigma2)`` once the bristle trajectory is fixed, and that
+trajectory depends only on four *shape* parameters,
+
+* ``v_s`` (Stribeck velocity),
+* ``r = tau_s / tau_c`` (stiction ratio),
+* ``l = tau_c / sigma0`` (bristle deflection at high speed) and
+* ``z0`` as a fraction of ``max(tau_c, tau_s) / sigma0``.
+
+So the global search (:func:`scipy.optimize.differential_evolution`, seeded)
+and the local refinement (bounded Nelder-Mead) run over those four, in log
+space for the first three, and every evaluation solves a 3-column
+non-negative weighted least-squares problem for the linear ones exactly.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import linalg, optimize
+
+from edm_sym.core.errors import ConfigError, DataFormatError
+from edm_sym.core.fitness import fitness
+from edm_sym.engines.lugre.model import (
+    LuGreParams,
+    _as_velocity,
+    _check_ts,
+    bristle_coefficients,
+    bristle_trajectory,
+    simulate_lugre,
+    weighted_rmse,
+)
+from edm_sym.engines.lugre.result import LuGreResult, MethodScore
+
+__all__ = [
+    "BOTH",
+    "METHODS",
+    "IdentifyMethod",
+    "LuGreProblem",
+    "MethodOutcome",
+    "identify_lugre",
+    "register_method",
+    "search_space",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class LuGreProblem:
+    """One identification task: fit the LuGre friction to ``target``.
+
+    Parameters
+    ----------
+    target : numpy.ndarray
+        Torque to reproduce per sample (finite, 1-D).
+    velocity : numpy.ndarray
+        Velocity per sample (finite, 1-D, same length, not all zero).
+    ts : float
+        Sample time [s].
+    weights : numpy.ndarray
+        Weighting function Lambda of eq. 8 per sample (>= 0, not all zero).
+    deadline : float or None
+        :func:`time.monotonic` value at which a method must stop and return
+        its best parameters so far; None for no limit.
+    """
+
+    target: np.ndarray
+    velocity: np.ndarray
+    ts: float
+    weights: np.ndarray
+    deadline: float | None = None
+
+    @property
+    def torque_scale(self) -> float:
+        """float: ``max |target|`` (1 when the target is all zero)."""
+        scale = float(np.max(np.abs(self.target)))
+        return scale if scale > 0.0 else 1.0
+
+    @property
+    def velocity_scale(self) -> float:
+        """float: ``max |velocity|`` (> 0)."""
+        return float(np.max(np.abs(self.velocity)))
+
+    def fitness(self, params: LuGreParams) -> float:
+        """Eq. 8 fitness of ``params`` on this problem's data.
+
+        Parameters
+        ----------
+        params : LuGreParams
+            Candidate parameters.
+
+        Returns
+        -------
+        float
+            Weighted RMS of ``target - simulate_lugre(params, velocity, ts)``.
+        """
+        return weighted_rmse(self.target, simulate_lugre(params, self.velocity, self.ts), self.weights)
+
+    def time_is_up(self) -> bool:
+        """Whether the deadline has passed.
+
+        Returns
+        -------
+        bool
+            True once :func:`time.monotonic` reaches ``deadline``.
+        """
+        return self.deadline is not None and time.monotonic() >= self.deadline
+
+
+@dataclass(frozen=True)
+class MethodOutcome:
+    """What an identification method returns.
+
+    Parameters
+    ----------
+    params : LuGreParams
+        Best parameters found.
+    evaluations : int
+        Number of model simulations used.
+    """
+
+    params: LuGreParams
+    evaluations: int
+
+
+#: Signature of an identification method: ``fn(problem, *, seed) -> MethodOutcome``.
+IdentifyMethod = Callable[..., MethodOutcome]
+
+#: Registered identification methods, by name.
+METHODS: dict[str, IdentifyMethod] = {}
+
+#: The methods ``method="both"`` runs, in this order; the first wins a tie.
+BOTH: tuple[str, ...] = ("scipy", "ga")
+
+
+def register_method(name: str) -> Callable[[IdentifyMethod], IdentifyMethod]:
+    """Register an identification method under ``name`` (decorator).
+
+    Parameters
+    ----------
+    name : str
+        Method name, as passed to :func:`identify_lugre`.
+
+    Returns
+    -------
+    callable
+        Decorator that stores the function in :data:`METHODS` and returns it.
+        The function is called as ``fn(problem, seed=seed)`` with a
+        :class:`LuGreProblem`, must be deterministic for a given seed, must
+        return its best parameters once ``problem.time_is_up()``, and returns
+        a :class:`MethodOutcome`.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is already registered.
+    """
+
+    def decorate(fn: IdentifyMethod) -> IdentifyMethod:
+        if name in METHODS:
+            raise ValueError(f"method {name!r} is already registered")
+        METHODS[name] = fn
+        return fn
+
+    return decorate
+
+
+def search_space(problem: LuGreProblem) -> dict[str, tuple[float, float, str]]:
+    """A bounded search box for the seven parameters, derived from the data.
+
+    Meant for direct searches (e.g. a genetic algorithm over the seven
+    parameters); the ``"scipy"`` method searches its own reduced space.
+
+    Parameters
+    ----------
+    problem : LuGreProblem
+        The identification task.
+
+    Returns
+    -------
+    dict of str to (float, float, str)
+        ``name -> (low, high, scale)`` with scale ``"log"`` (search
+        ``log10`` of the value) or ``"linear"``.
+    """
+    t_max, v_max = problem.torque_scale, problem.velocity_scale
+    sigma0_low, sigma0_high = 1e2, 1e8
+    # |z0| up to the largest steady deflection the box allows.
+    z_max = 2.0 * t_max / sigma0_low
+    return {
+        "v_s": (1e-4 * v_max, v_max, "log"),
+        "tau_c": (1e-6 * t_max, 2.0 * t_max, "log"),
+        "tau_s": (1e-6 * t_max, 2.0 * t_max, "log"),
+        "z0": (-z_max, z_max, "linear"),
+        "sigma0": (sigma0_low, sigma0_high, "log"),
+        "sigma1": (1e-6, 1e2, "log"),
+        "sigma2": (0.0, t_max / v_max, "linear"),
+    }
+
+
+class _TimeUp(Exception):
+    """Raised inside an objective to end a search at the deadline."""
+
+
+class _VarPro:
+    """Variable-projection objective over the four shape parameters.
+
+    ``theta = (log10 v_s, log10 r, log10 l, zf)``; see the module docstring.
+    Counts evaluations and keeps the best point seen.
+    """
+
+    def __init__(self, problem: LuGreProblem):
+        self.problem = problem
+        self.v = problem.velocity
+        self.v2 = problem.velocity**2
+        self.sw = np.sqrt(problem.weights)
+        self.yw = problem.target * self.sw
+        self.tau_c_min = 1e-9 * problem.torque_scale
+        self.evaluations = 0
+        self.best_f = math.inf
+        self.best: tuple[np.ndarray, np.ndarray] | None = None
+        v_max, step = problem.velocity_scale, problem.velocity_scale * problem.ts
+        self.bounds = [
+            (math.log10(1e-4 * v_max), math.log10(v_max)),
+            (-3.0, 2.0),
+            (math.log10(1e-6 * step), math.log10(1e3 * step)),
+            (-1.0, 1.0),
+        ]
+
+    def columns(self, theta: np.ndarray) -> np.ndarray:
+        """Regressors of (tau_c, sigma1, sigma2) for shape ``theta``, shape (3, N)."""
+        v_s, r, ell = 10.0 ** theta[0], 10.0 ** theta[1], 10.0 ** theta[2]
+        g = ell * (1.0 + (r - 1.0) * np.exp(-self.v2 / (v_s * v_s)))
+        z_ss, decay, rate = bristle_coefficients(g, self.v, self.problem.ts)
+        e = bristle_trajectory(z_ss, decay, theta[3] * ell * max(r, 1.0))
+        return np.stack([(z_ss + e) / ell, -rate * e, self.v])
+
+    def solve(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
+        """Best non-negative (tau_c, sigma1, sigma2) for ``theta`` and its fitness."""
+        cols = self.columns(theta)
+        aw = cols * self.sw
+        norms = np.sqrt(np.einsum("ij,ij->i", aw, aw))
+        active = np.flatnonzero(norms > 1e-12 * norms.max())
+        m = aw[active] / norms[active, None]
+        gram = m @ m.T + 1e-12 * np.eye(len(active))
+        chol = linalg.cholesky(gram)  # upper: gram = chol.T @ chol
+        q = linalg.solve_triangular(chol, m @ self.yw, trans="T")
+        # tau_c (column 0) keeps a small positive lower bound, so sigma0 = tau_c / l > 0.
+        low = np.zeros(len(active))
+        if active[0] == 0:
+            low[0] = self.tau_c_min * norms[0]
+        x, _ = optimize.nnls(chol, q - chol @ low)
+        coef = np.zeros(3)
+        coef[active] = (x + low) / norms[active]
+        if coef[0] <= 0.0:
+            coef[0] = self.tau_c_min
+        resid = self.problem.target - coef @ cols
+        return fitness(resid, self.problem.weights), coef
+
+    def __call__(self, theta: np.ndarray) -> float:
+        if self.best is not None and self.problem.time_is_up():
+            raise _TimeUp
+        theta = np.asarray(theta, dtype=float)
+        f, coef = self.solve(theta)
+        self.evaluations += 1
+        if f < self.best_f:
+            self.best_f, self.best = f, (theta.copy(), coef)
+        return f
+
+    def params(self, theta: np.ndarray, coef: np.ndarray) -> LuGreParams:
+        """Convert a shape point and its linear coefficients to the seven parameters."""
+        v_s, r, ell = 10.0 ** theta[0], 10.0 ** theta[1], 10.0 ** theta[2]
+        tau_c, sigma1, sigma2 = (float(c) for c in coef)
+        return LuGreParams(
+            v_s=v_s,
+            tau_c=tau_c,
+            tau_s=r * tau_c,
+            z0=float(theta[3]) * ell * max(r, 1.0),
+            sigma0=tau_c / ell,
+            sigma1=sigma1,
+            sigma2=sigma2,
+        )
+
+
+def _seed_kwargs(seed: int) -> dict[str, object]:
+    # scipy >= 1.15 takes ``rng``; older versions only ``seed``.
+    if "rng" in inspect.signature(optimize.differential_evolution).parameters:
+        return {"rng": np.random.default_rng(seed)}
+    return {"seed": seed}
+
+
+@register_method("scipy")
+def _identify_scipy(problem: LuGreProblem, *, seed: int) -> MethodOutcome:
+    """Differential evolution then Nelder-Mead over the shape parameters."""
+    objective = _VarPro(problem)
+
+    def stop(*_args: object, **_kwargs: object) -> bool:
+        return problem.time_is_up()
+
+    try:
+        optimize.differential_evolution(
+            objective,
+            objective.bounds,
+            popsize=10,
+            maxiter=150,
+            tol=1e-4,
+            atol=1e-6 * problem.torque_scale,
+            mutation=(0.5, 1.0),
+            recombination=0.7,
+            polish=False,
+            init="latinhypercube",
+            callback=stop,
+            workers=1,
+            **_seed_kwargs(seed),
+        )
+        assert objective.best is not None
+        optimize.minimize(
+            objective,
+            objective.best[0],
+            method="Nelder-Mead",
+            bounds=objective.bounds,
+            options={
+                "maxfev": 800,
+                "xatol": 1e-5,
+                "fatol": 1e-9 * problem.torque_scale,
+                "adaptive": True,
+            },
+        )
+    except _TimeUp:
+        pass
+    assert objective.best is not None
+    return MethodOutcome(objective.params(*objective.best), objective.evaluations)
+
+
+def _as_series(name: str, values: ArrayLike, n: int) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (n,):
+        raise DataFormatError(name, f"expected a 1-D array of {n} samples, found shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+        raise DataFormatError(f"{name}[{bad}]", f"expected a finite number, found {arr[bad]!r}")
+    return arr
+
+
+def identify_lugre(
+    target: ArrayLike,
+    velocity: ArrayLike,
+    ts: float,
+    *,
+    method: str = "scipy",
+    seed: int = 0,
+    time_limit: float | None = None,
+    weights: ArrayLike | None = None,
+) -> LuGreResult:
+    """Identify LuGre parameters that reproduce ``target`` from ``velocity``.
+
+    Parameters
+    ----------
+    target : array_like
+        Torque to reproduce per sample (the observer's free-motion estimate).
+    velocity : array_like
+        Velocity per sample, same length; not all zero.
+    ts : float
+        Sample time [s].
+    method : str, optional
+        Name of a registered method (see :data:`METHODS`), default
+        ``"scipy"``; or ``"both"``: run each method of :data:`BOTH` and return
+        the one with the lower fitness (the first on a tie), with every
+        method's fitness and evaluations in ``comparison``.
+    seed : int, optional
+        Random seed; equal seeds give equal parameters (without a time limit).
+    time_limit : float or None, optional
+        Wall time in seconds after which the search stops and returns the
+        best parameters found so far. With ``"both"``, method k of n stops at
+        (k + 1) / n of it, so a method that ends early leaves its time to the
+        next.
+    weights : array_like or None, optional
+        Weighting function Lambda of eq. 8 per sample (default all ones).
+
+    Returns
+    -------
+    LuGreResult
+        Parameters, method, weighted fitness (eq. 8) on the data, number of
+        evaluations and sample time (with ``"both"``: the better method's, and
+        ``comparison`` set).
+
+    Raises
+    ------
+    edm_sym.core.errors.ConfigError
+        (a ValueError) If the method is unknown or an option is invalid.
+    edm_sym.core.errors.DataFormatError
+        (a ValueError) If a data series is malformed (length, NaN, all-zero
+        velocity, negative weights).
+    """
+    if method not in METHODS and method != "both":
+        known = ", ".join(sorted([*METHODS, "both"]))
+        raise ConfigError("method", f"unknown method {method!r} (known: {known})")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ConfigError("seed", f"expected an integer, found {seed!r}")
+    if time_limit is not None and not (
+        isinstance(time_limit, (int, float, np.integer, np.floating))
+        and not isinstance(time_limit, bool)
+        and math.isfinite(float(time_limit))
+        and time_limit >= 0
+    ):
+        raise ConfigError("time_limit", f"expected a non-negative number of seconds, found {time_limit!r}")
+    v = _as_velocity(velocity)
+    ts_f = _check_ts(ts)
+    if len(v) < 2:
+        raise DataFormatError("velocity", f"expected at least 2 samples, found {len(v)}")
+    if not np.any(v != 0.0):
+        raise DataFormatError("velocity", "all samples are zero; the friction model cannot be identified")
+    y = _as_series("target", target, len(v))
+    w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
+    if np.any(w < 0.0) or not np.any(w > 0.0):
+        raise DataFormatError("weights", "expected non-negative values, not all zero")
+    names = BOTH if method == "both" else (method,)
+    start = time.monotonic()
+    found: dict[str, tuple[LuGreParams, MethodScore]] = {}
+    for k, name in enumerate(names):
+        deadline = None if time_limit is None else start + float(time_limit) * (k + 1) / len(names)
+        problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline)
+        outcome = METHODS[name](problem, seed=int(seed))
+        found[name] = (outcome.params, MethodScore(problem.fitness(outcome.params), outcome.evaluations))
+    best = min(names, key=lambda name: found[name][1].fitness)  # min keeps the first on a tie
+    params, score = found[best]
+    return LuGreResult(
+        params=params,
+        method=best,
+        rmse=score.fitness,
+        evaluations=score.evaluations,
+        sample_time=ts_f,
+        comparison={name: found[name][1] for name in names} if method == "both" else None,
+    )

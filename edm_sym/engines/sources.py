@@ -1,0 +1,62 @@
+"""Where a data log comes from: a file, or the simulated plant.
+
+A data spec is a path (CSV, .npz, .mat: read by :mod:`edm_sym.core.data`) or
+``plant:PRESET/EXCITATION[@SEED]``, the log ``edm plant`` would write, simulated
+on the fly (docs/data.md). Resolving the second needs the plant engine, so the
+resolver lives here, one layer above the file readers (docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from edm_sym.core import data as _files
+from edm_sym.core.data import PLANT_SCHEME, DataLog, is_plant_spec
+from edm_sym.core.errors import DataFormatError
+from edm_sym.engines.plant import EXCITATIONS, PRESETS, simulate_plant
+
+__all__ = ["load_data", "plant_log"]
+
+
+def load_data(
+    path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
+    default_ts: float | None = None,
+) -> DataLog:
+    """Read a log from a file, or simulate the plant log a ``plant:`` spec names.
+
+    Parameters and errors as :func:`edm_sym.core.data.load_data`; ``path`` may
+    also be ``"plant:PRESET/EXCITATION[@SEED]"`` (e.g. ``"plant:auger/evaluation"``).
+    """
+    if is_plant_spec(path):
+        log = plant_log(str(path))
+        for col in require:
+            log.column(col)
+        return log
+    return _files.load_data(path, ts=ts, require=require, default_ts=default_ts)
+
+
+def plant_log(spec: str) -> DataLog:
+    """The log of ``edm plant`` that a ``plant:PRESET/EXCITATION[@SEED]`` spec names."""
+    body = spec[len(PLANT_SCHEME):]
+    body, _, seed_text = body.partition("@")
+    preset, _, excitation = body.partition("/")
+    if preset not in PRESETS:
+        raise DataFormatError(f"{spec}: preset", f"expected one of {', '.join(sorted(PRESETS))}, "
+                              f"found {preset!r}")
+    if excitation not in EXCITATIONS:
+        raise DataFormatError(f"{spec}: excitation",
+                              f"expected one of {', '.join(EXCITATIONS)}, found {excitation!r}")
+    try:
+        seed = int(seed_text) if seed_text else 0
+    except ValueError:
+        raise DataFormatError(f"{spec}: seed", f"expected an integer, found {seed_text!r}") from None
+    cols = dict(simulate_plant(preset, excitation, seed=seed).columns)
+    digest = hashlib.sha256()
+    for key, col in cols.items():
+        digest.update(key.encode() + np.ascontiguousarray(col, dtype="<f8").tobytes())
+    ts = float(cols["t"][1] - cols["t"][0])
+    return DataLog(cols, ts, spec, digest.hexdigest())

@@ -1,0 +1,306 @@
+"""Honest names: a row is named as physics only when it earns it.
+
+:func:`judge_rows` takes the decoded model, the rows' outputs on a data log and
+the target, and decides per row what may be said about it:
+
+* its **contribution**: the RMS of the row's output over the RMS of the target
+  (a share, 0.42 = 42 %);
+* a row whose contribution is below ``threshold`` (default 1 %) is
+  **negligible**: its physical terms are not listed, the flag says what it
+  would have been called; so is a pair of rows that **cancels** (the RMS of
+  their sum below ``cancel_ratio`` of the smaller one) when the sum is below
+  the threshold;
+* a term that is a static function of the input (an offset, ``c sign(v)``, ...)
+  is measured on its own, and left out as negligible below the threshold;
+* a row with a parameter at (or within ``bound_margin`` of) its range bound
+  (:mod:`edm_sym.core.bounds`) keeps its parameters, but its terms are
+  ``unclassified``: the value is a limit of the search, not an estimate;
+* a row whose delays hold ``long_delay`` samples or more is flagged (firmware
+  memory, and a delay that long is rarely physics).
+
+Flags are ``(code, message)`` pairs; the codes are :data:`ROW_FLAGS` and
+:data:`TERM_FLAGS`. See ``docs/describe.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from edm_sym.core.bounds import BOUND_MARGIN, BoundFlag, bound_flags
+from edm_sym.engines.symbolic.classify import PhysicalTerm
+from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
+from edm_sym.engines.symbolic.model import RowModel, SymbolicModel
+from edm_sym.engines.symbolic.operators import LTI, Delay, Relay
+
+#: Flags of a row, and what they mean.
+ROW_FLAGS = {
+    "negligible": "the row (or a term of it) contributes less than the threshold",
+    "cancels": "the row's output largely cancels another row's",
+    "at_bound": "a parameter is at (or within the margin of) its range bound",
+    "long_delay": "the row's delays hold at least long_delay samples",
+    "no_output": "the row's output is identically zero",
+    "unmeasured": "no data: the contribution was not measured",
+}
+#: Flags of a term, and what they mean.
+TERM_FLAGS = {
+    "unclassified": "no physical pattern fits; the message is the reason",
+    "at_bound": "not named: a parameter of the row is at its range bound",
+    "nonlinear": "an acceleration-dependent term that is far from linear (R^2 < 0.95)",
+    "derivative_like": "its filters shift it by more than 45 deg at the representative frequency",
+    "wrap_jump": "a position-dependent term that jumps at each wrap of the angle",
+}
+
+
+@dataclass(frozen=True)
+class Flag:
+    """A flag on a row or a term: a stable code and one readable line."""
+
+    code: str
+    message: str
+
+    def to_json(self) -> dict[str, str]:
+        """``{"code": ..., "message": ...}``."""
+        return {"code": self.code, "message": self.message}
+
+
+@dataclass(frozen=True)
+class SignificanceOptions:
+    """Thresholds of :func:`judge_rows`.
+
+    Parameters
+    ----------
+    threshold : float, default 0.01
+        A row (or a static term) is negligible below this share of the
+        target's RMS.
+    bound_margin : float, default 0.01
+        A parameter is at its bound when ``p <= bound_margin`` or
+        ``p >= 1 - bound_margin`` (normalised ``p``).
+    cancel_ratio : float, default 0.5
+        Two rows cancel when the RMS of their sum is below this share of the
+        smaller of their two RMS values.
+    long_delay : int, default 100
+        A row whose delays add up to this many samples or more is flagged.
+    """
+
+    threshold: float = 0.01
+    bound_margin: float = BOUND_MARGIN
+    cancel_ratio: float = 0.5
+    long_delay: int = 100
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("threshold", 0.0, 1.0), ("bound_margin", 0.0, 0.5),
+                             ("cancel_ratio", 0.0, 1.0)):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and lo <= v < hi):
+                raise ValueError(f"{name}: expected a number in [{lo:g}, {hi:g}), found {v!r}")
+        if not (isinstance(self.long_delay, int) and self.long_delay >= 1):
+            raise ValueError(f"long_delay: expected an integer >= 1, found {self.long_delay!r}")
+
+
+@dataclass(frozen=True)
+class JudgedTerm:
+    """A physical term as it may be named, with its flags."""
+
+    term: PhysicalTerm
+    flags: tuple[Flag, ...] = ()
+
+
+@dataclass(frozen=True)
+class JudgedRow:
+    """What may honestly be said about one row.
+
+    Attributes
+    ----------
+    index : int
+        Row number, 0-based.
+    contribution : float or None
+        RMS of the row's output / RMS of the target (None without data).
+    terms : tuple of JudgedTerm
+        The terms that may be listed (empty for a negligible row).
+    flags : tuple of Flag
+    rms : float or None
+        RMS of the row's output [N m].
+    bounds : tuple of BoundFlag
+        The row's parameters at their bounds.
+    """
+
+    index: int
+    contribution: float | None
+    terms: tuple[JudgedTerm, ...]
+    flags: tuple[Flag, ...]
+    rms: float | None = None
+    bounds: tuple[BoundFlag, ...] = ()
+
+    @property
+    def negligible(self) -> bool:
+        """True when the row is negligible (its terms are not listed)."""
+        return any(f.code == "negligible" for f in self.flags) and not self.terms
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
+def _pct(share: float) -> str:
+    return f"{100 * share:.2g} %"
+
+
+def term_summary(term: PhysicalTerm) -> str:
+    """``coulomb (level -0.00064 N m)``: a term's kind and its main parameter."""
+    if not term.parameters:
+        return term.kind
+    name, (value, unit) = next(iter(term.parameters.items()))
+    return f"{term.kind} ({name.replace('_', ' ')} {value:.4g} {unit})"
+
+
+def _term_rms(term: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None) -> float | None:
+    """The RMS of a static term on the input ``x`` (None when it has dynamics)."""
+    if term.kind == "offset" and "level" in term.parameters:
+        return abs(float(term.parameters["level"][0]))
+    e = term.expr
+    if e is None or x is None or e.has(LTI, Delay, Relay) or e.free_symbols - {u}:
+        return None
+    f = sp.lambdify(u, e, modules=[NUMPY_FUNCTIONS, "numpy"])
+    with np.errstate(all="ignore"):
+        y = np.asarray(f(x), dtype=float) * np.ones_like(x)
+    return _rms(y) if np.all(np.isfinite(y)) else None
+
+
+def _term_flags(term: PhysicalTerm) -> list[Flag]:
+    p = term.parameters
+    out = []
+    if term.kind == "unclassified":
+        out.append(Flag("unclassified", term.description or "no physical pattern fits"))
+    if "linearity_r2" in p and p["linearity_r2"][0] < 0.95:
+        out.append(Flag("nonlinear", f"far from linear in the acceleration "
+                                     f"(R^2 {p['linearity_r2'][0]:.3f})"))
+    if "filter_phase" in p and abs(math.cos(p["filter_phase"][0])) < math.sqrt(0.5):
+        out.append(Flag("derivative_like",
+                        f"its filters shift it by {math.degrees(p['filter_phase'][0]):.3g} deg at "
+                        f"{p.get('frequency', (float('nan'),))[0]:.4g} rad/s: mostly a derivative "
+                        "or integral of the acceleration there"))
+    if "wrap_jump" in p:
+        out.append(Flag("wrap_jump", f"jumps by {p['wrap_jump'][0]:.4g} N m at each wrap"))
+    return out
+
+
+def _delay_samples(row: RowModel) -> int:
+    return sum(st.delay for st in row.stages)  # 0 for every stage but a delay line
+
+
+def judge_rows(
+    model: SymbolicModel,
+    outputs: np.ndarray | None = None,
+    target: np.ndarray | None = None,
+    inputs: Sequence[np.ndarray] | None = None,
+    *,
+    options: SignificanceOptions | None = None,
+) -> tuple[JudgedRow, ...]:
+    """Judge every row of a decoded model: contribution, flags, the terms it may name.
+
+    Parameters
+    ----------
+    model : SymbolicModel
+        From :func:`edm_sym.engines.symbolic.decode`.
+    outputs : numpy.ndarray, optional
+        Shape (m, N): each row's output on the data (the reference simulator's).
+    target : numpy.ndarray, optional
+        Shape (N,): the target on the same data.
+    inputs : sequence of numpy.ndarray, optional
+        Each row's input signal (to measure static terms on their own).
+    options : SignificanceOptions, optional
+
+    Returns
+    -------
+    tuple of JudgedRow
+        Without ``outputs`` and ``target`` nothing is measured: every row is
+        flagged ``unmeasured`` and keeps its classifier terms.
+    """
+    opts = options or SignificanceOptions()
+    bounds = bound_flags(model.compensator, margin=opts.bound_margin)
+    measured = outputs is not None and target is not None
+    ref = _rms(np.asarray(target, dtype=float)) if measured else 0.0
+    if measured and not ref > 0:
+        measured = False
+    rms = [_rms(y) for y in outputs] if measured else [None] * len(model.rows)
+    out = []
+    for row in model.rows:
+        j = row.index
+        flags: list[Flag] = []
+        share = rms[j] / ref if measured else None
+        if not measured:
+            flags.append(Flag("unmeasured", "no data with the target: contribution not measured"))
+        negligible = share is not None and share < opts.threshold
+        if measured:
+            for k in range(len(model.rows)):
+                small = min(rms[j], rms[k])
+                if k == j or not small > 0:
+                    continue
+                both = _rms(outputs[j] + outputs[k])
+                if both < opts.cancel_ratio * small:
+                    flags.append(Flag("cancels", f"cancels with row {k + 1}: together "
+                                      f"{both:.4g} N m RMS ({_pct(both / ref)} of the target's "
+                                      f"RMS), alone {rms[j]:.4g} and {rms[k]:.4g} N m"))
+                    negligible = negligible or both / ref < opts.threshold
+        row_bounds = tuple(b for b in bounds if b.row == j)
+        flags += [Flag("at_bound", b.message()) for b in row_bounds]
+        n_delay = _delay_samples(row)
+        if n_delay >= opts.long_delay:
+            flags.append(Flag("long_delay", f"delays of {n_delay} samples "
+                              f"({n_delay * model.sample_time:.4g} s): {n_delay} values of state"))
+        if not row.terms:
+            flags.append(Flag("no_output", "the row's output is identically zero"))
+        terms: list[JudgedTerm] = []
+        if negligible:
+            would = ", ".join(term_summary(t) for t in row.terms) or "nothing"
+            how = f"contributes {_pct(share)} of the target's RMS" if share < opts.threshold \
+                else "cancels with another row, and the pair contributes less"
+            flags.insert(0, Flag("negligible", f"{how} (threshold {_pct(opts.threshold)}); "
+                                               f"would be named {would}"))
+        else:
+            x = None
+            if inputs is not None:
+                x = np.asarray(inputs[j], dtype=float)
+            terms = _judge_terms(row, x, ref if measured else None, row_bounds, opts, flags)
+        out.append(JudgedRow(j, share, tuple(terms), tuple(flags), rms[j], row_bounds))
+    return tuple(out)
+
+
+def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,
+                 row_bounds: tuple[BoundFlag, ...], opts: SignificanceOptions,
+                 flags: list[Flag]) -> list[JudgedTerm]:
+    terms = []
+    for t in row.terms:
+        if ref is not None:
+            trms = _term_rms(t, row.input_symbol, x)
+            if trms is not None and trms / ref < opts.threshold:
+                flags.append(Flag("negligible", f"term {term_summary(t)} contributes "
+                                  f"{_pct(trms / ref)} of the target's RMS (threshold "
+                                  f"{_pct(opts.threshold)}): not listed"))
+                continue
+        tflags = _term_flags(t)
+        if row_bounds and t.kind != "unclassified":
+            where = "; ".join(b.message() for b in row_bounds)
+            tflags.insert(0, Flag("at_bound", f"would be named {term_summary(t)}, but {where}"))
+            t = replace(t, kind="unclassified",
+                        description=f"not named: a parameter is at its range bound ({where}); "
+                                    f"would be {t.description}")
+        terms.append(JudgedTerm(t, tuple(tflags)))
+    return terms
+
+
+def judged_json(row: JudgedRow) -> list[dict[str, Any]]:
+    """The ``terms`` list of ``edm describe --json`` for one judged row.
+
+    A parameter that is not finite (an open pass band's gain) is ``null``.
+    """
+    return [{"kind": jt.term.kind,
+             "parameters": {k: [float(v) if math.isfinite(v) else None, unit]
+                            for k, (v, unit) in jt.term.parameters.items()},
+             "flags": [f.to_json() for f in jt.flags]} for jt in row.terms]

@@ -1,0 +1,413 @@
+"""The report's context: everything the LaTeX template shows, computed and validated here.
+
+:func:`report_context` reads the decoded model, the runs on the data logs and
+the names of the figures, and returns nested dicts and lists whose leaves are
+all strings of finished LaTeX (from :class:`~edm_sym.outputs.printing.latex.EdmLatexPrinter`).
+Optional parts (a data log, the fitness history, the LuGre comparison) are
+lists of zero or one item, so the template needs nothing but loops.
+:func:`check_report_context` refuses a context the template could not render.
+"""
+
+from __future__ import annotations
+
+import shlex
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from edm_sym.engines.symbolic.model import SymbolicModel
+from edm_sym.outputs.printing.latex import EdmLatexPrinter
+from edm_sym.outputs.report.diagrams import matrix_diagram
+from edm_sym.outputs.report.flags import bounds_fact, judge_report_rows, judged_titles
+from edm_sym.outputs.report.front import front_context
+from edm_sym.outputs.report.rows import (
+    KIND_TITLES,
+    ROLE_TITLES,
+    equation_lines,
+    row_context,
+)
+from edm_sym.outputs.report.runs import LogRun, LuGreRef, SteadyState
+
+#: Packages whose versions the report names.
+VERSION_PACKAGES = ("edm_sym", "numpy", "scipy", "sympy", "control", "jinja2", "matplotlib")
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """What a report is made from.
+
+    Attributes
+    ----------
+    result : EdmResult
+    model : SymbolicModel
+        ``edm_sym.decode(result)``.
+    source_name, source_sha256 : str
+        The result file's name and digest.
+    prefix : str
+    abstraction, evaluation : LogRun or None
+        The compensator on the abstraction and evaluation logs.
+    lugre : LuGreRef or None
+    figures : mapping of str to str
+        Figure key -> file name, for the figures that were drawn.
+    versions : sequence of (str, str)
+        Package name -> version.
+    ts : float or None
+        The ``--ts`` option the logs were read with.
+    steady : SteadyState or None
+        The friction characteristic of the velocity rows.
+    """
+
+    result: Any
+    model: SymbolicModel
+    source_name: str
+    source_sha256: str
+    prefix: str
+    abstraction: LogRun | None = None
+    evaluation: LogRun | None = None
+    lugre: LuGreRef | None = None
+    figures: Mapping[str, str] = field(default_factory=dict)
+    versions: Sequence[tuple[str, str]] = ()
+    ts: float | None = None
+    steady: SteadyState | None = None
+
+
+def package_versions() -> tuple[tuple[str, str], ...]:
+    """The versions of edm_sym and its main dependencies (importlib.metadata).
+
+    Returns
+    -------
+    tuple of (str, str)
+        ``(name, version)``, ``"not installed"`` for a missing package.
+    """
+    import sys
+    from importlib import metadata
+
+    out = [("python", sys.version.split()[0])]
+    for name in VERSION_PACKAGES:
+        try:
+            out.append((name, metadata.version(name)))
+        except metadata.PackageNotFoundError:
+            out.append((name, "not installed"))
+    return tuple(out)
+
+
+# -- pieces ----------------------------------------------------------------------
+
+def _recorded(p: EdmLatexPrinter, v: Any) -> str:
+    return "not recorded" if v is None else p.text(str(v))
+
+
+def _params(model: SymbolicModel) -> list[dict[str, str]]:
+    p6 = EdmLatexPrinter({"digits": 6})
+    p4 = EdmLatexPrinter()
+    out = []
+    for info in model.params:
+        out.append({
+            "symbol": p6.math(p6._print(info.symbol)),
+            "where": p6.text(f"{info.row + 1}, {info.col + 1}"),
+            "element": p6.text(info.element),
+            "meaning": p6.text(info.meaning),
+            "value": p6.math(p6.number(info.value)),
+            "p": p6.math(p6.number(info.p)),
+            "range": p4.math(p4.interval(info.range.low, info.range.high)),
+            "scaling": p6.text(info.range.scaling),
+            "unit": p6.text(info.unit),
+        })
+    return out
+
+
+#: Rows per part of the parameter table: a part never outgrows a page (no longtable,
+#: whose page breaks fight the floats).
+PARAM_ROWS_PER_TABLE = 22
+
+
+def _chunks(p: EdmLatexPrinter, rows: list[dict[str, str]]) -> list[dict[str, Any]]:
+    if not rows:  # the table stays, so every reference to it holds
+        rows = [{"symbol": "--", "where": "", "element": "none",
+                 "meaning": "every element is parameter-free", "value": "", "p": "",
+                 "range": "", "scaling": "", "unit": ""}]
+    out = []
+    for k in range(0, len(rows), PARAM_ROWS_PER_TABLE):
+        first = k == 0
+        out.append({"caption": "Parameters of the element matrix" + ("." if first else
+                                                                      " (continued)."),
+                    "label": r"\label{tab:params}" if first else "",
+                    "rows": rows[k:k + PARAM_ROWS_PER_TABLE]})
+    return out
+
+
+def _contribution_tables(p: EdmLatexPrinter, runs: Sequence[LogRun],
+                         figures: Mapping[str, str]) -> list[dict[str, Any]]:
+    out = []
+    for r in runs:
+        c = r.contributions
+        rows = [{"row": p.math(p.signal("y", k + 1)), "rms": p.math(p.number(rms)),
+                 "rmse": p.math(p.number(e)), "drop": p.math(p.number(d))}
+                for k, (rms, e, d) in enumerate(zip(c.rms, c.rmse_cumulative, c.improvement,
+                                                    strict=True))]
+        worse = [k for k, d in enumerate(c.improvement) if d < 0]
+        warn = []
+        if worse:
+            names = ", ".join(p.math(p.signal("y", k + 1)) for k in worse)
+            warn.append(f"Adding {names} makes the fit on this log worse (a negative drop): "
+                        "check the sign and size of "
+                        + ("that row" if len(worse) == 1 else "those rows") + ".")
+        out.append({
+            "log": p.text(r.label), "name": p.mono(r.name), "warnings": warn,
+            "baseline": p.math(p.number(c.rmse_none)), "rows": rows,
+            "figures": [f for f in (_figure(figures, f"contributions_{r.label}",
+                                            f"Row contributions on the {r.label} log "
+                                            f"{p.mono(r.name)}: RMS of each row's output (left) and "
+                                            "the RMSE as the rows are added one by one (right).",
+                                            0.95),
+                                    _figure(figures, f"rows_{r.label}",
+                                            f"Output of each row on the {r.label} log, on a common "
+                                            "scale (signal flow of the element matrix).", 0.95))
+                        if f],
+        })
+    return out
+
+
+def _figure(figures: Mapping[str, str], key: str, caption: str, width: float) -> dict[str, str] | None:
+    if key not in figures:
+        return None
+    return {"file": figures[key], "caption": caption, "label": f"fig:{key.replace('_', '-')}",
+            "width": f"{width:.2f}"}
+
+
+def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun],
+                  figures: Mapping[str, str]) -> list[dict[str, str]]:
+    out = []
+    for r in runs:
+        vs = ", the LuGre model's," if r.lugre is not None else ""
+        for key, what in ((f"time_{r.label}", "over the whole log"),
+                          (f"zoom_{r.label}", "enlarged where the EDM residual is largest")):
+            f = _figure(figures, key, f"Target torque, EDM compensation torque{vs} and the "
+                        f"residuals on the {r.label} log {p.mono(r.name)}, {what}.", 1.0)
+            if f:
+                out.append(f)
+    return out
+
+
+def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, str],
+              has_data: bool) -> dict[str, list[str]]:
+    """The friction characteristic's figure and what it shows, as sentences."""
+    if st is None:
+        return {"figures": [], "notes": ["No row has a velocity input, so the compensator has "
+                                         "no friction characteristic."]}
+    rows = ", ".join(p.math(p.signal("y", j + 1)) for j in st.rows)
+    span = p.math(rf"\pm {p.number(st.velocity[-1])}")
+    where = "the largest velocity of the data logs" if has_data else "no data log was given"
+    notes = []
+    if st.rows:
+        notes.append(f"The rows with a velocity input ({rows}) held at each constant velocity "
+                     f"for {p.math(p.number(st.settle))}~s, over {span}~rad/s ({where}): the "
+                     "friction the compensator predicts in steady state, to check against the "
+                     "axis's friction curve (Coulomb level, viscous slope, Stribeck hump).")
+    if st.unsettled:
+        un = ", ".join(p.math(p.signal("y", j + 1)) for j in st.unsettled)
+        notes.append(f"Not shown: {un}, whose output is still changing after "
+                     f"{p.math(p.number(st.settle))}~s at constant velocity (a slow filter or "
+                     "an integral).")
+    caption = ("Steady-state torque of the velocity rows against constant velocity"
+               + (", with the LuGre model's (eq.~14)" if st.lugre is not None else "") + ".")
+    fig = _figure(figures, "friction", caption, 0.95)
+    return {"figures": [fig] if fig else [], "notes": notes}
+
+
+def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
+    return [{
+        "step": str(s.step), "size": p.math(f"{s.matrix.n_elements} \\times {s.matrix.n_rows}"),
+        "generations": str(s.generations), "evaluations": str(s.evaluations),
+        "fitness": p.math(p.number(s.fitness)),
+        "weighting": p.math(p.weighting(s.weighting)) if s.weighting else "--",
+    } for s in result.steps]
+
+
+def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun) -> dict[str, Any]:
+    from edm_sym.engines.lugre import PARAMETER_NAMES
+
+    symbols = {"v_s": r"\dot\nu_s", "tau_c": r"\tau_c", "tau_s": r"\tau_s", "z0": "z_0",
+               "sigma0": r"\sigma_0", "sigma1": r"\sigma_1", "sigma2": r"\sigma_2"}
+    lr = ref.result
+    params = [{"symbol": p.math(symbols.get(n, p.text(n))), "name": p.text(n),
+               "value": p.math(EdmLatexPrinter({"digits": 5}).number(getattr(lr.params, n)))}
+              for n in PARAMETER_NAMES]
+    return {
+        "name": p.mono(ref.name), "log": p.text(run.label), "log_name": p.mono(run.name),
+        "method": p.text(lr.method), "fitness": p.math(p.number(lr.rmse)),
+        "params": params,
+        "rmse": [{"method": "LuGre (conventional)", "value": p.math(p.number(run.lugre_rmse)),
+                  "unit": p.unit("N m")},
+                 {"method": "EDM (this compensator)", "value": p.math(p.number(run.rmse)),
+                  "unit": p.unit("N m")}],
+        "ratio": p.math(p.number(run.rmse / run.lugre_rmse if run.lugre_rmse else float("nan"))),
+    }
+
+
+def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
+    """The shell commands that regenerate the report and check its numbers."""
+    q = shlex.quote
+    name = q(inp.source_name)
+    export = [f"edm-export {name} --target latex --prefix {inp.prefix}"]
+    for flag, run in (("--data", inp.abstraction), ("--eval-data", inp.evaluation)):
+        if run is not None:
+            export.append(f"    {flag} {q(run.name)}")
+    if inp.lugre is not None:
+        export.append(f"    --lugre {q(inp.lugre.name)}")
+    if inp.ts is not None:
+        export.append(f"    --ts {inp.ts!r}")
+    export.append("    --pdf -o DIR")
+    lines = [line + " \\" for line in export[:-1]] + export[-1:]
+    for run in (inp.abstraction, inp.evaluation):
+        if run is not None:
+            ts = f" --ts {inp.ts!r}" if inp.ts is not None else ""
+            lines.append(f"edm simulate {name} {q(run.name)}{ts}   # prints rmse")
+    lines.append(f"edm-export {name} --target all --prefix {inp.prefix} -o DIR")
+    text = "\n".join(lines)
+    if "\\end{Verbatim}" in text:
+        raise ValueError(f"commands: a file name holds '\\end{{Verbatim}}': {text!r}")
+    return text.split("\n")
+
+
+def report_context(inp: ReportInputs) -> dict[str, Any]:
+    """The validated context of ``templates/report.tex.j2``.
+
+    Parameters
+    ----------
+    inp : ReportInputs
+
+    Returns
+    -------
+    dict
+        Nested dicts and lists of finished LaTeX strings; optional parts are
+        lists of zero or one item.
+
+    Raises
+    ------
+    ValueError
+        When the context is incomplete (a defect of this module, not of the input).
+    """
+    p = EdmLatexPrinter()
+    model, result = inp.model, inp.result
+    runs = [r for r in (inp.abstraction, inp.evaluation) if r is not None]
+    mat = model.compensator.matrix
+    roles = [f"{p.mono(n)} ({p.text(ROLE_TITLES.get(model.roles.get(n), 'no physical role'))})"
+             for n in model.inputs]
+    facts = [
+        ("Result file", p.mono(inp.source_name)),
+        ("sha256 of the result", p.digest(inp.source_sha256)),
+        ("Target (estimated torque)", p.mono(result.target)),
+        ("Inputs", ", ".join(roles)),
+        ("Sample time", p.math(f"T_s = {p.number(model.sample_time)}") + r"~s"),
+        ("Element matrix", p.math(f"{mat.n_elements} \\times {mat.n_rows}")
+         + f" ({mat.n_elements} elements per row, {mat.n_rows} rows)"),
+        ("Hierarchical steps", str(len(result.steps)) if result.steps
+         else "none recorded (hand-written or imported model)"),
+        ("Fitness in the result file", p.math(p.number(result.fitness)) + r"~N\,m"
+         if result.fitness is not None else "not recorded"),
+    ]
+    for r in runs:
+        facts.append((f"{r.label.capitalize()} log",
+                      f"{p.mono(r.name)}, {len(r.t)} samples, {p.math(p.number(r.duration))}~s"))
+        if r.sha256:
+            facts.append((f"sha256 of the {r.label} log", p.digest(r.sha256)))
+        facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + r"~N\,m"))
+    if inp.lugre is not None:
+        facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
+    facts.append(bounds_fact(p, model))
+    judged = judge_report_rows(model, runs)  # honest names (edm_sym.outputs.report.flags)
+    rows = [row_context(p, model, row, runs, j) for row, j in zip(model.rows, judged, strict=True)]
+    overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),
+                 "input": p.math(p._print(row.input_symbol)),
+                 "terms": p.text(", ".join(judged_titles(j, KIND_TITLES))
+                                 or "none (identically 0)"),
+                 "rms": [x["value"] for x in r["rms"]]}
+                for r, row, j in zip(rows, model.rows, judged, strict=True)]
+    total = [(row.expr_numeric, f"row {row.index + 1}") for row in model.rows]
+    compare = runs[-1] if runs else None
+    lugre = ([_lugre(p, inp.lugre, compare)]
+             if inp.lugre is not None and compare is not None and compare.lugre is not None else [])
+    fig = inp.figures
+    prov = result.provenance
+    ctx: dict[str, Any] = {
+        "title": p.text(f"EDM compensator {inp.prefix}: model report"),
+        "subtitle": p.mono(inp.source_name),
+        "facts": [{"label": p.text(k), "value": v} for k, v in facts],
+        "equation": equation_lines(p, r"\tau_{\mathrm{cmp}}(t)", total),
+        "overview": overview,
+        "log_labels": [p.text(r.label) for r in runs],
+        "no_data": [] if runs else ["no data log was given (edm-export --data LOG)"],
+        "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
+        "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
+        "rows": rows,
+        "friction": _friction(p, inp.steady, fig, bool(runs)),
+        "param_chunks": _chunks(p, _params(model)),
+        "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
+        "contributions": _contribution_tables(p, runs, fig),
+        "fitness": [f for f in [_figure(fig, "fitness", "Best fitness per generation of each "
+                                        "hierarchical step (weighted RMSE, eq.~8).", 1.0)] if f],
+        "steps": _steps(p, result),
+        "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
+        "time": _time_figures(p, runs, fig),
+        "lugre": lugre,
+        "no_lugre": [] if lugre else ["no LuGre result was given (edm-export --lugre LUGRE.json)"],
+        "provenance": [
+            {"label": p.text("sha256 of the result"), "value": p.digest(inp.source_sha256)},
+            {"label": p.text("seed"), "value": _recorded(p, prov.get("seed"))},
+            {"label": p.text("data sha256 (in the result)"),
+             "value": p.digest(prov["data_sha256"]) if prov.get("data_sha256")
+             else "not recorded"},
+            {"label": p.text("written by edm_sym"), "value": _recorded(p, prov.get("package_version"))},
+        ] + [{"label": p.text(str(k).replace("_", " ")), "value": p.text(str(v))}
+             for k, v in sorted(prov.items())
+             if k not in ("seed", "data_sha256", "package_version")],
+        "versions": [{"name": p.text(n), "version": p.text(v)} for n, v in inp.versions],
+        "commands": _commands(p, inp),
+        "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
+        **front_context(p, result, fig),
+    }
+    return check_report_context(ctx)
+
+
+#: Keys every report context holds.
+REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "param_chunks",
+               "contributions",
+               "fitness", "steps", "time", "lugre", "provenance", "versions", "commands")
+
+
+def check_report_context(ctx: dict[str, Any]) -> dict[str, Any]:
+    """Check a report context: every key present, every leaf a string.
+
+    Strings are finished LaTeX, so the template formats nothing; only the
+    verbatim ``commands`` may hold no ``\\end{Verbatim}``, and no other
+    string a line break.
+
+    Raises
+    ------
+    ValueError
+        Naming the key at fault.
+    """
+    for k in REPORT_KEYS:
+        if k not in ctx:
+            raise ValueError(f"report context: expected the key {k!r}, found it missing")
+
+    def walk(v: Any, where: str) -> None:
+        if isinstance(v, str):
+            if "\n" in v:
+                raise ValueError(f"report context: {where} holds a line break")
+            return
+        if isinstance(v, Mapping):
+            for k, x in v.items():
+                walk(x, f"{where}.{k}")
+            return
+        if isinstance(v, (list, tuple)):
+            for i, x in enumerate(v):
+                walk(x, f"{where}[{i}]")
+            return
+        raise ValueError(f"report context: {where} is a {type(v).__name__}, expected finished text")
+
+    walk(ctx, "context")
+    if not ctx["rows"]:
+        raise ValueError("report context: expected at least one row, found 0")
+    return ctx

@@ -1,0 +1,61 @@
+"""Honest names in the report: which rows it may name as physics, and their flags.
+
+The rows are judged (:func:`edm_sym.engines.symbolic.significance.judge_rows`) on the
+report's last data log (the evaluation log when there is one: data the
+search did not fit), so the report names rows exactly as ``edm describe``
+does on that log. Every string returned here is finished LaTeX.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from edm_sym.core.bounds import bound_flags
+from edm_sym.engines.symbolic.model import SymbolicModel
+from edm_sym.engines.symbolic.significance import JudgedRow, judge_rows
+from edm_sym.outputs.printing.latex import EdmLatexPrinter
+from edm_sym.outputs.report.runs import LogRun
+
+
+def judge_report_rows(model: SymbolicModel, runs: Sequence[LogRun]) -> tuple[JudgedRow, ...]:
+    """The rows judged on the last log of ``runs`` (none: nothing is measured).
+
+    Parameters
+    ----------
+    model : SymbolicModel
+    runs : sequence of LogRun
+
+    Returns
+    -------
+    tuple of JudgedRow
+    """
+    if not runs:
+        return judge_rows(model)
+    run = runs[-1]
+    # A row's input is needed only to measure its static terms; the run keeps none, so the
+    # rows' own outputs decide (a static term is then judged with its row).
+    return judge_rows(model, run.rows, run.target)
+
+
+def row_flags(p: EdmLatexPrinter, judged: JudgedRow) -> list[str]:
+    """The row's flags (and its terms'), one LaTeX line each; ``unmeasured`` is left out."""
+    out = []
+    for f in judged.flags:
+        if f.code != "unmeasured":
+            out.append(rf"\textbf{{{p.text(f.code.replace('_', ' '))}}}: {p.breakable(f.message)}")
+    return out
+
+
+def judged_titles(judged: JudgedRow, titles: dict[str, str]) -> list[str]:
+    """What the row is called: its judged terms' titles, or ``negligible``."""
+    if judged.negligible:
+        return ["negligible"]
+    return [titles.get(jt.term.kind, jt.term.kind) for jt in judged.terms]
+
+
+def bounds_fact(p: EdmLatexPrinter, model: SymbolicModel) -> tuple[str, str]:
+    """The report's fact line: the parameters at their range bounds, or none."""
+    flags = bound_flags(model.compensator)
+    text = "; ".join(f.message() for f in flags) if flags else "none"
+    return ("Parameters at a range bound", p.breakable(text))
+
