@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ResultFormatError, ToolMissingError
+from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
 from edm_sym.core.fileio import check_outputs
 
 
@@ -288,33 +288,19 @@ def _export_names(args: argparse.Namespace) -> list[str]:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
     from edm_sym.core.fitness import rms
+    from edm_sym.engines.models import load_model
     from edm_sym.engines.sources import load_data
 
     model_path = Path(args.model)
     out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
     check_outputs([out], [args.model, args.data])
     # The model is validated completely before the data is read.
-    if _model_kind(model_path) == "edm-lugre":
-        from edm_sym.engines.lugre import load_lugre, simulate_lugre
-
-        lugre = load_lugre(model_path)
-        target, velocity = lugre.target_name, lugre.velocity_name
-        data = load_data(args.data, ts=args.ts, require=[velocity], default_ts=lugre.sample_time)
-        data = _match_ts(model_path.name, lugre.sample_time, data, args.resample)
-        cols = {"t": _time_column(data)}
-        cols["tau_cmp"] = simulate_lugre(lugre.params, data.columns[velocity], data.ts)
-    else:
-        from edm_sym.core.result import load_result
-        from edm_sym.engines.simulate import simulate
-
-        result = load_result(model_path)
-        target = result.target
-        data = load_data(args.data, ts=args.ts, require=result.inputs, default_ts=result.sample_time)
-        data = _match_ts(model_path.name, result.sample_time, data, args.resample)
-        sim = simulate(result, data)
-        cols = {"t": _time_column(data)}
-        cols.update({f"row_{j}": row for j, row in enumerate(sim.rows, start=1)})
-        cols["tau_cmp"] = sim.total
+    model = load_model(model_path)
+    target = model.target
+    data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time)
+    data = _match_ts(model_path.name, model.sample_time, data, args.resample)
+    run = model.run(data)
+    cols = {"t": _time_column(data), **run.parts, "tau_cmp": run.torque}
     rmse = None
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
@@ -343,23 +329,6 @@ def _time_column(data):  # noqa: ANN001, ANN202
     import numpy as np
 
     return data.columns["t"] if "t" in data.columns else np.arange(len(data)) * data.ts
-
-
-def _model_kind(path: Path) -> str:
-    try:
-        doc = json.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
-    if not isinstance(doc, dict):
-        raise ResultFormatError(f"{path.name}: (top level)",
-                                f"expected a JSON object, found {type(doc).__name__}")
-    kind = doc.get("format")
-    if kind not in ("edm-result", "edm-lugre"):
-        raise ResultFormatError(f"{path.name}: format",
-                                f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')
-    return kind
 
 
 def _cmd_plant(args: argparse.Namespace) -> int:

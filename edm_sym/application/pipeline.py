@@ -186,8 +186,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.application.exporting import export
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, load_config
-    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
-    from edm_sym.engines.simulate import simulate
+    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre
+    from edm_sym.engines.models import model_of
 
     out = out if out is not None else sys.stdout
     pipe = load_pipeline(path)
@@ -242,11 +242,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     print(f"result: {result_file}", file=out)
 
     summary: dict[str, Any] = {}
+    models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None else {})
     for label, log in logs.items():
-        row = {"edm": rms(log.columns[pipe.target] - simulate(result, log).total)}
-        if lugre is not None:
-            tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
-            row["lugre"] = rms(log.columns[pipe.target] - tau)
+        row = {kind: rms(log.columns[pipe.target] - m.run(log).torque) for kind, m in models.items()}
+        if "lugre" in row:
             row["ratio"] = row["edm"] / row["lugre"]
         summary[label] = row
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
