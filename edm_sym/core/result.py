@@ -21,8 +21,8 @@ from typing import Any
 
 from edm_sym.core.bounds import bound_flags
 from edm_sym.core.elements import REGISTRY, ParamRange
-from edm_sym.core.errors import TOO_DEEP, ResultFormatError
-from edm_sym.core.fileio import write_atomic
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.core.fileio import read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.validation import json_path, schema_problem
 
@@ -404,19 +404,6 @@ def load_result(path: str | Path) -> EdmResult:
         When the file is missing, not JSON, or not a valid edm-result.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
-    try:
-        doc = json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
-        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
-    except RecursionError:
-        raise ResultFormatError(str(path), TOO_DEEP) from None
+    doc, raw = read_json(path, ResultFormatError)
     res = parse_result(doc, path.name)
     return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))
-
-
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"{name} is not allowed in result files")

@@ -20,7 +20,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from edm_sym.core.data import DataLog
-from edm_sym.core.errors import TOO_DEEP, ResultFormatError
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.core.fileio import read_json
 from edm_sym.core.result import EdmResult, load_result
 
 __all__ = ["FORMATS", "CompensationModel", "EdmModel", "LuGreModel", "ModelRun", "load_model", "model_of"]
@@ -139,14 +140,7 @@ def file_format(path: str | Path) -> str:
         Unreadable file, invalid JSON, or a format that is neither kind.
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
-    except RecursionError:
-        raise ResultFormatError(path.name, TOO_DEEP) from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ResultFormatError(path.name, f"expected JSON, found invalid text ({exc})") from None
+    doc, _ = read_json(path, ResultFormatError)
     if not isinstance(doc, dict):
         raise ResultFormatError(f"{path.name}: (top level)",
                                 f"expected a JSON object, found {type(doc).__name__}")
