@@ -317,6 +317,28 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "result_")
         return export(self.result_, "python", out_dir, **options)
 
+    def to_control(self, **options: Any) -> Any:
+        """The fitted compensator as a discrete python-control system (``dt = Ts``).
+
+        Parameters
+        ----------
+        **options
+            ``output`` (default ``"tau_cmp"``) and ``name``, as for
+            :meth:`edm_sym.engines.symbolic.model.SymbolicModel.to_control`.
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+            Inputs named as the features of :meth:`fit`, one output; its
+            :func:`control.input_output_response` equals :meth:`predict`.
+        """
+        from edm_sym.engines.symbolic.model import build_model
+
+        check_is_fitted(self, "result_")
+        # The stages suffice: no simplification, no classification.
+        comp = self.result_.compensator
+        return build_model(comp, target=self.result_.target).to_control(**options)
+
     # --- helpers ---
 
     def _checked_sample_time(self) -> float:

@@ -227,6 +227,34 @@ class SymbolicModel:
                              "edm_sym.engines.symbolic.decode, not build_model")
         return sp.Add(*parts)
 
+    def to_control(self, *, output: str = "tau_cmp", name: str | None = None) -> Any:
+        """The whole compensator as a discrete python-control system (``dt = Ts``).
+
+        Parameters
+        ----------
+        output : str, default "tau_cmp"
+            The output's name.
+        name : str, optional
+            The system's name (default ``"edm_compensator"``).
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+            Inputs named as the model's inputs (all of them, in order; an input
+            no row reads is ignored), one output, the rows' states from rest;
+            :func:`control.input_output_response` equals the reference
+            simulator (docs/symbolic.md#python-control). It goes into a loop
+            with :func:`control.interconnect`, connected by signal names.
+
+        Examples
+        --------
+        >>> sys = edm_sym.decode(result).to_control()          # doctest: +SKIP
+        >>> resp = control.input_output_response(sys, t, u)    # doctest: +SKIP
+        """
+        from edm_sym.engines.symbolic.lti import compensator_system
+
+        return compensator_system(self, output=output, name=name)
+
 
 def _stage(comp: Compensator, j: int, i: int) -> Stage:
     gene = comp.matrix.rows[j].genes[i]
