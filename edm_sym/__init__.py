@@ -20,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from edm_sym.core import display as _display
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import (
     ConfigError,
@@ -126,6 +127,21 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
 
     return _export(result, target, out_dir, **options)
 
+
+def _model_latex(model: Any) -> str:
+    from edm_sym.outputs.printing.latex import model_latex  # the one place that writes LaTeX
+
+    return model_latex(model)
+
+
+def _result_latex(result: EdmResult) -> str:
+    return _model_latex(decode(result, classify=False, systems=False))
+
+
+# Jupyter's rich display of results and models: core and engines know no LaTeX, so the
+# package face (which may import every layer) hands them the printer's renderers.
+_display.register_latex("model", _model_latex)
+_display.register_latex("result", _result_latex)
 
 #: Names resolved on first access, so that their optional dependencies load only then.
 _LAZY = {"EDMRegressor": "edm_sym.application.estimator"}

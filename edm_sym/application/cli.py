@@ -156,7 +156,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the result file (default result.json; a checkpoint is kept beside it)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     p.add_argument("--validation-share", type=float, metavar="SHARE",
                    help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
@@ -198,7 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
     p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--reuse", action="store_true",
                    help="keep an existing lugre.json / result.json (evaluate and export only)")
     p.set_defaults(func=_cmd_pipeline)
@@ -231,6 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default scipy; docs/lugre.md)")
     p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json",
                    help="the LuGre file (default lugre.json)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.set_defaults(func=_cmd_lugre)
 
@@ -274,7 +278,20 @@ def _cmd_export(args: argparse.Namespace) -> int:
                      data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
     for path in written:
         print(path)
+    _export_summary(result, args)
     return 0
+
+
+def _export_summary(result, args: argparse.Namespace) -> None:  # noqa: ANN001
+    """The closing summary of an export: the fitness the result records, and its flags."""
+    from edm_sym.application.summary import NOT_MEASURED, fitness_line, print_summary, result_flags
+    from edm_sym.engines.sources import load_data
+
+    prog = "edm-export" if not hasattr(args, "command") else "edm export"
+    spec = args.eval_data or args.data
+    log = load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) if spec else None
+    notes = [fitness_line(result)] + ([] if log is not None else [NOT_MEASURED])
+    print_summary(prog, fitness=notes, flags=result_flags(result, log), describe=args.result)
 
 
 def _export_names(args: argparse.Namespace) -> list[str]:
@@ -349,7 +366,7 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_pipeline(args: argparse.Namespace) -> int:
     from edm_sym.application.pipeline import run_pipeline
 
-    run_pipeline(args.pipeline, progress=not args.quiet and sys.stderr.isatty(), reuse=args.reuse)
+    run_pipeline(args.pipeline, progress=not args.quiet, reuse=args.reuse)
     return 0
 
 
@@ -371,19 +388,26 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 
 
 def _cmd_lugre(args: argparse.Namespace) -> int:
-    from edm_sym.engines.lugre import identify_lugre, save_lugre
+    from edm_sym.application.progress import ProgressReporter
+    from edm_sym.application.summary import print_summary
+    from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.sources import load_data
 
     check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[args.target, args.velocity])
-    res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
-                         method=args.method, seed=args.seed, time_limit=args.time_limit)
+    with ProgressReporter("edm lugre", quiet=args.quiet) as reporter:
+        res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
+                             method=args.method, seed=args.seed, time_limit=args.time_limit,
+                             progress=reporter.lugre)
     save_lugre(args.output, res, target=args.target, velocity=args.velocity,
                data_sha256=data.sha256, seed=args.seed)
     print(f"wrote {args.output}")
     for name, score in (res.comparison or {}).items():
         print(f"{name} fitness {score.fitness:.10g} ({score.evaluations} evaluations)")
     print(f"rmse {res.rmse:.10g}")
+    print_summary("edm lugre", fitness=[f"fitness (weighted eq. 8): training {res.rmse:.6g} "
+                                        f"(the target's unit), validation: none held out"],
+                  flags=shape_bound_flags(res.params, data.columns[args.velocity], data.ts))
     return 0
 
 

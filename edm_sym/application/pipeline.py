@@ -171,12 +171,15 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     path : path-like
         The pipeline TOML file.
     progress : bool
-        Show the genetic algorithm's progress bar.
+        Show the progress of the LuGre identification and the genetic
+        algorithm on stderr (a bar on a terminal, a line every few seconds
+        elsewhere).
     reuse : bool
         Keep an existing ``lugre.json`` / ``result.json`` beside the file
         instead of identifying again (evaluation and export still run).
     out : file, optional
-        Where the summary is printed (default: standard output).
+        Where the files written and the RMSE table are printed (default:
+        standard output); the fitness and the flags go to standard error.
 
     Returns
     -------
@@ -184,9 +187,11 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         The evaluation summary (also written to ``evaluation.json``).
     """
     from edm_sym.application.exporting import export
+    from edm_sym.application.progress import ProgressReporter
+    from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, load_config
-    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre
+    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 
     out = out if out is not None else sys.stdout
@@ -212,12 +217,15 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
         if not (reuse and lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
-            res = identify_lugre(
-                abst.columns[pipe.target], abst.column(velocity, role="velocity column"), abst.ts,
-                method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"), seed=seed,
-                time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
-                weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
-                                       f"{name}: lugre.weighting"))
+            with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
+                res = identify_lugre(
+                    abst.columns[pipe.target], abst.column(velocity, role="velocity column"),
+                    abst.ts, method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"),
+                    seed=seed,
+                    time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
+                    weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
+                                           f"{name}: lugre.weighting"),
+                    progress=reporter.lugre)
             save_lugre(lugre_file, res, target=pipe.target, velocity=velocity,
                        data_sha256=abst.sha256, seed=seed)
         lugre = load_lugre(lugre_file)
@@ -225,8 +233,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
 
     if not (reuse and result_file.exists()):
         config = load_config(pipe.config) if pipe.config else None
-        result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
-                          seed=pipe.seed, time_limit=pipe.time_limit, progress=progress)
+        with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
+            result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
+                              seed=pipe.seed, time_limit=pipe.time_limit,
+                              callback=reporter.abstraction)
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data
@@ -260,4 +270,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
                      pdf=_get(f"{name}: export", ex, "pdf", bool, False))
     for p in written:
         print(f"wrote {p}", file=out)
+    flags = result_flags(result, logs.get("evaluation", abst))
+    if lugre is not None:
+        flags += shape_bound_flags(lugre.params, abst.columns[lugre.velocity_name], abst.ts)
+    print_summary("edm pipeline", fitness=[fitness_line(result)], flags=flags,
+                  describe=result_file)
     return summary

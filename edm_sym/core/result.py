@@ -86,6 +86,29 @@ class EdmResult:
     validation: Mapping[str, Any] = field(default_factory=dict)
     parsimony: Mapping[str, Any] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        """A header line and one line per row (the dataclass dump would fill the screen)."""
+        from edm_sym.core.display import matrix_lines
+
+        m = self.compensator.matrix
+        val = self.validation.get("validation") if isinstance(self.validation, Mapping) else None
+        from edm_sym.core.units import axis_units
+
+        unit = axis_units(getattr(self, "axis", "rotary")).force
+        fit = "inf" if self.fitness is None else f"{self.fitness:.4g} {unit}"
+        if isinstance(val, Mapping) and val.get("fitness") and val["fitness"][0] is not None:
+            fit += f", validation {val['fitness'][0]:.4g} {unit}"
+        head = (f"EdmResult(target {self.target!r}, inputs {', '.join(m.inputs)}, "
+                f"{m.n_elements}x{len(m.rows)} matrix, Ts = {self.sample_time:g} s, "
+                f"fitness {fit})")
+        return "\n".join([head] + [f"  {line}" for line in matrix_lines(self.compensator)])
+
+    def _repr_latex_(self) -> str | None:
+        """The compensator as LaTeX, one row per line (Jupyter; decodes with sympy)."""
+        from edm_sym.core.display import latex_repr
+
+        return latex_repr("result", self)
+
     @property
     def matrix(self) -> ElementMatrix:
         """The final element matrix."""
