@@ -185,7 +185,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     """
     from edm_sym.application.exporting import export
     from edm_sym.core.result import load_result, save_result
-    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.abstraction import abstract, default_config, load_config
+    from edm_sym.engines.abstraction.run import check_budget
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
     from edm_sym.engines.simulate import simulate
 
@@ -206,6 +207,11 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
     check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
                   [path, pipe.config, *data_files], option="pipeline output")
+    # The abstraction's sizes are checked before the LuGre identification runs.
+    config = load_config(pipe.config) if pipe.config else None
+    if not (reuse and result_file.exists()):
+        check_budget(config or default_config(), len(abst), len(pipe.inputs),
+                     time_limit=pipe.time_limit)
 
     lugre = None
     if pipe.lugre is not None:
@@ -224,7 +230,6 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         print(f"lugre: {lugre_file}", file=out)
 
     if not (reuse and result_file.exists()):
-        config = load_config(pipe.config) if pipe.config else None
         result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
                           seed=pipe.seed, time_limit=pipe.time_limit, progress=progress)
         stored = {"data": pipe.abstraction_data}
