@@ -174,7 +174,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         Show the genetic algorithm's progress bar.
     reuse : bool
         Keep an existing ``lugre.json`` / ``result.json`` beside the file
-        instead of identifying again (evaluation and export still run).
+        instead of identifying again (evaluation and export still run); an
+        interrupted ``result.json`` is not kept but continued from its
+        checkpoint ``result.json.checkpoint``.
     out : file, optional
         Where the summary is printed (default: standard output).
 
@@ -205,11 +207,15 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         Path("generated") / pipe.folder.name
     # Every output is checked before the long work: none may be an input, all must be writable.
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
-    check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
-                  [path, pipe.config, *data_files], option="pipeline output")
+    ckpt = result_file.with_name(result_file.name + ".checkpoint")
+    check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
+                   out_dir / "edm_comp.h"], [path, pipe.config, *data_files], option="pipeline output")
+    # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
+    keep_result = reuse and result_file.exists() and \
+        load_result(result_file).provenance.get("stop_reason") != "interrupted"
     # The abstraction's sizes are checked before the LuGre identification runs.
     config = load_config(pipe.config) if pipe.config else None
-    if not (reuse and result_file.exists()):
+    if not keep_result:
         check_budget(config or default_config(), len(abst), len(pipe.inputs),
                      time_limit=pipe.time_limit)
 
@@ -229,9 +235,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         lugre = load_lugre(lugre_file)
         print(f"lugre: {lugre_file}", file=out)
 
-    if not (reuse and result_file.exists()):
+    if not keep_result:
         result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
-                          seed=pipe.seed, time_limit=pipe.time_limit, progress=progress)
+                          seed=pipe.seed, time_limit=pipe.time_limit, progress=progress,
+                          checkpoint=ckpt, resume=reuse and ckpt.exists())
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data
