@@ -3,7 +3,7 @@
 Bad input (config, columns, options) raises :class:`~edm_sym.core.errors.ConfigError`
 or :class:`~edm_sym.core.errors.DataFormatError`, which ``edm`` prints as one line
 with exit status 2. A time limit ends the run with exit 0, Ctrl-C (or
-SIGTERM) with exit 1; both write the best result found so far, and the
+SIGTERM) with exit 130; both write the best result found so far, and the
 checkpoint ``<output>.checkpoint`` lets ``--resume`` continue the run to the
 result an uninterrupted run gives.
 """

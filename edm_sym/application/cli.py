@@ -15,7 +15,7 @@ import os
 import sys
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
@@ -496,13 +496,37 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         return EXIT_FAILED
 
 
+def _interruptible(prog: str, body: Callable[[], int]) -> int:
+    """Run a whole command, start-up included, so that SIGINT and SIGTERM end it with 130.
+
+    The handler is installed before the parser is built and before any heavy
+    import (``edm_sym`` imports nothing heavy itself), and an interrupt that
+    arrives outside :func:`_dispatch` (building the parser, printing a message)
+    still ends in one line, never a traceback.
+    """
+    import signal
+
+    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        return body()
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``edm``."""
-    return _run(argv, build_parser())
+    return _interruptible("edm", lambda: _run(argv, build_parser()))
 
 
 def export_main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``edm-export`` (the same as ``edm export``)."""
+    return _interruptible("edm-export", lambda: _run(argv, _export_parser()))
+
+
+def _export_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.",
                      epilog="examples:\n  edm-export result.json --target c\n"
                             "  edm-export result.json --target all --pdf -o gen/\n"
@@ -510,7 +534,7 @@ def export_main(argv: Sequence[str] | None = None) -> int:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_version(parser)
     _add_export_args(parser)
-    return _run(argv, parser)
+    return parser
 
 
 if __name__ == "__main__":  # pragma: no cover

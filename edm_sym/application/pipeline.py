@@ -176,7 +176,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         elsewhere).
     reuse : bool
         Keep an existing ``lugre.json`` / ``result.json`` beside the file
-        instead of identifying again (evaluation and export still run).
+        instead of identifying again (evaluation and export still run); an
+        interrupted ``result.json`` is not kept but continued from its
+        checkpoint ``result.json.checkpoint``.
     out : file, optional
         Where the files written and the RMSE table are printed (default:
         standard output); the fitness and the flags go to standard error.
@@ -190,7 +192,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.application.progress import ProgressReporter
     from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
-    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.abstraction import abstract, default_config, load_config
+    from edm_sym.engines.abstraction.run import check_budget
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 
@@ -209,8 +212,17 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         Path("generated") / pipe.folder.name
     # Every output is checked before the long work: none may be an input, all must be writable.
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
-    check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
-                  [path, pipe.config, *data_files], option="pipeline output")
+    ckpt = result_file.with_name(result_file.name + ".checkpoint")
+    check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
+                   out_dir / "edm_comp.h"], [path, pipe.config, *data_files], option="pipeline output")
+    # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
+    keep_result = reuse and result_file.exists() and \
+        load_result(result_file).provenance.get("stop_reason") != "interrupted"
+    # The abstraction's sizes are checked before the LuGre identification runs.
+    config = load_config(pipe.config) if pipe.config else None
+    if not keep_result:
+        check_budget(config or default_config(), len(abst), len(pipe.inputs),
+                     time_limit=pipe.time_limit)
 
     lugre = None
     if pipe.lugre is not None:
@@ -231,12 +243,12 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         lugre = load_lugre(lugre_file)
         print(f"lugre: {lugre_file}", file=out)
 
-    if not (reuse and result_file.exists()):
-        config = load_config(pipe.config) if pipe.config else None
+    if not keep_result:
         with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
             result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
                               seed=pipe.seed, time_limit=pipe.time_limit,
-                              callback=reporter.abstraction)
+                              callback=reporter.abstraction,
+                              checkpoint=ckpt, resume=reuse and ckpt.exists())
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data

@@ -486,6 +486,7 @@ def abstract(
         rng.bit_generator.state = state.rng_state
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
+    check_budget(cfg, x.shape[1], len(inputs), workers=workers, time_limit=time_limit)
     batch = max(s.ga.population * s.n_rows for s in cfg.steps)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
                           cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
@@ -525,6 +526,42 @@ def abstract(
         checkpoint.unlink()
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony)
+
+
+def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
+                 workers: int | None = None, time_limit: float | None = None) -> None:
+    """Refuse a run that cannot fit this machine, before it starts (:mod:`edm_sym.core.budget`).
+
+    Parameters
+    ----------
+    cfg : AbstractionConfig
+    n_samples : int
+        Samples the GA fits.
+    n_inputs : int
+        Input columns.
+    workers : int, optional
+        Processes (default: every usable core).
+    time_limit : float, optional
+        The run's wall-time limit [s]: then only the first generation must fit the time limit.
+
+    Raises
+    ------
+    BudgetError
+        Naming the config and the largest step, with the estimate and the limit.
+    """
+    from edm_sym.core.budget import StepSize, abstraction_estimate, check
+    from edm_sym.engines.abstraction.rowsim import default_workers
+
+    sizes = [StepSize(s.ga.population, s.n_rows, s.n_elements,
+                      min(s.ga.generations, s.ga.patience) if s.ga.patience else s.ga.generations)
+             for s in cfg.steps]
+    est = abstraction_estimate(sizes, n_samples=n_samples, n_inputs=n_inputs,
+                               cache_bytes=int(cfg.cache_mb * 2**20),
+                               workers=int(workers) if workers else default_workers(),
+                               time_limit=time_limit)
+    check(est, cfg.source, "use a smaller population or matrix, or a shorter log",
+          time_hint="use a smaller population or matrix, fewer generations (or patience), "
+                    "a shorter log or a time limit")
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
