@@ -108,11 +108,6 @@ def run_cli(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)
     reason = result.provenance.get("stop_reason")
-    if reason == "interrupted":
-        print(f"edm abstract: interrupted; wrote the best so far to {output} "
-              f"(continue with --resume)", file=sys.stderr)
-    elif reason == "time_limit":
-        print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")
     for line in summary_lines(result.validation):
@@ -123,6 +118,12 @@ def run_cli(args: argparse.Namespace) -> int:
         print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
               f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
     _warn_flags(result, output, data)
+    # How the run ended is the last line, after the summary's flags.
+    if reason == "interrupted":
+        print(f"edm abstract: interrupted; wrote the best so far to {output} "
+              f"(continue with --resume)", file=sys.stderr)
+    elif reason == "time_limit":
+        print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     return 130 if reason == "interrupted" else 0
 
 
