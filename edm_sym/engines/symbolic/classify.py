@@ -102,10 +102,13 @@ class ClassifyOptions:
 
     Parameters
     ----------
-    coulomb_velocity : float, default 0.1
+    coulomb_velocity : float, default 0.25
         [rad/s] A saturating function of velocity counts as Coulomb friction
         when its level divided by its slope at the origin is at most this
-        velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)).
+        velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)). A servo log
+        sampled at 1 ms moves its velocity by about that much per sample at
+        a few hundred rad/s^2, so a transition below it cannot be told from
+        a step.
     velocity_range : float, default 10.0
         [rad/s] The velocities over which shapes are judged (Stribeck-like
         humps, Coulomb + viscous fits).
@@ -123,7 +126,7 @@ class ClassifyOptions:
         a whole multiple of a common fundamental.
     """
 
-    coulomb_velocity: float = 0.1
+    coulomb_velocity: float = 0.25
     velocity_range: float = 10.0
     acceleration_frequency: float = 4 * math.pi
     acceleration_range: float = 1000.0
@@ -489,8 +492,54 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
                                 f"viscous friction (fitted to {f}): {d:.6g} N m s/rad{note}",
                                 term))
         return out
+    split = _stribeck_split(term, f, v, pos, scale, extra, note)
+    if split is not None:
+        return split
     return [_unclassified(term, f"an odd function of velocity ({term}) that is neither "
                           "Coulomb, viscous nor Stribeck-like over the velocity range" + note)]
+
+
+#: Share of the velocity range, at its top, where a Stribeck curve has settled.
+_TAIL = 0.2
+
+
+def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, scale: float,
+                    extra: dict, note: str) -> list[PhysicalTerm] | None:
+    """An odd velocity function that is Coulomb + viscous at speed and deviates below.
+
+    The GA writes a Stribeck curve as several rows: ``Fs sign(v)`` in one, and in
+    another a function that bends the sum down to the Coulomb level at speed
+    (``c sin(Sat(v))``, ``-c tanh(k v)``). Over the top ``_TAIL`` of the range
+    the function must be ``Fc + D v`` within 1 % of its peak; that asymptote
+    gives the Coulomb and viscous parts, and what differs from it at lower
+    speed, when it reaches ``_SIGNIFICANT`` of the peak, is the Stribeck part.
+    """
+    top = v >= (1.0 - _TAIL) * v[-1]
+    A = np.column_stack([np.ones(int(top.sum())), v[top]])
+    (fc, d), *_ = np.linalg.lstsq(A, pos[top], rcond=None)
+    if np.max(np.abs(A @ np.array([fc, d]) - pos[top])) > 0.01 * scale:
+        return None
+    dev = pos - (fc + d * v)
+    i = int(np.argmax(np.abs(dev)))
+    peak = float(dev[i])
+    if abs(peak) < _SIGNIFICANT * scale:
+        return None
+    after = np.nonzero(np.abs(dev[i:]) <= 0.5 * abs(peak))[0]
+    vs = float(v[i + after[0]]) if after.size else float(v[-1])
+    how = f" (the asymptote of {f} over the top {100 * _TAIL:g} % of +-{v[-1]:g} rad/s)"
+    out = []
+    if abs(fc) >= _SIGNIFICANT * scale:
+        out.append(PhysicalTerm("coulomb", {"level": (float(fc), "N m"), **extra},
+                                f"Coulomb friction: {fc:.6g} N m{how}{note}", term))
+    if abs(d) * v[-1] >= _SIGNIFICANT * scale:
+        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
+                                f"viscous friction: {d:.6g} N m s/rad{how}{note}", term))
+    out.append(PhysicalTerm("stribeck", {"peak": (peak, "N m"),
+                                         "peak_velocity": (float(v[i]), "rad/s"),
+                                         "stribeck_velocity": (vs, "rad/s"), **extra},
+                            f"Stribeck-like: {peak:.4g} N m above Coulomb + viscous at "
+                            f"{v[i]:.4g} rad/s, half of that at {vs:.4g} rad/s{note}", term))
+    return out
 
 
 _INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}
