@@ -423,6 +423,7 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
     sn, k, phi = found
     k = k * g
     amp = c
+    dominant: dict[str, tuple[float, str]] = {}
     if isinstance(sn, sp.sin) and f == sn or isinstance(sn, sp.cos) and f == sn:
         if k < 0:
             k, phi, amp = -k, -phi, -amp
@@ -440,11 +441,21 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
             return None
         k = abs(k)
         shape = f"periodic, non-sinusoidal ({f})"
+        # F(sin) holds harmonics of k: sin(3.7 sin q) is mostly 3 cycles/rev.
+        with np.errstate(all="ignore"):
+            y = np.asarray(F(np.sin((np.arange(720) + 0.5) * (2 * np.pi / 720))),
+                           dtype=float) * np.ones(720)
+        mag = np.abs(np.fft.rfft(y))[1:] if np.all(np.isfinite(y)) else np.zeros(1)
+        top = int(np.argmax(mag)) + 1
+        if top > 1:
+            dominant = {"dominant_cycles": (top * k, "1"),
+                        "dominant_amplitude": (float(2 * mag[top - 1] / y.size), "N m")}
+            shape += f", strongest harmonic {top * k:.6g} cycles/rev"
     else:
         return None
     phi = _wrap(phi)
     params = {"amplitude": (amp, "N m"), "period": (2 * math.pi / k, "rad"),
-              "cycles_per_revolution": (k, "1"), "phase": (phi, "rad"), **extra}
+              "cycles_per_revolution": (k, "1"), "phase": (phi, "rad"), **dominant, **extra}
     wrap_note = ""
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
         wrap_note = "; not a whole number of cycles per revolution: it jumps at each wrap"
@@ -492,7 +503,7 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
                                 f"viscous friction (fitted to {f}): {d:.6g} N m s/rad{note}",
                                 term))
         return out
-    split = _stribeck_split(term, f, v, pos, scale, extra, note)
+    split = _stribeck_split(term, f, v, pos, scale, extra, note, opts)
     if split is not None:
         return split
     return [_unclassified(term, f"an odd function of velocity ({term}) that is neither "
@@ -504,7 +515,8 @@ _TAIL = 0.2
 
 
 def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, scale: float,
-                    extra: dict, note: str) -> list[PhysicalTerm] | None:
+                    extra: dict, note: str, opts: ClassifyOptions
+                    ) -> list[PhysicalTerm] | None:
     """An odd velocity function that is Coulomb + viscous at speed and deviates below.
 
     The GA writes a Stribeck curve as several rows: ``Fs sign(v)`` in one, and in
@@ -512,7 +524,9 @@ def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, s
     (``c sin(Sat(v))``, ``-c tanh(k v)``). Over the top ``_TAIL`` of the range
     the function must be ``Fc + D v`` within 1 % of its peak; that asymptote
     gives the Coulomb and viscous parts, and what differs from it at lower
-    speed, when it reaches ``_SIGNIFICANT`` of the peak, is the Stribeck part.
+    speed, when it reaches ``_SIGNIFICANT`` of the peak, is the Stribeck part,
+    unless it has halved by ``coulomb_velocity``: then it is the smoothing of
+    the Coulomb step, which the data cannot tell from a step.
     """
     top = v >= (1.0 - _TAIL) * v[-1]
     A = np.column_stack([np.ones(int(top.sum())), v[top]])
@@ -534,6 +548,8 @@ def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, s
     if abs(d) * v[-1] >= _SIGNIFICANT * scale:
         out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
                                 f"viscous friction: {d:.6g} N m s/rad{how}{note}", term))
+    if vs <= opts.coulomb_velocity:
+        return out or None
     out.append(PhysicalTerm("stribeck", {"peak": (peak, "N m"),
                                          "peak_velocity": (float(v[i]), "rad/s"),
                                          "stribeck_velocity": (vs, "rad/s"), **extra},
