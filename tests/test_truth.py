@@ -97,7 +97,8 @@ def test_true_terms_follow_the_parameters() -> None:
 def test_the_check_fails_on_a_wrong_model() -> None:
     # The check itself can fail: a spurious offset, a Coulomb level 20 % off, a wrong order.
     def doc(*terms: tuple[str, dict]) -> dict:
-        return {"rows": [{"index": 1, "input": "omega", "terms": [{"kind": k, "parameters": {n: [v, "-"] for n, v in ps.items()}}
+        return {"rows": [{"index": 1, "input": "omega",
+                          "terms": [{"kind": k, "parameters": {n: [v, "-"] for n, v in ps.items()}}
                                     for k, ps in terms]}],
                 "fitness": {"data": {"rows": [1, 2]}, "held_out": {"rows": [1, 2]}}}
 
@@ -167,3 +168,94 @@ def test_describe_judges_on_the_held_out_rows_of_the_fitted_log(tmp_path: Path) 
     other = DataLog(dict(log.columns), ts, "evaluation", "e" * 64)
     whole = describe(path, data=other).to_json()["fitness"]["data"]
     assert "rows" not in whole and whole["samples"] == n
+
+
+# -- what the truth tests needed of the classifier and the pruning ------------------
+
+def _classify(expr, name: str, role: str):  # noqa: ANN001, ANN202
+    import sympy as sp
+
+    from edm_sym.engines.symbolic.classify import classify_expression
+
+    u = sp.Symbol(name, real=True)
+    return classify_expression(expr(u), u, role)
+
+
+def test_a_row_bending_coulomb_down_at_speed_is_coulomb_plus_stribeck() -> None:
+    import sympy as sp
+
+    from edm_sym.engines.symbolic.functions import Sat
+
+    # A GA row of the stribeck plant: a hump to 1.57 rad/s, constant beyond 5.55 rad/s.
+    terms = _classify(lambda w: 0.2274 * sp.sin(Sat(w, -5.551, 5.551)), "omega", "velocity")
+    kinds = {t.kind: t for t in terms}
+    assert sorted(kinds) == ["coulomb", "stribeck"]
+    assert kinds["coulomb"].parameters["level"][0] == pytest.approx(0.2274 * math.sin(5.551),
+                                                                     rel=1e-6)
+    s = kinds["stribeck"].parameters
+    assert s["peak"][0] == pytest.approx(0.2274 * (1 - math.sin(5.551)), rel=1e-3)
+    assert s["peak_velocity"][0] == pytest.approx(math.pi / 2, abs=0.01)
+
+
+def test_a_coulomb_step_smoothed_below_the_coulomb_velocity_is_no_stribeck() -> None:
+    import sympy as sp
+
+    from edm_sym.engines.symbolic.functions import SymLog
+
+    terms = _classify(lambda w: -0.00508 * SymLog(sp.tanh(1.509 * w), 0.0002237), "omega",
+                      "velocity")
+    assert [t.kind for t in terms] == ["coulomb"]
+    level = -0.00508 * math.log(1 + math.tanh(1.509 * 10.0) / 0.0002237)
+    assert terms[0].parameters["level"][0] == pytest.approx(level, rel=1e-3)
+
+
+def test_a_function_of_a_sine_names_its_strongest_harmonic() -> None:
+    import sympy as sp
+
+    # sin(3.725 sin q) = 2 sum J_{2k+1}(3.725) sin((2k+1) q): J_3 dominates, J_1 is near a zero.
+    (t,) = _classify(lambda q: 0.01351 * sp.sin(3.725 * sp.sin(q)), "theta_uw", "angle")
+    assert t.kind == "spatial"
+    assert t.parameters["cycles_per_revolution"][0] == pytest.approx(1.0)
+    assert t.parameters["dominant_cycles"][0] == pytest.approx(3.0)
+    (t1,) = _classify(lambda q: 0.1 * sp.sin(sp.sin(q)), "theta_uw", "angle")
+    assert "dominant_cycles" not in t1.parameters  # the fundamental dominates: nothing to add
+
+
+def _relief_case(gene_p: float, element: str, tau_gain: float):  # noqa: ANN202
+    import numpy as np
+
+    from edm_sym.core.data import DataLog
+    from edm_sym.core.elements import default_ranges
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
+    from edm_sym.engines.abstraction.weighting import Weighting
+
+    n, ts = 4000, 1e-3
+    t = np.arange(n) * ts
+    omega = 20 * np.sin(2 * np.pi * 0.7 * t)
+    tau = tau_gain * omega + 0.01 * np.random.default_rng(3).standard_normal(n)
+    log = DataLog({"t": t, "omega": omega, "tau_ext": tau}, ts, "v", "0" * 64)
+    ranges = default_ranges(ts, n * ts)
+    g = ranges["gain"].encode(tau_gain) if element == "lpf" else gene_p
+    m = make_matrix(["omega"], [("omega", [("gain", g), ("lpf", gene_p)] if element == "lpf"
+                                 else [("gain", g)])])
+    comp = Compensator(m, ts, ranges, n * ts)
+    hold = plan_holdout(log, target="tau_ext", inputs=["omega"], settings=ValidationSettings())
+    return comp, Scorer(hold, Weighting())
+
+
+def test_relieve_bounds_moves_a_bound_the_data_does_not_need() -> None:
+    from edm_sym.core.bounds import bound_flags
+    from edm_sym.engines.abstraction.prune import RELIEF, relieve_bounds
+
+    # A low-pass at the Nyquist end of its range: inside it, the fit is the same.
+    comp, scorer = _relief_case(1.0, "lpf", 0.01)
+    assert len(bound_flags(comp)) == 1
+    new, moved = relieve_bounds(comp, scorer, 0.01)
+    assert moved == 1 and not bound_flags(new)
+    assert new.matrix.rows[0].genes[1].p == pytest.approx(1 - RELIEF)
+    assert scorer.criterion(new) <= 1.01 * scorer.criterion(comp)
+    # A gain the data needs at its bound (10) stays there, flagged.
+    comp, scorer = _relief_case(1.0, "gain", 10.0)
+    new, moved = relieve_bounds(comp, scorer, 0.01)
+    assert moved == 0 and new.matrix == comp.matrix and len(bound_flags(new)) == 1

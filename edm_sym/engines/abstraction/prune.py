@@ -14,10 +14,10 @@ last step's best matrix. At every stage it tries each simplification:
 just inside it, :func:`relieve_bounds`, when the criterion stays within the
 tolerance: a bound the data does not need is no estimate, and would keep the
 row from being named as physics.) It scores every candidate by the
-**criterion** (eq. 8 on the held-out part with the final step's weighting; its RMSE there when that weighting is 0 on
-every held-out sample; the training eq. 8 when nothing is held out), takes
-the best one, then refits the row gains of the result by weighted least
-squares on the **training** part (kept when it lowers the criterion), and
+**criterion** (eq. 8 on the held-out part with the final step's weighting;
+its RMSE there when that weighting is 0 on every held-out sample; the
+training eq. 8 when nothing is held out), takes the best one, then refits
+the row gains of the result by weighted least squares on the **training** part (kept when it lowers the criterion), and
 goes on until one row with nothing to drop is left. Every model on the way
 is a candidate member of the front; the front keeps, for each complexity,
 the best criterion, and only members no simpler member beats or equals.
@@ -201,8 +201,11 @@ def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
         rows[flag.row] = Row(row.input, genes)
         m = ElementMatrix(comp.matrix.inputs, rows)
         options = [m] + [r for r in (_refit(comp, m, scorer),) if r is not None]
+        # A refit may put the parameter (a gain) back on its bound: that is no move.
+        options = [c for c in options if not any(
+            (b.row, b.col) == (flag.row, flag.col) for b in bound_flags(_with(comp, c)))]
         scored = [(scorer.criterion(_with(comp, c)), q) for q, c in enumerate(options)]
-        crit, q = min(scored)
+        crit, q = min(scored) if scored else (math.inf, -1)
         if crit <= limit:
             comp = _with(comp, options[q])
             moved += 1

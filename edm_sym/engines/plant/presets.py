@@ -174,7 +174,7 @@ class PlantPreset:
         """tuple of str: the physical terms ``tau_ext`` holds, as the classifier names them.
 
         In free motion the RTOB sees ``(K_tn/K_t)(friction + J alpha) - J_n alpha``
-        (docs/plant.md#ground-truth), so: ``"coulomb"`` when ``coulomb > 0``,
+        (docs/plant.md, "Ground truth"), so: ``"coulomb"`` when ``coulomb > 0``,
         ``"viscous"`` when ``viscous > 0``, ``"acceleration"`` when the
         equivalent inertia :attr:`inertia_error` is not zero (beyond rounding), ``"spatial"``
         with a ripple, ``"stribeck"`` when ``stiction > coulomb``; in the order
