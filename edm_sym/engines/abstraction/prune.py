@@ -17,8 +17,9 @@ row from being named as physics.) It scores every candidate by the
 **criterion** (eq. 8 on the held-out part with the final step's weighting;
 its RMSE there when that weighting is 0 on every held-out sample; the
 training eq. 8 when nothing is held out), takes the best one, then refits
-the row gains of the result by weighted least squares on the **training** part (kept when it lowers the criterion), and
-goes on until one row with nothing to drop is left. Every model on the way
+the row gains of the result by weighted least squares on the **training**
+part (kept when it lowers the criterion), and goes on until one row with
+nothing to drop is left. Every model on the way
 is a candidate member of the front; the front keeps, for each complexity,
 the best criterion, and only members no simpler member beats or equals.
 
