@@ -24,6 +24,7 @@ from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.core.errors import TOO_DEEP, ResultFormatError
 from edm_sym.core.fileio import write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.core.units import AXES, AxisUnits, axis_units
 from edm_sym.core.validation import json_path, schema_problem
 
 FORMAT = "edm-result"
@@ -73,6 +74,10 @@ class EdmResult:
         empty when there was none.
     sha256 : str or None
         The sha256 of the file it was loaded from.
+    axis : str
+        ``"rotary"`` (the default, and what a file without ``axis`` means) or
+        ``"linear"``: which SI units the target and the inputs are in
+        (:func:`edm_sym.core.units.axis_units`, docs/data.md#units).
     """
 
     compensator: Compensator
@@ -85,6 +90,16 @@ class EdmResult:
     report_inputs: Mapping[str, str] = field(default_factory=dict)
     validation: Mapping[str, Any] = field(default_factory=dict)
     parsimony: Mapping[str, Any] = field(default_factory=dict)
+    axis: str = "rotary"
+
+    def __post_init__(self) -> None:
+        if self.axis not in AXES:
+            raise ResultFormatError("axis", f"expected {' or '.join(AXES)}, found {self.axis!r}")
+
+    @property
+    def units(self) -> AxisUnits:
+        """The SI units of this result's axis (``axis_units(self.axis)``)."""
+        return axis_units(self.axis)
 
     @property
     def matrix(self) -> ElementMatrix:
@@ -111,6 +126,7 @@ class EdmResult:
             "record_length": comp.record_length,
             "inputs": list(comp.matrix.inputs),
             "target": self.target,
+            "axis": self.axis,
             "fitness": self.fitness,
             "matrix": matrix_to_json(comp.matrix),
             # Every element's range is kept, so a matrix grown later decodes the same.
@@ -324,7 +340,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
                      report_inputs=dict(doc.get("report_inputs", {})),
                      validation=dict(doc.get("validation", {})),
-                     parsimony=_parsimony_from_json(name, doc, inputs))
+                     parsimony=_parsimony_from_json(name, doc, inputs),
+                     axis=doc.get("axis", "rotary"))
 
 
 def _parsimony_from_json(name: str, doc: Mapping[str, Any], inputs: Sequence[str]
