@@ -157,8 +157,7 @@ def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
     from edm_sym.engines.abstraction.weighting import parse_weighting
 
     weighting = parse_weighting(where, spec)
-    t = data.columns.get("t", np.arange(len(data)) * data.ts)
-    w = weighting.weights(t, data.columns[target])
+    w = weighting.weights(data.times, data.columns[target])
     return np.broadcast_to(np.asarray(w, dtype=float), (len(data),)).copy()
 
 

@@ -32,6 +32,7 @@ from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import ConfigError, NumericsWarning
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
+from edm_sym.core.units import axis_units
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
     RunState,
@@ -372,6 +373,7 @@ def abstract(
     validate: DataLog | None = None,
     validation_share: float | None = None,
     select: str | None = None,
+    axis: str = "rotary",
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -416,21 +418,25 @@ def abstract(
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
         config's ``[parsimony]`` rule (default: the simplest member within
         its tolerance, 1 %). See :mod:`edm_sym.engines.abstraction.prune`.
+    axis : str
+        ``"rotary"`` or ``"linear"``: the SI units of the log (docs/data.md#units),
+        recorded in the result; the scores' unit when the config sets none.
 
     Returns
     -------
     EdmResult
-        The final compensator, every step's record and the provenance
+        The final compensator, every step's record, the provenance
         (``seed``, ``package_version``, ``data_sha256``, ``stop_reason``: one of
-        ``"completed"``, ``"time_limit"``, ``"stopped"``, ``"interrupted"``).
+        ``"completed"``, ``"time_limit"``, ``"stopped"``, ``"interrupted"``),
+        the axis and the record of each log used (``logs``).
 
     Raises
     ------
     ConfigError
         Bad inputs or config (unknown input in the human model, a weighting
-        that is zero everywhere, a checkpoint of another run).
+        that is zero everywhere, a checkpoint of another run, an unknown axis).
     DataFormatError
-        A missing target or input column.
+        A missing target or input column, or an input column that is constant.
     KeyboardInterrupt
         Only when interrupted before the first population was evaluated.
     """
@@ -450,10 +456,17 @@ def abstract(
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
         raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
+    try:
+        units = axis_units(axis)
+    except ValueError as exc:
+        raise ConfigError("axis", str(exc)) from None
     if validation_share is not None:
         cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
+    if cfg.validation.unit is None:
+        cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
     hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
                         validate=validate)
+    data.require_varying(inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones).
     part = hold.training
     x = np.ascontiguousarray(part.x[:, :hold.n_train])
@@ -508,8 +521,9 @@ def abstract(
                   "data_sha256": data.sha256, "stop_reason": reason}
     if reason == "completed" and checkpoint is not None and checkpoint.exists():
         checkpoint.unlink()
+    logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
-                     parsimony=parsimony)
+                     parsimony=parsimony, axis=axis, logs=logs)
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

@@ -133,8 +133,7 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
         raise ValueError(f"label: expected 'abstraction' or 'evaluation', found {label!r}")
     sim = simulate(result, data)
     target = np.asarray(data.column(result.target, role="target"), dtype=float)
-    n = len(target)
-    t = np.asarray(data.columns["t"], dtype=float) if "t" in data.columns else np.arange(n) * data.ts
+    t = data.times
     lugre_tau = lugre_rmse = None
     if lugre is not None:
         from edm_sym.engines.lugre import simulate_lugre
