@@ -63,9 +63,10 @@ class ColumnRoles:
         Column -> role, in the order given.
     where : str
         Where they were given, for messages (``"--role"``, ``"cfg.toml: columns"``).
-    optional : bool
-        Roles recorded in a model file apply to a log only where it has the
-        column (a second log of the axis); given ones must all be present.
+    loose : frozenset of str
+        Columns whose role applies only when a log has them: the roles a model
+        file records (a second log of the axis may lack its target); the
+        columns given by options and tables must all be present.
 
     Raises
     ------
@@ -75,20 +76,21 @@ class ColumnRoles:
 
     roles: Mapping[str, str] = field(default_factory=dict)
     where: str = "--role"
-    optional: bool = False
+    loose: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         seen: dict[str, str] = {}
         for col, role in self.roles.items():
             if role not in LOG_ROLES:
-                raise DataFormatError(f"{self.where}: {col}",
+                raise DataFormatError(_at(self.where, col),
                                       f"expected a role of {', '.join(LOG_ROLES)}, found {role!r}")
             if role in UNIQUE_ROLES and role in seen:
-                raise DataFormatError(f"{self.where}: {col}",
+                raise DataFormatError(_at(self.where, col),
                                       f"expected one column with the role {role!r}, found it given "
                                       f"twice ({seen[role]!r} and {col!r})")
             seen.setdefault(role, col)
         object.__setattr__(self, "roles", dict(self.roles))
+        object.__setattr__(self, "loose", frozenset(self.loose) & set(self.roles))
 
     @classmethod
     def parse(cls, items: Iterable[str] = (), *, time_column: str | None = None,
@@ -129,7 +131,7 @@ class ColumnRoles:
         roles: dict[str, str] = {}
         for col, role in table.items():
             if not isinstance(role, str):
-                raise DataFormatError(f"{where}.{col}",
+                raise DataFormatError(_at(where, col),
                                       f"expected a role of {', '.join(LOG_ROLES)}, found {role!r}")
             _add_role(roles, col, role, where)
         return cls(roles, where)
@@ -141,8 +143,9 @@ class ColumnRoles:
             return self
         mine = set(self.roles.values()) & set(UNIQUE_ROLES)
         kept = {c: r for c, r in base.roles.items() if c not in self.roles and r not in mine}
-        return ColumnRoles({**kept, **self.roles}, self.where if self.roles else base.where,
-                           self.optional and base.optional)
+        where = self.where if not kept else base.where if not self.roles else (
+            f"{self.where} or {base.where}")
+        return ColumnRoles({**kept, **self.roles}, where, (base.loose & set(kept)) | self.loose)
 
     def with_role(self, column: str, role: str) -> ColumnRoles:
         """These roles and ``column``'s (a ``--target``), which must not contradict them."""
@@ -150,14 +153,14 @@ class ColumnRoles:
         if have == role:
             return self
         if have is not None:
-            raise DataFormatError(f"{self.where}: {column}",
+            raise DataFormatError(_at(self.where, column),
                                   f"expected one role per column, found {have!r} and {role!r}")
         other = self.column_of(role) if role in UNIQUE_ROLES else None
         if other is not None:
-            raise DataFormatError(f"{self.where}: {other}",
+            raise DataFormatError(_at(self.where, other),
                                   f"expected the {role} column {column!r}, found {other!r} given "
                                   f"the role {role!r}")
-        return ColumnRoles({**self.roles, column: role}, self.where, self.optional)
+        return ColumnRoles({**self.roles, column: role}, self.where, self.loose)
 
     def column_of(self, role: str) -> str | None:
         """The (first) column with ``role``, or None."""
@@ -179,9 +182,14 @@ class ColumnRoles:
         return tuple(c for c, r in self.roles.items() if r in INPUT_ROLES)
 
 
+def _at(where: str, col: str) -> str:
+    """``--role qm`` for an option, ``cfg.toml: columns.qm`` for a table."""
+    return f"{where} {col}" if where.startswith("--") else f"{where}.{col}"
+
+
 def _add_role(roles: dict[str, str], col: str, role: str, where: str) -> None:
     if col in roles:
-        raise DataFormatError(f"{where}: {col}", f"expected one role per column, found "
+        raise DataFormatError(_at(where, col), f"expected one role per column, found "
                               f"{roles[col]!r} and {role!r}")
     roles[col] = role
 
@@ -319,8 +327,8 @@ def load_data(
     columns : ColumnRoles, optional
         The roles of its columns (``--time-column``, ``--role``, a ``[columns]``
         table, or those a model recorded): the ``time`` column replaces ``t``,
-        and every column named must be present (unless ``columns.optional``:
-        then roles of absent columns are dropped).
+        and every column named must be present (but for ``columns.loose`` ones,
+        whose roles are dropped when absent).
 
     Returns
     -------
@@ -369,7 +377,7 @@ def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
     ------
     DataFormatError
         A column named by a role that the log does not have (roles that are
-        not ``optional``).
+        not ``loose``).
     """
     if columns is None or not columns.roles:
         return log
@@ -377,11 +385,10 @@ def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
     for col, role in columns.roles.items():
         if col in log.columns:
             roles[col] = role
-        elif not columns.optional:
+        elif col not in columns.loose:
             have = ", ".join(log.columns)
             raise DataFormatError(f"{log.source}: column {col!r}",
-                                  f"expected the {role} column named by {columns.where}, "
-                                  f"found only: {have}")
+                                  f"expected a {role} column named {col!r}, found only: {have}")
     return replace(log, roles=roles)
 
 

@@ -107,7 +107,7 @@ class EdmResult:
     def column_roles(self) -> ColumnRoles | None:
         """The column roles of the abstraction log, to apply to another log of the axis.
 
-        They are ``optional``: a second log takes the recorded time column and
+        They are ``loose``: a second log takes the recorded time column and
         roles where it has those columns (``edm simulate``, ``edm-export
         --data``, ``edm describe``). None when no log is recorded.
         """
@@ -116,7 +116,7 @@ class EdmResult:
             return None
         roles = {c["name"]: c["role"] for c in self.logs[k].get("columns", ()) if c.get("role")}
         name = Path(self.source).name if self.source else "result.json"
-        return ColumnRoles(roles, f"{name}: logs[{k}].columns", optional=True)
+        return ColumnRoles(roles, f"{name}: logs[{k}].columns", loose=frozenset(roles))
 
     @property
     def roles(self) -> dict[str, str]:

@@ -110,7 +110,9 @@ def load_log(path: str | Path, result: Any, *, ts: float | None = None,
     need = [*result.inputs, result.target]
     if lugre is not None and lugre.result.velocity_name:
         need.append(lugre.result.velocity_name)
-    data = load_data(path, ts=ts, require=need, default_ts=result.sample_time)
+    # The time column and roles the result records for its abstraction log, where this one has them.
+    data = load_data(path, ts=ts, require=need, default_ts=result.sample_time,
+                     columns=result.column_roles())
     return match_sample_time(data, result.sample_time, model="the result")
 
 
