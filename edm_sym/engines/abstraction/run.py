@@ -29,7 +29,7 @@ import numpy as np
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
-from edm_sym.core.errors import ConfigError, NumericsWarning
+from edm_sym.core.errors import ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
 from edm_sym.core.units import axis_units
@@ -466,6 +466,7 @@ def abstract(
         cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
     hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
                         validate=validate)
+    _require_samples(data, hold.n_train, cfg)
     data.require_varying(inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones).
     part = hold.training
@@ -524,6 +525,23 @@ def abstract(
     logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=logs)
+
+
+def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> None:
+    """Refuse a training part too short to fit the schedule's largest matrix.
+
+    Its parameters (one per element) must not outnumber the samples fitted,
+    and the filters' default corner range, 2 pi/T_sum .. pi/Ts, is empty below
+    3 samples (docs/data.md#too-few-samples).
+    """
+    largest = max(cfg.steps, key=lambda s: s.n_rows * s.n_elements)
+    need = max(3, largest.n_rows * largest.n_elements + 1)
+    if n_train < need:
+        raise DataFormatError(
+            f"{data.source}: samples 1-{n_train} (the training part)",
+            f"expected at least {need} samples to fit (more than the {largest.n_rows}x"
+            f"{largest.n_elements} matrix's parameters), found {n_train}; use a longer log, a "
+            "smaller schedule or a smaller held-out share")
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
