@@ -20,7 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from edm_sym.core.data import DataLog
+from edm_sym.core.data import ColumnRoles, DataLog
 from edm_sym.core.errors import (
     ConfigError,
     DataFormatError,
@@ -35,6 +35,7 @@ from edm_sym.engines.simulate import Simulation, simulate
 from edm_sym.engines.sources import load_data
 
 __all__ = [
+    "ColumnRoles",
     "Compensator",
     "ConfigError",
     "DataFormatError",

@@ -308,3 +308,26 @@ def test_same_seed_same_bytes_with_logs_recorded(export_csv: Path, tmp_path: Pat
         outs.append(out.read_bytes())
     assert outs[0] == outs[1]
     assert dumps(load_result(tmp_path / "r0.json")).encode() == outs[0]
+
+
+# -- the shipped EMPS example: a linear axis without the data ------------------------------
+
+EMPS_EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "emps"
+
+
+def test_emps_example_is_a_linear_axis_end_to_end(tmp_path: Path) -> None:
+    from edm_sym.engines.abstraction import load_config
+
+    result = load_result(EMPS_EXAMPLE / "result.json")
+    config = load_config(EMPS_EXAMPLE / "abstraction.toml")
+    assert result.axis == config.axis == "linear"
+    # The roles the config gives are the ones the result recorded for its log.
+    recorded = {c["name"]: c["role"] for c in result.logs[0]["columns"] if c["role"]}
+    assert recorded == config.columns.roles
+    desc = edm_sym.describe(result)
+    kinds = {t.term.kind: t.term for r in desc.rows for t in r.terms}
+    assert kinds["viscous"].parameters["coefficient"][1] == "N s/m"
+    assert kinds["acceleration"].parameters["inertia"][1] == "kg"
+    assert "linear axis, target in N" in desc.table()
+    written = edm_sym.export(result, "c", tmp_path)
+    assert [p.name for p in written] == ["edm_comp.h", "edm_comp.c"]
