@@ -43,7 +43,10 @@ from edm_sym.engines.observer import (
 from edm_sym.engines.simulate import simulate
 
 REPO = Path(__file__).resolve().parents[1]
-EMPS = REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat"
+#: The EMPS log beside the checkout (``../shared``), or beside a worktree's parent.
+EMPS = next((p for p in (REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat",
+                         REPO.parents[1] / "shared" / "data" / "emps" / "DATA_EMPS.mat")
+             if p.exists()), REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat")
 CONFIG = REPO / "examples" / "emps" / "abstraction.toml"
 #: Nominal mass the observer assumes [kg] (the identified one is about 95 kg).
 NOMINAL_MASS = 90.0
@@ -84,8 +87,9 @@ def run(time_limit: float | None = None, seed: int = 1, path: Path = EMPS,
     ref_err = relative_error(c_te["force"],
                              c_te["force"] - reference_model(coef, c_te["qd"], c_te["qdd"]))
     t0 = time.perf_counter()
-    result = abstract(train, target="tau_ext", inputs=["q", "qd", "qdd"], config=load_config(CONFIG),
-                      seed=seed, time_limit=time_limit)
+    config = load_config(CONFIG)
+    result = abstract(train, target="tau_ext", inputs=["q", "qd", "qdd"], config=config,
+                      seed=seed, time_limit=time_limit, axis=config.axis or "linear")
     seconds = time.perf_counter() - t0
     train_res = c_tr["tau_ext"] - simulate(result, train).total
     test_res = (test_view.columns["tau_ext"] - simulate(result, test_view).total)[scored]
@@ -141,7 +145,8 @@ def main() -> None:
     for r in runs:
         m, fv, fc, off = r["reference_coefficients"]
         print(f"seed {r['seed']}: EDM {r['edm_held_out']:.4f} %  reference {r['reference_held_out']:.4f} %  "
-              f"ratio {r['ratio']:.3f}  (train {r['edm_train']:.4f} %, matrix {r['matrix']}, "
+              f"ratio {r['ratio']:.3f}  (train {r['edm_train']:.4f} %, matrix {r['matrix']} "
+              f"(elements x rows), "
               f"{r['seconds']:.0f} s; reference M={m:.2f} kg Fv={fv:.2f} N s/m Fc={fc:.2f} N "
               f"offset={off:.2f} N)")
     print(f"held out, median [min-max] over {len(runs)} seeds: EDM {_fmt(summary['edm_held_out'])} %, "

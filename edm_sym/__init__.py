@@ -26,7 +26,7 @@ from edm_sym.core import display as _display  # no dependencies: safe before Ctr
 # they must be able to catch Ctrl-C and SIGTERM before numpy and scipy load (docs/cli.md).
 # The public names resolve on first access (__getattr__ below).
 if TYPE_CHECKING:
-    from edm_sym.core.data import DataLog
+    from edm_sym.core.data import ColumnRoles, DataLog
     from edm_sym.core.errors import ConfigError, DataFormatError, EdmError, NumericsWarning, ResultFormatError
     from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
     from edm_sym.core.result import EdmResult, load_result, save_result
@@ -35,6 +35,7 @@ if TYPE_CHECKING:
     from edm_sym.engines.sources import load_data
 
 __all__ = [
+    "ColumnRoles",
     "Compensator",
     "ConfigError",
     "DataFormatError",
@@ -144,7 +145,7 @@ _display.register_latex("result", _result_latex)
 
 #: Names resolved on first access: name -> module.
 _LAZY = {
-    "DataLog": "edm_sym.core.data",
+    "DataLog": "edm_sym.core.data", "ColumnRoles": "edm_sym.core.data",
     "ConfigError": "edm_sym.core.errors", "DataFormatError": "edm_sym.core.errors",
     "EdmError": "edm_sym.core.errors", "NumericsWarning": "edm_sym.core.errors",
     "ResultFormatError": "edm_sym.core.errors",

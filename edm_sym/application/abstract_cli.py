@@ -49,7 +49,8 @@ def run_cli(args: argparse.Namespace) -> int:
         ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
         ``workers``, ``validation_share``, ``validate``, ``select``,
-        ``prune_tolerance``, ``no_prune``.
+        ``prune_tolerance``, ``no_prune``, ``time_column``, ``role`` (a list
+        of ``COL=ROLE``), ``axis``.
 
     Returns
     -------
@@ -64,10 +65,8 @@ def run_cli(args: argparse.Namespace) -> int:
     from edm_sym.engines.sources import load_data
 
     config = load_config(args.config) if args.config else default_config()
-    inputs = [name.strip() for name in str(args.inputs).split(",")]
-    if not all(inputs):
-        raise ConfigError("--inputs", f"expected comma-separated column names, found "
-                                      f"{args.inputs!r}")
+    columns, target, inputs = resolve_columns(args, config)
+    axis = getattr(args, "axis", None) or config.axis or "rotary"
     if args.workers is not None and args.workers < 1:
         raise ConfigError("--workers", f"expected an integer >= 1, found {args.workers}")
     if args.seed < 0:
@@ -83,12 +82,12 @@ def run_cli(args: argparse.Namespace) -> int:
         except ConfigError as exc:
             raise ConfigError("--validation-share", exc.problem) from None
     config = _parsimony_options(config, args)
-    data = load_data(args.data, ts=args.ts)
-    data.column(args.target, role="target column")
+    data = load_data(args.data, ts=args.ts, columns=columns)
+    data.column(target, role="target column")
     data.stack(inputs)
     validate = None
     if validate_path is not None:
-        validate = load_data(validate_path, ts=args.ts, require=[args.target, *inputs])
+        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns)
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     if args.resume and not ckpt.exists():
@@ -99,11 +98,11 @@ def run_cli(args: argparse.Namespace) -> int:
     old = signal.signal(signal.SIGTERM, _raise_interrupt)
     try:
         with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
-            result = abstract(data, target=args.target, inputs=inputs, config=config,
+            result = abstract(data, target=target, inputs=inputs, config=config,
                               seed=args.seed, time_limit=args.time_limit,
                               callback=reporter.abstraction,
                               checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                              validate=validate, select=getattr(args, "select", None))
+                              validate=validate, select=getattr(args, "select", None), axis=axis)
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)
@@ -135,6 +134,48 @@ def _unit(args: argparse.Namespace) -> str:
         return axis_units(getattr(args, "axis", None) or "rotary").force
     except ValueError:
         return ""
+
+
+def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
+    """The column roles, target and inputs of ``edm abstract``.
+
+    ``--time-column`` and ``--role`` go over the config's ``[columns]``;
+    ``--target`` and ``--inputs`` name the target and the inputs, or, when not
+    given, the columns with the role ``target`` and the input roles
+    (docs/data.md#columns-and-roles).
+
+    Returns
+    -------
+    tuple
+        (ColumnRoles, target, list of inputs).
+
+    Raises
+    ------
+    DataFormatError, ConfigError
+        A role given twice, or no target or no inputs named either way.
+    """
+    from edm_sym.core.data import ColumnRoles
+
+    given = ColumnRoles.parse(getattr(args, "role", None) or (),
+                              time_column=getattr(args, "time_column", None))
+    columns = given.over(getattr(config, "columns", None))
+    target = args.target or columns.target
+    if target is None:
+        raise ConfigError("--target", "expected the target column (--target COL, --role COL=target "
+                                      "or [columns] in the config), found none")
+    columns = columns.with_role(target, "target")
+    if args.inputs is not None:
+        inputs = [name.strip() for name in str(args.inputs).split(",")]
+        if not all(inputs):
+            raise ConfigError("--inputs", f"expected comma-separated column names, found "
+                                          f"{args.inputs!r}")
+    else:
+        inputs = list(columns.inputs)
+        if not inputs:
+            raise ConfigError("--inputs", "expected the input columns (--inputs COL,COL, --role "
+                                          "COL=position|velocity|acceleration|input or [columns] "
+                                          "in the config), found none")
+    return columns, target, inputs
 
 
 def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202

@@ -64,6 +64,29 @@ def _seed(text: str) -> int:
 DATA_HELP = "a log: CSV, .npz, .mat, or plant:PRESET/EXCITATION[@SEED] (docs/cli.md#data-files)"
 #: Help of every --ts option.
 TS_HELP = "sample time [s] of a log without a 't' column"
+#: The roles a --role option takes (edm_sym.core.data.LOG_ROLES).
+ROLES_HELP = "time, target, position, position_wrapped, velocity, acceleration or input"
+
+
+def _add_column_args(p: argparse.ArgumentParser, *, roles: bool = True, axis: bool = True) -> None:
+    """``--time-column``, ``--role`` and ``--axis`` of a command that reads a log (docs/data.md)."""
+    p.add_argument("--time-column", metavar="COL",
+                   help="the log's time column [s] (default: t, or the one the model records)")
+    if roles:
+        p.add_argument("--role", action="append", default=[], metavar="COL=ROLE",
+                       help=f"what a column is: {ROLES_HELP} (repeatable; docs/data.md"
+                            "#columns-and-roles)")
+    if axis:
+        p.add_argument("--axis", choices=["rotary", "linear"],
+                       help="the axis, which sets the SI units: rotary (rad, N m) or linear (m, N) "
+                            "(default: the model's, else rotary)")
+
+
+def _columns(args: argparse.Namespace):  # noqa: ANN202
+    """The column roles the options give (a ColumnRoles; empty without options)."""
+    from edm_sym.core.data import ColumnRoles
+
+    return ColumnRoles.parse(getattr(args, "role", None) or (), time_column=args.time_column)
 
 
 def _add_version(parser: argparse.ArgumentParser) -> None:
@@ -89,6 +112,9 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--front-member", type=int, metavar="K",
                    help="export member K (1-based) of the result's parsimony front instead of "
                         "the selected one")
+    p.add_argument("--axis", choices=["rotary", "linear"],
+                   help="the units of the outputs: rotary (rad, N m) or linear (m, N) (default: "
+                        "the result's axis)")
     p.set_defaults(func=_cmd_export)
 
 
@@ -110,6 +136,10 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
                    help="a row below this share of the target's RMS is negligible (default 1)")
     p.add_argument("--ts", type=_positive_float, help="sample time of a log without a 't' column")
+    p.add_argument("--resample", action="store_true",
+                   help="resample a log whose sample time differs from the result's by more than "
+                        "0.1 %% onto its grid (default: refuse it)")
+    _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_describe)
 
 
@@ -118,7 +148,8 @@ def _cmd_describe(args: argparse.Namespace) -> int:
     from edm_sym.engines.symbolic.significance import SignificanceOptions
 
     desc = describe(args.result, data=args.data, ts=args.ts,
-                    options=SignificanceOptions(threshold=args.threshold / 100))
+                    options=SignificanceOptions(threshold=args.threshold / 100), axis=args.axis,
+                    columns=_columns(args), resample=args.resample)
     print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
     return 0
 
@@ -141,10 +172,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
     p.add_argument("data", metavar="DATA", help=DATA_HELP)
-    p.add_argument("--target", required=True, metavar="COL",
-                   help="the column the compensator reproduces (the observer's torque estimate)")
-    p.add_argument("--inputs", required=True, metavar="COL[,COL...]",
-                   help="the columns a row may take as its input, e.g. theta_w,omega,alpha")
+    p.add_argument("--target", metavar="COL",
+                   help="the column the compensator reproduces (the observer's torque estimate; "
+                        "or --role COL=target)")
+    p.add_argument("--inputs", metavar="COL[,COL...]",
+                   help="the columns a row may take as its input, e.g. theta_w,omega,alpha "
+                        "(default: the columns given an input role with --role or [columns])")
     p.add_argument("--config", metavar="FILE.toml",
                    help="the schedule and GA settings (default: the default schedule, docs/abstraction.md)")
     p.add_argument("--seed", type=_seed, default=0, help="random seed; the same seed gives the same "
@@ -170,6 +203,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative worsening a simplification may cost (default 0.01)")
     p.add_argument("--no-prune", action="store_true",
                    help="export the search's model as it is (no pruning, no front)")
+    _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
     _add_describe_args(sub.add_parser(
@@ -185,6 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resample", action="store_true",
                    help="resample a log whose sample time differs from the model's by more than "
                         "0.1 %% onto the model's grid (default: refuse it)")
+    _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
@@ -207,7 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
     p.add_argument("data", metavar="DATA", help=DATA_HELP)
-    p.add_argument("--position", required=True, metavar="COL", help="the measured position column")
+    p.add_argument("--position", metavar="COL",
+                   help="the measured position column (or --role COL=position)")
     p.add_argument("--force", required=True, metavar="COL",
                    help="the force (torque) command column, or a controller output to scale")
     p.add_argument("--force-gain", default="1", metavar="NUM|NAME",
@@ -219,12 +255,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv",
                    help="output CSV (default observer.csv)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    _add_column_args(p)
     p.set_defaults(func=_cmd_observe)
 
     p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
     p.add_argument("data", metavar="DATA", help=DATA_HELP)
-    p.add_argument("--target", required=True, metavar="COL", help="the torque column the model fits")
-    p.add_argument("--velocity", required=True, metavar="COL", help="the velocity column")
+    p.add_argument("--target", metavar="COL",
+                   help="the torque column the model fits (or --role COL=target)")
+    p.add_argument("--velocity", metavar="COL", help="the velocity column (or --role COL=velocity)")
     p.add_argument("--seed", type=_seed, default=0, help="random seed of the global stage (default 0)")
     p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
                    help="end the identification at this wall time (default: none)")
@@ -236,6 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
 
     p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
@@ -262,6 +301,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from edm_sym.core.result import load_result
 
     result = load_result(args.result)
+    if args.axis is not None:
+        from dataclasses import replace
+
+        result = replace(result, axis=args.axis)
     if args.front_member is not None:
         from edm_sym.core.result import front_member
 
@@ -305,26 +348,36 @@ def _export_names(args: argparse.Namespace) -> list[str]:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
     from edm_sym.core.fitness import rms
+    from edm_sym.core.units import axis_units
     from edm_sym.engines.models import load_model
     from edm_sym.engines.sources import load_data
 
     model_path = Path(args.model)
     out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
     check_outputs([out], [args.model, args.data])
+    given = _columns(args)
     # The model is validated completely before the data is read.
     model = load_model(model_path)
     target = model.target
-    data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time)
+    if args.axis is not None and model.axis is not None and args.axis != model.axis:
+        raise UsageError(f"edm simulate: --axis: expected {model.axis} as in {model_path.name}, "
+                         f"found {args.axis}")
+    axis = model.axis or args.axis or "rotary"
+    # The time column and roles the model records, under those given now.
+    data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time,
+                     columns=given.over(model.column_roles()))
     data = _match_ts(model_path.name, model.sample_time, data, args.resample)
     run = model.run(data)
-    cols = {"t": _time_column(data), **run.parts, "tau_cmp": run.torque}
+    cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
     rmse = None
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
         rmse = rms(cols["residual"])
     write_csv(out, cols)
     print(f"wrote {out}")
-    print(f"rmse {rmse:.10g}" if rmse is not None else f"rmse nan (no column {target!r} in DATA)")
+    unit = axis_units(axis).force
+    print(f"rmse {rmse:.10g} {unit}" if rmse is not None
+          else f"rmse nan (no column {target!r} in DATA)")
     return 0
 
 
@@ -341,11 +394,9 @@ def _match_ts(name: str, ts: float, data, resample: bool):  # noqa: ANN001, ANN2
     return out
 
 
-def _time_column(data):  # noqa: ANN001, ANN202
-    """The log's own time column, or one built from its sample time (the output starts with t)."""
-    import numpy as np
-
-    return data.columns["t"] if "t" in data.columns else np.arange(len(data)) * data.ts
+def _time_name(data) -> str:  # noqa: ANN001
+    """The name of the output's first column: the log's time column, else ``t``."""
+    return data.time_column or "t"
 
 
 def _cmd_plant(args: argparse.Namespace) -> int:
@@ -372,6 +423,7 @@ def _cmd_pipeline(args: argparse.Namespace) -> int:
 
 def _cmd_observe(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
+    from edm_sym.core.units import axis_units
     from edm_sym.engines.observer import ObserverOptions, observer_view
     from edm_sym.engines.sources import load_data
 
@@ -379,35 +431,57 @@ def _cmd_observe(args: argparse.Namespace) -> int:
         gain: float | str = float(args.force_gain)
     except ValueError:
         gain = args.force_gain
-    opts = ObserverOptions(args.position, args.force, args.nominal_inertia, gain, args.cutoff)
+    given = _columns(args)
+    position = _option_or_role(args.position, given, "position", "--position")
+    opts = ObserverOptions(position, args.force, args.nominal_inertia, gain, args.cutoff)
     check_outputs([args.output], [args.data])
-    view = observer_view(load_data(args.data, ts=args.ts), opts)
+    view = observer_view(load_data(args.data, ts=args.ts, columns=given), opts)
     write_csv(args.output, view.columns)
+    u = axis_units(args.axis or "rotary")
     print(f"wrote {args.output}")
+    print(f"columns: q [{u.position}], qd [{u.velocity}], qdd [{u.acceleration}], force and "
+          f"tau_ext [{u.force}] ({u.axis} axis); tau_ext = force - {args.nominal_inertia:g} "
+          f"{u.inertia} * qdd")
     return 0
+
+
+def _option_or_role(value: str | None, given, role: str, option: str) -> str:  # noqa: ANN001
+    """A column named by its option, or by ``--role COL=ROLE``; both must agree."""
+    named = given.column_of(role)
+    if value is not None and named is not None and value != named:
+        raise UsageError(f"{option}: expected the column given --role {named}={role}, found {value!r}")
+    if value is None and named is None:
+        raise UsageError(f"{option}: expected the {role} column ({option} COL or --role COL={role}), "
+                         "found neither")
+    return value or named
 
 
 def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.application.progress import ProgressReporter
     from edm_sym.application.summary import print_summary
+    from edm_sym.core.units import axis_units
     from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.sources import load_data
 
+    given = _columns(args)
+    target = _option_or_role(args.target, given, "target", "--target")
+    velocity = _option_or_role(args.velocity, given, "velocity", "--velocity")
     check_outputs([args.output], [args.data])
-    data = load_data(args.data, ts=args.ts, require=[args.target, args.velocity])
+    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
     with ProgressReporter("edm lugre", quiet=args.quiet) as reporter:
-        res = identify_lugre(data.columns[args.target], data.columns[args.velocity], data.ts,
+        res = identify_lugre(data.columns[target], data.columns[velocity], data.ts,
                              method=args.method, seed=args.seed, time_limit=args.time_limit,
                              progress=reporter.lugre)
-    save_lugre(args.output, res, target=args.target, velocity=args.velocity,
+    save_lugre(args.output, res, target=target, velocity=velocity,
                data_sha256=data.sha256, seed=args.seed)
+    unit = axis_units(args.axis or "rotary").force
     print(f"wrote {args.output}")
     for name, score in (res.comparison or {}).items():
-        print(f"{name} fitness {score.fitness:.10g} ({score.evaluations} evaluations)")
-    print(f"rmse {res.rmse:.10g}")
+        print(f"{name} fitness {score.fitness:.10g} {unit} ({score.evaluations} evaluations)")
+    print(f"rmse {res.rmse:.10g} {unit}")
     print_summary("edm lugre", fitness=[f"fitness (weighted eq. 8): training {res.rmse:.6g} "
-                                        f"(the target's unit), validation: none held out"],
-                  flags=shape_bound_flags(res.params, data.columns[args.velocity], data.ts))
+                                        f"{unit}, validation: none held out"],
+                  flags=shape_bound_flags(res.params, data.columns[velocity], data.ts))
     return 0
 
 

@@ -6,6 +6,10 @@ from a small TOML file of data (never code)::
     [data]
     abstraction = "plant:auger/abstraction"   # a file, or a simulated plant log
     evaluation = "plant:auger/evaluation"
+    axis = "rotary"                           # or "linear" (the units; default rotary)
+
+    [columns]                                 # optional: COLUMN = "ROLE" (docs/data.md)
+    tau_ext = "target"
 
     [abstraction]                             # edm abstract
     config = "abstraction.toml"
@@ -40,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.data import DataLog, is_plant_spec
-from edm_sym.core.errors import TOO_DEEP, ConfigError
+from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec
+from edm_sym.core.errors import TOO_DEEP, ConfigError, DataFormatError
 from edm_sym.core.fileio import check_outputs, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
@@ -52,7 +56,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 SECTIONS = {
-    "data": {"abstraction", "evaluation"},
+    "data": {"abstraction", "evaluation", "axis"},
     "abstraction": {"config", "target", "inputs", "seed", "time_limit"},
     "lugre": {"velocity", "method", "seed", "time_limit", "weighting"},
     "export": {"target", "pdf", "out_dir", "prefix", "real"},
@@ -73,6 +77,8 @@ class Pipeline:
     time_limit: float | None = None
     lugre: Mapping[str, Any] | None = None
     export: Mapping[str, Any] = field(default_factory=dict)
+    columns: ColumnRoles = field(default_factory=ColumnRoles)
+    axis: str = "rotary"
 
     def data_path(self, spec: str) -> str | Path:
         """A data spec as :func:`~edm_sym.core.data.load_data` takes it."""
@@ -112,9 +118,12 @@ def load_pipeline(path: str | Path) -> Pipeline:
         raise ConfigError(str(path), TOO_DEEP) from None
     name = path.name
     for section, table in doc.items():
+        if section == "columns":
+            continue
         if section not in SECTIONS:
             raise ConfigError(f"{name}: {section}",
-                              f"expected one of the sections {', '.join(SECTIONS)}, found {section!r}")
+                              f"expected one of the sections {', '.join(SECTIONS)}, columns, "
+                              f"found {section!r}")
         if not isinstance(table, dict):
             raise ConfigError(f"{name}: {section}", f"expected a table, found {table!r}")
         for key in table:
@@ -124,10 +133,35 @@ def load_pipeline(path: str | Path) -> Pipeline:
     data, abst = doc.get("data", {}), doc.get("abstraction", {})
     abstraction_data = _get(f"{name}: data", data, "abstraction", str)
     evaluation_data = _get(f"{name}: data", data, "evaluation", str, None)
-    inputs = _get(f"{name}: abstraction", abst, "inputs", list)
-    if not inputs or not all(isinstance(i, str) for i in inputs):
-        raise ConfigError(f"{name}: abstraction.inputs", f"expected column names, found {inputs!r}")
     config = _get(f"{name}: abstraction", abst, "config", str, None)
+    # The abstraction config's [columns] and axis, under the pipeline's own.
+    base = None
+    if config:
+        from edm_sym.engines.abstraction import load_config
+
+        base = load_config(path.resolve().parent / config)
+    axis = _get(f"{name}: data", data, "axis", str, None) or (base.axis if base else None) or "rotary"
+    if axis not in ("rotary", "linear"):
+        raise ConfigError(f"{name}: data.axis", f"expected rotary or linear, found {axis!r}")
+    try:
+        columns = ColumnRoles.from_table(f"{name}: columns", doc.get("columns", {})).over(
+            base.columns if base else None)
+    except DataFormatError as exc:
+        raise ConfigError(exc.where, exc.problem) from None
+    target = _get(f"{name}: abstraction", abst, "target", str, None) or columns.target
+    if target is None:
+        raise ConfigError(f"{name}: abstraction.target", "expected this key (or a column with "
+                          "the role \"target\" in [columns]), found neither")
+    try:
+        columns = columns.with_role(target, "target")
+    except DataFormatError as exc:
+        raise ConfigError(exc.where, exc.problem) from None
+    inputs = _get(f"{name}: abstraction", abst, "inputs", list, None)
+    if inputs is None:
+        inputs = list(columns.inputs)
+    if not inputs or not all(isinstance(i, str) for i in inputs):
+        raise ConfigError(f"{name}: abstraction.inputs", f"expected column names (or columns "
+                          f"with an input role in [columns]), found {inputs!r}")
     limit = _get(f"{name}: abstraction", abst, "time_limit", (int, float), None)
     if limit is not None and not (math.isfinite(limit) and limit > 0):
         raise ConfigError(f"{name}: abstraction.time_limit",
@@ -139,13 +173,15 @@ def load_pipeline(path: str | Path) -> Pipeline:
         folder=path.resolve().parent,
         abstraction_data=abstraction_data,
         evaluation_data=evaluation_data,
-        target=_get(f"{name}: abstraction", abst, "target", str),
+        target=target,
         inputs=tuple(inputs),
         config=path.resolve().parent / config if config else None,
         seed=seed,
         time_limit=float(limit) if limit is not None else None,
         lugre=doc.get("lugre"),
         export=doc.get("export", {}),
+        columns=columns,
+        axis=axis,
     )
 
 
@@ -157,8 +193,7 @@ def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
     from edm_sym.engines.abstraction.weighting import parse_weighting
 
     weighting = parse_weighting(where, spec)
-    t = data.columns.get("t", np.arange(len(data)) * data.ts)
-    w = weighting.weights(t, data.columns[target])
+    w = weighting.weights(data.times, data.columns[target])
     return np.broadcast_to(np.asarray(w, dtype=float), (len(data),)).copy()
 
 
@@ -201,10 +236,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     pipe = load_pipeline(path)
     name = Path(path).name
     logs = {"abstraction": load_data(pipe.data_path(pipe.abstraction_data),
-                                     require=[*pipe.inputs, pipe.target])}
+                                     require=[*pipe.inputs, pipe.target], columns=pipe.columns)}
     if pipe.evaluation_data:
         logs["evaluation"] = load_data(pipe.data_path(pipe.evaluation_data),
-                                       require=[*pipe.inputs, pipe.target])
+                                       require=[*pipe.inputs, pipe.target], columns=pipe.columns)
     abst = logs["abstraction"]
     lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
     ex = pipe.export
@@ -248,7 +283,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
             result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
                               seed=pipe.seed, time_limit=pipe.time_limit,
                               callback=reporter.abstraction,
-                              checkpoint=ckpt, resume=reuse and ckpt.exists())
+                              checkpoint=ckpt, resume=reuse and ckpt.exists(), axis=pipe.axis)
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data

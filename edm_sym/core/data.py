@@ -13,7 +13,7 @@ import hashlib
 import io
 import math
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +32,166 @@ JITTER_RTOL = 0.25
 PLANT_SCHEME = "plant:"
 
 
+#: The time column when no other is named (``--time-column``, a ``time`` role).
+DEFAULT_TIME = "t"
+#: What a column of a log may be (docs/data.md#columns-and-roles).
+LOG_ROLES = ("time", "target", "position", "position_wrapped", "velocity", "acceleration", "input")
+#: Roles at most one column has.
+UNIQUE_ROLES = ("time", "target")
+#: Roles of the signals a compensator row may take as its input; ``input`` has no
+#: physical role (its terms stay unclassified).
+INPUT_ROLES = ("position", "position_wrapped", "velocity", "acceleration", "input")
+
+
 def is_plant_spec(spec: object) -> bool:
     """True for a ``plant:PRESET/EXCITATION[@SEED]`` data spec."""
     return isinstance(spec, str) and spec.startswith(PLANT_SCHEME)
+
+
+@dataclass(frozen=True)
+class ColumnRoles:
+    """Which column of a log is what: column name -> one of :data:`LOG_ROLES`.
+
+    Given by ``--time-column`` and ``--role COL=ROLE`` (:meth:`parse`), a
+    ``[columns]`` table of a TOML file (:meth:`from_table`), or recorded in a
+    result (``EdmResult.column_roles``). ``time`` and ``target`` name one
+    column at most; several columns may share a motion role (two velocities).
+
+    Parameters
+    ----------
+    roles : mapping of str to str
+        Column -> role, in the order given.
+    where : str
+        Where they were given, for messages (``"--role"``, ``"cfg.toml: columns"``).
+    loose : frozenset of str
+        Columns whose role applies only when a log has them: the roles a model
+        file records (a second log of the axis may lack its target); the
+        columns given by options and tables must all be present.
+
+    Raises
+    ------
+    DataFormatError
+        An unknown role, or ``time``/``target`` given to two columns.
+    """
+
+    roles: Mapping[str, str] = field(default_factory=dict)
+    where: str = "--role"
+    loose: frozenset[str] = frozenset()
+
+    def __post_init__(self) -> None:
+        seen: dict[str, str] = {}
+        for col, role in self.roles.items():
+            if role not in LOG_ROLES:
+                raise DataFormatError(_at(self.where, col),
+                                      f"expected a role of {', '.join(LOG_ROLES)}, found {role!r}")
+            if role in UNIQUE_ROLES and role in seen:
+                raise DataFormatError(_at(self.where, col),
+                                      f"expected one column with the role {role!r}, found it given "
+                                      f"twice ({seen[role]!r} and {col!r})")
+            seen.setdefault(role, col)
+        object.__setattr__(self, "roles", dict(self.roles))
+        object.__setattr__(self, "loose", frozenset(self.loose) & set(self.roles))
+
+    @classmethod
+    def parse(cls, items: Iterable[str] = (), *, time_column: str | None = None,
+              where: str = "--role") -> ColumnRoles:
+        """Roles from ``COL=ROLE`` strings (``--role``) and a ``--time-column``.
+
+        Raises
+        ------
+        DataFormatError
+            A string without ``=``, an unknown role, a column given twice, or
+            a second time or target column.
+        """
+        roles: dict[str, str] = {}
+        if time_column is not None:
+            if not time_column.strip():
+                raise DataFormatError("--time-column", "expected a column name, found nothing")
+            roles[time_column.strip()] = "time"
+        for item in items:
+            col, sep, role = str(item).rpartition("=")
+            col, role = col.strip(), role.strip()
+            if not sep or not col:
+                raise DataFormatError(where, f"expected COL=ROLE (a role of {', '.join(LOG_ROLES)}), "
+                                      f"found {item!r}")
+            _add_role(roles, col, role, where)
+        return cls(roles, where)
+
+    @classmethod
+    def from_table(cls, where: str, table: object) -> ColumnRoles:
+        """Roles from a TOML ``[columns]`` table: ``qm = "position"``, ``t = "time"``.
+
+        Raises
+        ------
+        DataFormatError
+            A table that is no table of strings, or roles as for :meth:`parse`.
+        """
+        if not isinstance(table, Mapping):
+            raise DataFormatError(where, f"expected a table of COLUMN = \"ROLE\", found {table!r}")
+        roles: dict[str, str] = {}
+        for col, role in table.items():
+            if not isinstance(role, str):
+                raise DataFormatError(_at(where, col),
+                                      f"expected a role of {', '.join(LOG_ROLES)}, found {role!r}")
+            _add_role(roles, col, role, where)
+        return cls(roles, where)
+
+    def over(self, base: ColumnRoles | None) -> ColumnRoles:
+        """These roles over ``base`` (options over a config file): a column or a
+        ``time``/``target`` role given here replaces base's."""
+        if base is None:
+            return self
+        mine = set(self.roles.values()) & set(UNIQUE_ROLES)
+        kept = {c: r for c, r in base.roles.items() if c not in self.roles and r not in mine}
+        where = self.where if not kept else base.where if not self.roles else (
+            f"{self.where} or {base.where}")
+        return ColumnRoles({**kept, **self.roles}, where, (base.loose & set(kept)) | self.loose)
+
+    def with_role(self, column: str, role: str) -> ColumnRoles:
+        """These roles and ``column``'s (a ``--target``), which must not contradict them."""
+        have = self.roles.get(column)
+        if have == role:
+            return self
+        if have is not None:
+            raise DataFormatError(_at(self.where, column),
+                                  f"expected one role per column, found {have!r} and {role!r}")
+        other = self.column_of(role) if role in UNIQUE_ROLES else None
+        if other is not None:
+            raise DataFormatError(_at(self.where, other),
+                                  f"expected the {role} column {column!r}, found {other!r} given "
+                                  f"the role {role!r}")
+        return ColumnRoles({**self.roles, column: role}, self.where, self.loose)
+
+    def column_of(self, role: str) -> str | None:
+        """The (first) column with ``role``, or None."""
+        return next((c for c, r in self.roles.items() if r == role), None)
+
+    @property
+    def time(self) -> str | None:
+        """The time column named, or None (then ``t`` when the log has it)."""
+        return self.column_of("time")
+
+    @property
+    def target(self) -> str | None:
+        """The target column named, or None."""
+        return self.column_of("target")
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """The columns with an input role (:data:`INPUT_ROLES`), in the order given."""
+        return tuple(c for c, r in self.roles.items() if r in INPUT_ROLES)
+
+
+def _at(where: str, col: str) -> str:
+    """``--role qm`` for an option, ``cfg.toml: columns.qm`` for a table."""
+    return f"{where} {col}" if where.startswith("--") else f"{where}.{col}"
+
+
+def _add_role(roles: dict[str, str], col: str, role: str, where: str) -> None:
+    if col in roles:
+        raise DataFormatError(_at(where, col), f"expected one role per column, found "
+                              f"{roles[col]!r} and {role!r}")
+    roles[col] = role
 
 
 @dataclass(frozen=True)
@@ -53,6 +210,9 @@ class DataLog:
         Digest of the file's bytes (provenance).
     scalars : mapping of str to float
         Scalar values stored beside the columns (.mat and .npz files).
+    roles : mapping of str to str
+        The roles the columns were given (:class:`ColumnRoles`), the time
+        column's among them; empty when none were.
     """
 
     columns: Mapping[str, np.ndarray]
@@ -60,9 +220,59 @@ class DataLog:
     source: str = "<memory>"
     sha256: str | None = None
     scalars: Mapping[str, float] = field(default_factory=dict)
+    roles: Mapping[str, str] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(next(iter(self.columns.values())))
+
+    @property
+    def time_column(self) -> str | None:
+        """The time column: the one with the role ``time``, else ``t`` when present, else None."""
+        named = next((c for c, r in self.roles.items() if r == "time"), None)
+        if named is not None:
+            return named
+        return DEFAULT_TIME if DEFAULT_TIME in self.columns else None
+
+    @property
+    def times(self) -> np.ndarray:
+        """The time stamps [s]: the time column, or ``k Ts`` for a log without one."""
+        name = self.time_column
+        if name is not None:
+            return np.asarray(self.columns[name], dtype=float)
+        return np.arange(len(self)) * self.ts
+
+    def role_of(self, name: str) -> str | None:
+        """The role of a column: given, ``time`` for the time column, else None."""
+        if name == self.time_column:
+            return "time"
+        return self.roles.get(name)
+
+    def record(self, use: str) -> dict[str, object]:
+        """Provenance of this log in a result (result.json ``logs[]``).
+
+        Parameters
+        ----------
+        use : str
+            What the log was used for: ``"abstraction"`` or ``"validation"``.
+        """
+        return {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
+                "sample_time": float(self.ts),
+                "columns": [{"name": c, "role": self.role_of(c)} for c in self.columns]}
+
+    def require_varying(self, names: Iterable[str]) -> None:
+        """Refuse a constant column among ``names`` (an input that carries no information).
+
+        Raises
+        ------
+        DataFormatError
+            Naming the file, the column and its rows.
+        """
+        for name in names:
+            col = self.column(name, role="input column")
+            if len(col) and np.all(col == col[0]):
+                raise DataFormatError(f"{self.source}: column {name!r}",
+                                      f"expected a varying signal for an input, found "
+                                      f"{col[0]:g} on all {len(col)} rows")
 
     @property
     def record_length(self) -> float:
@@ -86,7 +296,8 @@ class DataLog:
         if not len(next(iter(cols.values()))):
             raise DataFormatError(f"{self.source}: rows {start}:{stop}", "expected samples, found none")
         digest = hashlib.sha256(f"{self.sha256}[{start}:{stop}]".encode()).hexdigest()
-        return DataLog(cols, self.ts, f"{self.source}[{start}:{stop}]", digest, dict(self.scalars))
+        return DataLog(cols, self.ts, f"{self.source}[{start}:{stop}]", digest, dict(self.scalars),
+                       dict(self.roles))
 
     def stack(self, names: Iterable[str]) -> np.ndarray:
         """The named columns as a (len(names), N) array."""
@@ -95,7 +306,7 @@ class DataLog:
 
 def load_data(
     path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
-    default_ts: float | None = None,
+    default_ts: float | None = None, columns: ColumnRoles | None = None,
 ) -> DataLog:
     """Read a log from CSV, .npz or .mat.
 
@@ -111,8 +322,13 @@ def load_data(
     require : iterable of str
         Column names that must be present.
     default_ts : float, optional
-        Sample time [s] for a log with neither a ``t`` column nor ``ts``: the
+        Sample time [s] for a log with neither a time column nor ``ts``: the
         one a model file records, so a user need not give it again.
+    columns : ColumnRoles, optional
+        The roles of its columns (``--time-column``, ``--role``, a ``[columns]``
+        table, or those a model recorded): the ``time`` column replaces ``t``,
+        and every column named must be present (but for ``columns.loose`` ones,
+        whose roles are dropped when absent).
 
     Returns
     -------
@@ -137,19 +353,43 @@ def load_data(
     suffix = path.suffix.lower()
     scalars: dict[str, float] = {}
     if suffix == ".npz":
-        columns, scalars = _read_arrays(name, _load_npz(name, raw))
+        arrays, scalars = _read_arrays(name, _load_npz(name, raw))
     elif suffix == ".mat":
-        columns, scalars = _read_arrays(name, _load_mat(name, raw))
+        arrays, scalars = _read_arrays(name, _load_mat(name, raw))
     else:
-        columns = _read_csv(name, raw)
-    # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
-    if ts is None and "t" not in columns:
+        arrays = _read_csv(name, raw)
+    log = with_roles(DataLog(arrays, 1.0, name, hashlib.sha256(raw).hexdigest(), scalars), columns)
+    time = log.time_column
+    if ts is None and time is None:
         ts = default_ts
-    log_ts = _sample_time(name, columns, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
-    log = DataLog(columns, log_ts, name, hashlib.sha256(raw).hexdigest(), scalars)
+    # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
+    log_ts = _sample_time(name, arrays, time, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
+    log = replace(log, ts=log_ts)
     for col in require:
         log.column(col)
     return log
+
+
+def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
+    """``log`` with the column roles given (see :func:`load_data`'s ``columns``).
+
+    Raises
+    ------
+    DataFormatError
+        A column named by a role that the log does not have (roles that are
+        not ``loose``).
+    """
+    if columns is None or not columns.roles:
+        return log
+    roles = {}
+    for col, role in columns.roles.items():
+        if col in log.columns:
+            roles[col] = role
+        elif col not in columns.loose:
+            have = ", ".join(log.columns)
+            raise DataFormatError(f"{log.source}: column {col!r}",
+                                  f"expected a {role} column named {col!r}, found only: {have}")
+    return replace(log, roles=roles)
 
 
 def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
@@ -282,24 +522,26 @@ def _read_arrays(
 
 
 def _sample_time(
-    name: str, columns: Mapping[str, np.ndarray], ts: float | None, *, row_offset: int
+    name: str, columns: Mapping[str, np.ndarray], time: str | None, ts: float | None, *,
+    row_offset: int,
 ) -> float:
     if ts is not None and not (math.isfinite(ts) and ts > 0):
         raise DataFormatError(f"{name}: --ts", f"expected a positive sample time, found {ts}")
-    t = columns.get("t")
-    if t is None:
+    if time is None:
         if ts is None:
-            raise DataFormatError(f"{name}: column 't'",
-                                  "expected a time column 't' or the option --ts SECONDS, found neither")
+            raise DataFormatError(f"{name}: column {DEFAULT_TIME!r}",
+                                  f"expected a time column {DEFAULT_TIME!r} (or one named by "
+                                  "--time-column) or the option --ts SECONDS, found neither")
         return float(ts)
+    t = columns[time]
     if len(t) < 2:
-        raise DataFormatError(f"{name}: column 't'", f"expected at least 2 samples, found {len(t)}")
+        raise DataFormatError(f"{name}: column {time!r}", f"expected at least 2 samples, found {len(t)}")
     dt = np.diff(t)
     back = np.flatnonzero(dt <= 0)
     if back.size:
         k = int(back[0])
         what = "a repeated" if dt[k] == 0 else "a decreasing"
-        raise DataFormatError(f"{name}: row {k + 1 + row_offset}, column 't'",
+        raise DataFormatError(f"{name}: row {k + 1 + row_offset}, column {time!r}",
                               f"expected increasing time stamps, found {what} one "
                               f"({t[k + 1]:.9g} s after {t[k]:.9g} s)")
     step = float(np.median(dt))
@@ -308,7 +550,7 @@ def _sample_time(
         k = int(bad[0])
         kind = f"a gap of {dt[k] / step - 1:.3g} samples" if dt[k] > step else "a short step"
         raise DataFormatError(
-            f"{name}: row {k + 1 + row_offset}, column 't'",
+            f"{name}: row {k + 1 + row_offset}, column {time!r}",
             f"expected uniform sampling (step {step:g} s, jitter up to {JITTER_RTOL:.0%}), "
             f"found a step of {dt[k]:g} s ({kind})",
         )
@@ -316,7 +558,8 @@ def _sample_time(
     # median, unbiased by per-stamp jitter (its error shrinks as 1/N).
     step = float(t[-1] - t[0]) / (len(t) - 1)
     if ts is not None and abs(ts - step) > TIME_RTOL * step:
-        raise DataFormatError(f"{name}: --ts", f"expected the step of column 't' ({step:g} s), found {ts:g}")
+        raise DataFormatError(f"{name}: --ts",
+                              f"expected the step of column {time!r} ({step:g} s), found {ts:g}")
     return step
 
 
@@ -369,19 +612,21 @@ def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = 
     if abs(data.ts * down / up - ts) > TIME_RTOL * ts:
         raise DataFormatError(where, f"expected a ratio of small integers to the model's {ts:g} s, "
                               f"found {data.ts:g} s (best {up}/{down})")
+    time = data.time_column
     cols = {}
     for key, col in data.columns.items():
-        if key == "t":
+        if key == time:
             continue
         cols[key] = np.ascontiguousarray(signal.resample_poly(col, up, down, padtype="line"))
     n = len(next(iter(cols.values()))) if cols else 0
     if n < 2:
         raise DataFormatError(where, f"expected at least 2 samples after resampling, found {n}")
-    t0 = float(data.columns["t"][0]) if "t" in data.columns else 0.0
-    out = {"t": t0 + ts * np.arange(n)} if "t" in data.columns else {}
-    out.update(cols)
+    # The time column keeps its place and its first value; its steps become the model's.
+    out = {key: (float(data.columns[time][0]) + ts * np.arange(n) if key == time else cols[key])
+           for key in data.columns}
     digest = hashlib.sha256(f"{data.sha256}@resample:{up}/{down}".encode()).hexdigest()
-    return DataLog(out, ts, f"{data.source} (resampled {up}/{down})", digest, dict(data.scalars))
+    return DataLog(out, ts, f"{data.source} (resampled {up}/{down})", digest, dict(data.scalars),
+                   dict(data.roles))
 
 
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:

@@ -20,10 +20,12 @@ from pathlib import Path
 from typing import Any
 
 from edm_sym.core.bounds import bound_flags
+from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import REGISTRY, ParamRange
-from edm_sym.core.errors import ResultFormatError
+from edm_sym.core.errors import DataFormatError, ResultFormatError
 from edm_sym.core.fileio import read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.core.units import AXES, AxisUnits, axis_units
 from edm_sym.core.validation import json_path, schema_problem
 
 FORMAT = "edm-result"
@@ -73,6 +75,15 @@ class EdmResult:
         empty when there was none.
     sha256 : str or None
         The sha256 of the file it was loaded from.
+    axis : str
+        ``"rotary"`` (the default, and what a file without ``axis`` means) or
+        ``"linear"``: which SI units the target and the inputs are in
+        (:func:`edm_sym.core.units.axis_units`, docs/data.md#units).
+    logs : tuple of mapping
+        Provenance of every log the abstraction used
+        (:meth:`edm_sym.core.data.DataLog.record`): ``use``, ``file``,
+        ``sha256``, ``rows``, ``sample_time`` and ``columns`` with their roles;
+        empty for a hand-written model.
     """
 
     compensator: Compensator
@@ -85,6 +96,41 @@ class EdmResult:
     report_inputs: Mapping[str, str] = field(default_factory=dict)
     validation: Mapping[str, Any] = field(default_factory=dict)
     parsimony: Mapping[str, Any] = field(default_factory=dict)
+    axis: str = "rotary"
+    logs: tuple[Mapping[str, Any], ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.axis not in AXES:
+            raise ResultFormatError("axis", f"expected {' or '.join(AXES)}, found {self.axis!r}")
+        object.__setattr__(self, "logs", tuple(self.logs))
+
+    def column_roles(self) -> ColumnRoles | None:
+        """The column roles of the abstraction log, to apply to another log of the axis.
+
+        They are ``loose``: a second log takes the recorded time column and
+        roles where it has those columns (``edm simulate``, ``edm-export
+        --data``, ``edm describe``). None when no log is recorded.
+        """
+        k = next((k for k, g in enumerate(self.logs) if g.get("use") == "abstraction"), None)
+        if k is None:
+            return None
+        roles = {c["name"]: c["role"] for c in self.logs[k].get("columns", ()) if c.get("role")}
+        name = Path(self.source).name if self.source else "result.json"
+        return ColumnRoles(roles, f"{name}: logs[{k}].columns", loose=frozenset(roles))
+
+    @property
+    def roles(self) -> dict[str, str]:
+        """The roles recorded for the inputs (input -> position, velocity, ...);
+        inputs without one take the role their name gives (docs/symbolic.md#input-roles)."""
+        cols = self.column_roles()
+        if cols is None:
+            return {}
+        return {name: cols.roles[name] for name in self.inputs if name in cols.roles}
+
+    @property
+    def units(self) -> AxisUnits:
+        """The SI units of this result's axis (``axis_units(self.axis)``)."""
+        return axis_units(self.axis)
 
     def __repr__(self) -> str:
         """A header line and one line per row (the dataclass dump would fill the screen)."""
@@ -134,6 +180,7 @@ class EdmResult:
             "record_length": comp.record_length,
             "inputs": list(comp.matrix.inputs),
             "target": self.target,
+            "axis": self.axis,
             "fitness": self.fitness,
             "matrix": matrix_to_json(comp.matrix),
             # Every element's range is kept, so a matrix grown later decodes the same.
@@ -144,6 +191,7 @@ class EdmResult:
             **_bounds_block(comp),
             **({"validation": dict(self.validation)} if self.validation else {}),
             **({"parsimony": dict(self.parsimony)} if self.parsimony else {}),
+            **({"logs": [dict(g) for g in self.logs]} if self.logs else {}),
         }
 
 
@@ -347,7 +395,23 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
                      report_inputs=dict(doc.get("report_inputs", {})),
                      validation=dict(doc.get("validation", {})),
-                     parsimony=_parsimony_from_json(name, doc, inputs))
+                     parsimony=_parsimony_from_json(name, doc, inputs),
+                     axis=doc.get("axis", "rotary"), logs=_logs_from_json(name, doc))
+
+
+def _logs_from_json(name: str, doc: Mapping[str, Any]) -> tuple[dict[str, Any], ...]:
+    logs = doc.get("logs", [])
+    for k, log in enumerate(logs):
+        names = [c["name"] for c in log["columns"]]
+        for i, col in enumerate(names):
+            if names.index(col) != i:
+                raise ResultFormatError(f"{name}: logs[{k}].columns[{i}].name",
+                                        f"expected unique column names, found {col!r} twice")
+        try:
+            ColumnRoles({c["name"]: c["role"] for c in log["columns"] if c["role"]})
+        except DataFormatError as exc:
+            raise ResultFormatError(f"{name}: logs[{k}].columns", exc.problem) from None
+    return tuple(dict(g) for g in logs)
 
 
 def _parsimony_from_json(name: str, doc: Mapping[str, Any], inputs: Sequence[str]

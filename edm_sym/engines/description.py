@@ -13,16 +13,17 @@ import json
 import math
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from edm_sym.core.bounds import complexity
-from edm_sym.core.data import DataLog, is_plant_spec
+from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, match_sample_time
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.result import EdmResult, load_result
+from edm_sym.core.units import axis_units
 from edm_sym.engines.sources import load_data
 
 
@@ -70,6 +71,10 @@ class Description:
         The result described.
     threshold : float
         The significance threshold used (share of the target's RMS).
+    notes : tuple of str
+        What was assumed or could not be used, one line each.
+    axis : str
+        ``"rotary"`` or ``"linear"``: the units of every value.
     """
 
     rows: tuple[RowDescription, ...]
@@ -78,6 +83,7 @@ class Description:
     source: str = "<memory>"
     threshold: float = 0.01
     notes: tuple[str, ...] = field(default=())
+    axis: str = "rotary"
 
     def to_json(self) -> dict[str, Any]:
         """The stable JSON shape of ``edm describe --json`` (docs/describe.md)."""
@@ -93,8 +99,10 @@ class Description:
 
     def table(self) -> str:
         """The description for people: a summary table, then each row's terms and flags."""
+        u = axis_units(self.axis)
         lines = [f"{self.source}: {len(self.rows)} row(s), complexity {self.complexity} "
-                 "(rows + active elements + state size)"]
+                 f"(rows + active elements + state size); {self.axis} axis, target in {u.force}, "
+                 f"position in {u.position}"]
         lines += ["fitness: " + _fitness_text(self.fitness)]
         lines += [f"note: {n}" for n in self.notes]
         head = f"{'row':>3}  {'input':<10} {'contribution':>12}  named as"
@@ -133,8 +141,8 @@ def _fitness_text(fit: Mapping[str, Any]) -> str:
     d = fit.get("data")
     if d:
         rows = f" (held-out rows {d['rows'][0]}-{d['rows'][1]})" if d.get("rows") else ""
-        parts.append(f"on {d['source']}{rows}: RMSE {d['rmse'][0]:.4g} N m, target RMS "
-                     f"{d['target_rms'][0]:.4g} N m")
+        parts.append(f"on {d['source']}{rows}: RMSE {_value_text(d['rmse'])}, target RMS "
+                     f"{_value_text(d['target_rms'])}")
     else:
         parts.append("no data: contributions not measured (pass --data)")
     return "; ".join(parts)
@@ -180,12 +188,14 @@ def recorded_fitness(result: EdmResult) -> dict[str, Any]:
     ``training`` and ``validation`` are the ``{fitness, rmse, samples}`` scores
     of result.json's ``validation`` entry, and ``held_out`` says what was held
     out; a result written without held-out validation has only its training
-    eq. 8 (``{"fitness": [value, "N m"]}``) and ``validation`` null.
+    eq. 8 (``{"fitness": [value, unit]}``, the axis's force unit: ``"N m"`` or
+    ``"N"``) and ``validation`` null.
     """
     val = result.validation if isinstance(result.validation, Mapping) else {}
     training = val.get("training")
     if not isinstance(training, Mapping):
-        training = {"fitness": [result.fitness, "N m"]} if result.fitness is not None else None
+        training = ({"fitness": [result.fitness, result.units.force]}
+                    if result.fitness is not None else None)
     validation = val.get("validation")
     held = val.get("held_out")
     return {"training": _plain(training) if training else None,
@@ -233,17 +243,20 @@ def held_out_rows(result: EdmResult, log: DataLog) -> tuple[int, int] | None:
     return start, stop
 
 
-def _load(spec: Any, result: EdmResult, ts: float | None) -> DataLog:
-    log = spec if isinstance(spec, DataLog) else load_data(
-        spec, ts=ts, require=[*result.inputs, result.target])
+def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles | None,
+          resample: bool) -> DataLog:
+    """The log on the result's grid: its recorded time column and roles under the given ones,
+    its sample time if the log has none, the drift tolerance of docs/data.md."""
     if isinstance(spec, DataLog):
+        log = spec
         log.stack(result.inputs)
         log.column(result.target, role="target column")
-    if abs(log.ts - result.sample_time) > 1e-6 * result.sample_time:
-        raise DataFormatError(f"{log.source}: sample time",
-                              f"expected {result.sample_time:g} s as in the result, "
-                              f"found {log.ts:g} s")
-    return log
+    else:
+        roles = columns.over(result.column_roles()) if columns is not None else result.column_roles()
+        log = load_data(spec, ts=ts, require=[*result.inputs, result.target],
+                        default_ts=result.sample_time, columns=roles)
+    name = Path(result.source).name if result.source else "the result"
+    return match_sample_time(log, result.sample_time, model=name, resample=resample)
 
 
 def describe(
@@ -253,6 +266,9 @@ def describe(
     ts: float | None = None,
     options: Any = None,
     roles: Mapping[str, str | None] | None = None,
+    axis: str | None = None,
+    columns: ColumnRoles | None = None,
+    resample: bool = False,
 ) -> Description:
     """Describe what a model found: per row its terms, contribution and flags.
 
@@ -268,11 +284,21 @@ def describe(
         When it is the log the search was fitted to and the result records a
         held-out segment of it, only those rows are judged (:func:`held_out_rows`).
     ts : float, optional
-        Sample time of a log without a time column.
+        Sample time of a log without a time column (default: the result's).
     options : SignificanceOptions, optional
         Thresholds (:class:`edm_sym.engines.symbolic.significance.SignificanceOptions`).
     roles : mapping, optional
-        Input roles over the defaults, as for :func:`edm_sym.decode`.
+        Input roles over those the result records and the defaults, as for
+        :func:`edm_sym.decode`.
+    axis : str, optional
+        ``"rotary"`` or ``"linear"`` instead of the result's ``axis`` (for a
+        result written before the axis was recorded).
+    columns : ColumnRoles, optional
+        The log's time column and roles (``--time-column``), over those the
+        result records for its abstraction log.
+    resample : bool
+        Resample a log whose sample time differs from the result's by more
+        than the tolerance (docs/data.md#sample-time) instead of refusing it.
 
     Returns
     -------
@@ -289,13 +315,19 @@ def describe(
 
     if not isinstance(result, EdmResult):
         result = load_result(result)
+    if axis is not None:
+        try:
+            axis_units(axis)
+        except ValueError as exc:
+            raise DataFormatError("--axis", str(exc)) from None
+        result = replace(result, axis=axis)
     notes = []
     log = None
     if data is not None:
-        log = _load(data, result, ts)
+        log = _load(data, result, ts, columns, resample)
     elif (spec := recorded_data(result)) is not None:
         try:
-            log = _load(spec, result, ts)
+            log = _load(spec, result, ts, columns, resample)
         except (OSError, ValueError) as exc:
             msg = f"the data the result records cannot be used ({' '.join(str(exc).split())})"
             warnings.warn(msg, stacklevel=2)
@@ -304,7 +336,12 @@ def describe(
     comp = result.compensator
     outputs = target = inputs = None
     data_fit = None
+    force = result.units.force
     if log is not None:
+        if log.ts != result.sample_time:
+            notes.append(f"sample time {log.ts:.9g} s in {log.source}, {result.sample_time:.9g} s "
+                         f"in the result (relative drift {abs(log.ts / result.sample_time - 1):.2g}, "
+                         "accepted)")
         x = log.stack(comp.matrix.inputs)
         outputs = simulate_rows(comp, comp.matrix.rows, x)
         target = log.column(result.target, role="target column")
@@ -317,8 +354,8 @@ def describe(
             outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
         resid = target - outputs.sum(axis=0)
         data_fit = {"source": str(log.source), "samples": len(target),
-                    "target_rms": [float(np.sqrt(np.mean(target ** 2))), "N m"],
-                    "rmse": [float(np.sqrt(np.mean(resid ** 2))), "N m"]}
+                    "target_rms": [float(np.sqrt(np.mean(target ** 2))), force],
+                    "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
         if held is not None:
             data_fit["rows"] = list(held)
     judged = judge_rows(model, outputs, target, inputs, options=options)
@@ -328,7 +365,7 @@ def describe(
     fitness = {**recorded_fitness(result), "data": data_fit}
     threshold = getattr(options, "threshold", 0.01) if options is not None else 0.01
     return Description(rows, fitness, complexity(comp), result.source or "<memory>",
-                       threshold, tuple(notes))
+                       threshold, tuple(notes), result.axis)
 
 
 def _expression(expr: Any) -> str:

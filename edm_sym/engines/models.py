@@ -54,6 +54,11 @@ class CompensationModel(Protocol):
     target: str | None  #: the column the model compensates, when recorded
     inputs: tuple[str, ...]  #: the columns it reads
     sample_time: float  #: [s]
+    axis: str | None  #: "rotary" or "linear"; None when the file does not record it
+
+    def column_roles(self) -> Any:
+        """The time column and roles the file records (a ColumnRoles), or None."""
+        ...
 
     def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
         """The model over ``data`` (which holds every column of ``inputs``)."""
@@ -79,6 +84,13 @@ class EdmModel:
     @property
     def sample_time(self) -> float:
         return float(self.result.sample_time)
+
+    @property
+    def axis(self) -> str:
+        return self.result.axis
+
+    def column_roles(self) -> Any:
+        return self.result.column_roles()
 
     def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
         from edm_sym.engines.simulate import simulate
@@ -107,6 +119,13 @@ class LuGreModel:
     @property
     def sample_time(self) -> float:
         return float(self.result.sample_time)
+
+    @property
+    def axis(self) -> None:
+        return None  # LUGRE.json records no axis: the command's --axis says it
+
+    def column_roles(self) -> None:
+        return None
 
     def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
         from edm_sym.engines.lugre import simulate_lugre

@@ -104,8 +104,7 @@ def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
     qd = np.gradient(qf, data.ts)
     qdd = np.gradient(qd, data.ts)
     force = float(gain) * raw
-    t = data.columns.get("t", np.arange(len(q)) * data.ts)
-    cols = {"t": t, "q": q, "qd": qd, "qdd": qdd, "force": force,
+    cols = {data.time_column or "t": data.times, "q": q, "qd": qd, "qdd": qdd, "force": force,
             "tau_ext": force - options.nominal_inertia * qdd}
     return DataLog(cols, data.ts, data.source, data.sha256, dict(data.scalars))
 

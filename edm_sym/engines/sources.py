@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from edm_sym.core import data as _files
-from edm_sym.core.data import PLANT_SCHEME, DataLog, is_plant_spec
+from edm_sym.core.data import PLANT_SCHEME, ColumnRoles, DataLog, is_plant_spec, with_roles
 from edm_sym.core.errors import DataFormatError
 from edm_sym.engines.plant import EXCITATIONS, PRESETS, simulate_plant
 
@@ -24,7 +24,7 @@ __all__ = ["load_data", "plant_log"]
 
 def load_data(
     path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
-    default_ts: float | None = None,
+    default_ts: float | None = None, columns: ColumnRoles | None = None,
 ) -> DataLog:
     """Read a log from a file, or simulate the plant log a ``plant:`` spec names.
 
@@ -32,11 +32,11 @@ def load_data(
     also be ``"plant:PRESET/EXCITATION[@SEED]"`` (e.g. ``"plant:auger/evaluation"``).
     """
     if is_plant_spec(path):
-        log = plant_log(str(path))
+        log = with_roles(plant_log(str(path)), columns)
         for col in require:
             log.column(col)
         return log
-    return _files.load_data(path, ts=ts, require=require, default_ts=default_ts)
+    return _files.load_data(path, ts=ts, require=require, default_ts=default_ts, columns=columns)
 
 
 def plant_log(spec: str) -> DataLog:

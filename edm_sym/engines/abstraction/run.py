@@ -28,9 +28,10 @@ import numpy as np
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
-from edm_sym.core.errors import ConfigError, NumericsWarning
+from edm_sym.core.errors import ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
+from edm_sym.core.units import axis_units
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
     RunState,
@@ -388,6 +389,7 @@ def abstract(
     validate: DataLog | None = None,
     validation_share: float | None = None,
     select: str | None = None,
+    axis: str = "rotary",
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -432,21 +434,25 @@ def abstract(
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
         config's ``[parsimony]`` rule (default: the simplest member within
         its tolerance, 1 %). See :mod:`edm_sym.engines.abstraction.prune`.
+    axis : str
+        ``"rotary"`` or ``"linear"``: the SI units of the log (docs/data.md#units),
+        recorded in the result; the scores' unit when the config sets none.
 
     Returns
     -------
     EdmResult
-        The final compensator, every step's record and the provenance
+        The final compensator, every step's record, the provenance
         (``seed``, ``package_version``, ``data_sha256``, ``stop_reason``: one of
-        ``"completed"``, ``"time_limit"``, ``"stopped"``, ``"interrupted"``).
+        ``"completed"``, ``"time_limit"``, ``"stopped"``, ``"interrupted"``),
+        the axis and the record of each log used (``logs``).
 
     Raises
     ------
     ConfigError
         Bad inputs or config (unknown input in the human model, a weighting
-        that is zero everywhere, a checkpoint of another run).
+        that is zero everywhere, a checkpoint of another run, an unknown axis).
     DataFormatError
-        A missing target or input column.
+        A missing target or input column, or an input column that is constant.
     KeyboardInterrupt
         Only when interrupted before the first population was evaluated.
     """
@@ -466,10 +472,18 @@ def abstract(
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
         raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
+    try:
+        units = axis_units(axis)
+    except ValueError as exc:
+        raise ConfigError("axis", str(exc)) from None
     if validation_share is not None:
         cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
+    if cfg.validation.unit is None:
+        cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
     hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
                         validate=validate)
+    _require_samples(data, hold.n_train, cfg)
+    data.require_varying(inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones).
     part = hold.training
     x = np.ascontiguousarray(part.x[:, :hold.n_train])
@@ -524,8 +538,26 @@ def abstract(
                   "data_sha256": data.sha256, "stop_reason": reason}
     if reason == "completed" and checkpoint is not None and checkpoint.exists():
         checkpoint.unlink()
+    logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
-                     parsimony=parsimony)
+                     parsimony=parsimony, axis=axis, logs=logs)
+
+
+def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> None:
+    """Refuse a training part too short to fit the schedule's largest matrix.
+
+    Its parameters (one per element) must not outnumber the samples fitted,
+    and the filters' default corner range, 2 pi/T_sum .. pi/Ts, is empty below
+    3 samples (docs/data.md#too-few-samples).
+    """
+    largest = max(cfg.steps, key=lambda s: s.n_rows * s.n_elements)
+    need = max(3, largest.n_rows * largest.n_elements + 1)
+    if n_train < need:
+        raise DataFormatError(
+            f"{data.source}: samples 1-{n_train} (the training part)",
+            f"expected at least {need} samples to fit (more than the {largest.n_rows}x"
+            f"{largest.n_elements} matrix's parameters), found {n_train}; use a longer log, a "
+            "smaller schedule or a smaller held-out share")
 
 
 def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,

@@ -19,8 +19,10 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import BY_NAME, ParamRange, default_ranges
-from edm_sym.core.errors import TOO_DEEP, ConfigError
+from edm_sym.core.errors import TOO_DEEP, ConfigError, DataFormatError
+from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
 from edm_sym.engines.abstraction.weighting import Weighting, parse_weighting
@@ -228,6 +230,12 @@ class AbstractionConfig:
         The pruning pass after the search and the front's selection rule.
     source : str
         The config file name (for messages).
+    columns : ColumnRoles or None
+        The log's columns and their roles (``[columns]``: ``qm = "position"``;
+        docs/data.md#columns-and-roles); ``--time-column`` and ``--role`` go over them.
+    axis : str or None
+        ``"rotary"`` or ``"linear"`` (the top-level ``axis`` key); None: rotary
+        unless ``--axis`` says otherwise.
     """
 
     steps: tuple[StepConfig, ...] = ()
@@ -237,8 +245,13 @@ class AbstractionConfig:
     source: str = "<default config>"
     validation: ValidationSettings = field(default_factory=ValidationSettings)
     parsimony: ParsimonySettings = field(default_factory=ParsimonySettings)
+    columns: ColumnRoles | None = None
+    axis: str | None = None
 
     def __post_init__(self) -> None:
+        if self.axis is not None and self.axis not in AXES:
+            raise ConfigError(f"{self.source}: axis",
+                              f"expected {' or '.join(AXES)}, found {_found(self.axis)}")
         steps = tuple(self.steps) or default_steps()
         object.__setattr__(self, "steps", steps)
         object.__setattr__(self, "initial", tuple(self.initial))
@@ -397,7 +410,7 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
-             "parsimony")
+             "parsimony", "columns", "axis")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -464,8 +477,14 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     initial = _parse_initial(f, doc.get("initial"))
     validation = parse_validation(f"{f}validation", doc.get("validation", {}))
     parsimony = parse_parsimony(f"{f}parsimony", doc.get("parsimony", {}))
+    columns = None
+    if "columns" in doc:
+        try:
+            columns = ColumnRoles.from_table(f"{f}columns", doc["columns"])
+        except DataFormatError as exc:
+            raise ConfigError(exc.where, exc.problem) from None
     return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
-                             parsimony)
+                             parsimony, columns, doc.get("axis"))
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:

@@ -53,12 +53,13 @@ class ValidationSettings:
     share : float
         Share of the abstraction log held out at its end, in [0, 0.9]
         (0: nothing held out; ignored when a second log is given).
-    unit : str
-        Unit of the target column, written beside every fitness value.
+    unit : str or None
+        Unit of the target column, written beside every fitness value;
+        None: the axis's force unit (N m rotary, N linear), set by ``abstract``.
     """
 
     share: float = 0.2
-    unit: str = "N m"
+    unit: str | None = None
 
     def __post_init__(self) -> None:
         s = self.share
@@ -67,12 +68,12 @@ class ValidationSettings:
             raise ConfigError("validation.share",
                               f"expected a number in [0, {MAX_SHARE:g}], found {s!r}")
         object.__setattr__(self, "share", float(s))
-        if not isinstance(self.unit, str) or not self.unit.strip():
+        if self.unit is not None and (not isinstance(self.unit, str) or not self.unit.strip()):
             raise ConfigError("validation.unit", f"expected a non-empty unit, found {self.unit!r}")
 
     def to_json(self) -> dict[str, Any]:
         """The settings as a config table."""
-        return {"share": self.share, "unit": self.unit}
+        return {"share": self.share, **({"unit": self.unit} if self.unit is not None else {})}
 
 
 def parse_validation(where: str, doc: Any) -> ValidationSettings:
@@ -150,9 +151,7 @@ class Holdout:
 
 
 def _times(data: DataLog) -> np.ndarray:
-    n = len(data)
-    return (np.asarray(data.columns["t"], dtype=float) if "t" in data.columns
-            else np.arange(n) * float(data.ts))
+    return data.times
 
 
 def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],

@@ -5,7 +5,9 @@ Each term is ``c f(w)`` with one *leaf* ``w``: the input itself, or the input
 through transfer functions and delays. A transfer function ``s^k H(s)`` moves
 the leaf's role k steps along angle -> velocity -> acceleration (an integral
 moves it back) with the low-frequency gain ``H(0)``; the poles of ``H`` are
-reported as filter corners. Then, by the leaf's role:
+reported as filter corners. Then, by the leaf's role (the units are a rotary
+axis's; on a linear axis they read N, N s/m, kg, m and m/s, and a spatial
+term's frequency is given in cycles per metre, ``ClassifyOptions.axis``):
 
 ========================  ===========================================  ============
 pattern                   term                                         parameters
@@ -50,11 +52,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import sympy as sp
 
+from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.characteristic import (
     corners,
     describe_operators,
@@ -96,28 +99,43 @@ class PhysicalTerm:
     expr: sp.Expr | None = field(default=None, compare=False)
 
 
+#: Default thresholds per axis, in its units: a rotary motor axis turns at up to
+#: some 10 rad/s, a linear (ball-screw) axis moves at up to some 0.5 m/s; the
+#: Coulomb threshold is 1 % of that range on both.
+AXIS_DEFAULTS: dict[str, dict[str, float]] = {
+    "rotary": {"coulomb_velocity": 0.1, "velocity_range": 10.0, "acceleration_range": 1000.0},
+    "linear": {"coulomb_velocity": 0.005, "velocity_range": 0.5, "acceleration_range": 10.0},
+}
+
+
 @dataclass(frozen=True)
 class ClassifyOptions:
     """Thresholds of the classification.
 
+    Every threshold is in the SI units of ``axis`` (rad or m); the defaults
+    are a rotary axis's, :meth:`for_axis` gives those of a linear one.
+
     Parameters
     ----------
-    coulomb_velocity : float, default 0.25
-        [rad/s] A saturating function of velocity counts as Coulomb friction
+    axis : str, default "rotary"
+        ``"rotary"`` or ``"linear"``: the units of the terms' parameters
+        (:func:`edm_sym.core.units.axis_units`) and of the thresholds below.
+    coulomb_velocity : float, default 0.25 (linear: 0.005)
+        [rad/s or m/s] A saturating function of velocity counts as Coulomb friction
         when its level divided by its slope at the origin is at most this
         velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)). A servo log
         sampled at 1 ms moves its velocity by about that much per sample at
         a few hundred rad/s^2, so a transition below it cannot be told from
         a step.
-    velocity_range : float, default 10.0
-        [rad/s] The velocities over which shapes are judged (Stribeck-like
+    velocity_range : float, default 10.0 (linear: 0.5)
+        [rad/s or m/s] The velocities over which shapes are judged (Stribeck-like
         humps, Coulomb + viscous fits).
     acceleration_frequency : float, default 4 pi (2 Hz)
         [rad/s] The representative frequency of a filtered acceleration-dependent
         term that fits no exact pattern: its transfer functions count with their
         gain here (about the geometric middle of a 0.2 - 20 Hz excitation).
-    acceleration_range : float, default 1000.0
-        [rad/s^2] The accelerations, ``[-range, range]``, over which such a
+    acceleration_range : float, default 1000.0 (linear: 10.0)
+        [rad/s^2 or m/s^2] The accelerations, ``[-range, range]``, over which such a
         term's static characteristic is fitted by a line (its slope is the
         equivalent inertia).
     harmonic_tolerance : float, default 0.01
@@ -126,13 +144,30 @@ class ClassifyOptions:
         a whole multiple of a common fundamental.
     """
 
+    axis: str = "rotary"
     coulomb_velocity: float = 0.25
     velocity_range: float = 10.0
     acceleration_frequency: float = 4 * math.pi
     acceleration_range: float = 1000.0
     harmonic_tolerance: float = 0.01
 
+    @classmethod
+    def for_axis(cls, axis: str = "rotary") -> ClassifyOptions:
+        """The default thresholds of an axis (:data:`AXIS_DEFAULTS`)."""
+        try:
+            return cls(axis=axis, **AXIS_DEFAULTS[axis])
+        except KeyError:
+            raise ValueError(f"axis: expected one of {', '.join(AXIS_DEFAULTS)}, "
+                             f"found {axis!r}") from None
+
+    @property
+    def units(self) -> AxisUnits:
+        """The SI units of the axis."""
+        return axis_units(self.axis)
+
     def __post_init__(self) -> None:
+        if self.axis not in AXIS_DEFAULTS:
+            raise ValueError(f"axis: expected one of {', '.join(AXIS_DEFAULTS)}, found {self.axis!r}")
         for name in ("coulomb_velocity", "velocity_range", "acceleration_frequency",
                      "acceleration_range", "harmonic_tolerance"):
             v = getattr(self, name)
@@ -219,14 +254,16 @@ def _extras(leaf: _Leaf) -> tuple[dict[str, tuple[float, str]], str]:
     return params, ("; " + "; ".join(notes)) if notes else ""
 
 
+#: A term linear in a velocity or an acceleration: (kind, parameter, unit attribute, name).
 _LINEAR = {
-    "velocity": ("viscous", "coefficient", "N m s/rad", "viscous friction"),
-    "acceleration": ("acceleration", "inertia", "kg m^2", "acceleration-dependent term"),
+    "velocity": ("viscous", "coefficient", "viscous", "viscous friction"),
+    "acceleration": ("acceleration", "inertia", "inertia", "acceleration-dependent term"),
 }
 
 
 def classify_expression(
-    expr: sp.Expr, u: sp.Symbol, role: str | None, *, options: ClassifyOptions | None = None
+    expr: sp.Expr, u: sp.Symbol, role: str | None, *, options: ClassifyOptions | None = None,
+    axis: str | None = None,
 ) -> tuple[PhysicalTerm, ...]:
     """Split a numeric row expression into physical terms.
 
@@ -239,12 +276,19 @@ def classify_expression(
     role : str or None
         The input's role (see :mod:`edm_sym.engines.symbolic.roles`).
     options : ClassifyOptions, optional
+        Default: ``ClassifyOptions.for_axis(axis)``.
+    axis : str, optional
+        ``"rotary"`` or ``"linear"``; overrides ``options.axis`` (the units of
+        the parameters). Default: ``options.axis``, else rotary.
 
     Returns
     -------
     tuple of PhysicalTerm
     """
-    opts = options or ClassifyOptions()
+    if options is None:
+        opts = ClassifyOptions.for_axis(axis or "rotary")
+    else:
+        opts = options if axis is None or axis == options.axis else replace(options, axis=axis)
     out: list[PhysicalTerm] = []
     for term in sp.Add.make_args(expr):
         found = _classify_term(term, u, role, opts)
@@ -259,7 +303,7 @@ def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
     if term.is_zero:
         return []
     if not term.has(u):
-        return [_offset(term)]
+        return [_offset(term, opts.units)]
     if role is None:
         return [_unclassified(term, f"input {u.name!r} has no physical role "
                               f"(pass roles={{{u.name!r}: 'velocity'}} or another role)")]
@@ -298,25 +342,26 @@ def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
 
 def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
            extra: dict, note: str, opts: ClassifyOptions) -> list[PhysicalTerm]:
-    g, role = leaf.gain, leaf.role
+    g, role, U = leaf.gain, leaf.role, opts.units
     if f == w:
         if role in _LINEAR:
-            kind, pname, unit, what = _LINEAR[role]
-            v = c * g
+            kind, pname, attr, what = _LINEAR[role]
+            v, unit = c * g, getattr(U, attr)
             return [PhysicalTerm(kind, {pname: (v, unit), **extra},
                                  f"{what}: {v:.6g} {unit}{note}", term)]
-        return [_unclassified(term, f"linear in the angle: a stiffness of {c * g:.6g} N m/rad, "
-                              "not a friction term" + note, {"stiffness": (c * g, "N m/rad")})]
+        stiff = f"{U.force}/{U.position}"
+        return [_unclassified(term, f"linear in the position: a stiffness of {c * g:.6g} {stiff}, "
+                              "not a friction term" + note, {"stiffness": (c * g, stiff)})]
     if role == "velocity":
         hit = _coulomb(term, c, f, w, g, extra, note, opts)
         if hit is not None:
             return hit
     if role == "acceleration":
-        hit = _saturating_acceleration(term, c, f, w, g, extra, note)
+        hit = _saturating_acceleration(term, c, f, w, g, extra, note, U)
         if hit is not None:
             return hit
     if role in ("angle", "angle_wrapped"):
-        hit = _spatial(term, c, f, w, g, role, extra, note)
+        hit = _spatial(term, c, f, w, g, role, extra, note, U)
         if hit is not None:
             return hit
     if role == "velocity" and not f.has(LTI, Delay, Relay):
@@ -327,30 +372,31 @@ def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
 def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: dict,
              note: str, opts: ClassifyOptions) -> list[PhysicalTerm] | None:
     sg = math.copysign(1.0, g)
+    F, V = opts.units.force, opts.units.velocity
     if f == sp.sign(w):
         level = c * sg
-        return [PhysicalTerm("coulomb", {"level": (level, "N m"), **extra},
-                             f"Coulomb friction: {level:.6g} N m sgn(velocity){note}", term)]
+        return [PhysicalTerm("coulomb", {"level": (level, F), **extra},
+                             f"Coulomb friction: {level:.6g} {F} sgn(velocity){note}", term)]
     if isinstance(f, Relay) and f.args[0] == w and f.args[1].is_Number:
         level, band = c * sg, float(f.args[1]) / abs(g)
-        return [PhysicalTerm("coulomb", {"level": (level, "N m"),
-                                         "hysteresis": (band, "rad/s"), **extra},
-                             f"Coulomb friction with hysteresis: {level:.6g} N m, switching "
-                             f"at +-{band:.4g} rad/s{note}", term)]
+        return [PhysicalTerm("coulomb", {"level": (level, F),
+                                         "hysteresis": (band, V), **extra},
+                             f"Coulomb friction with hysteresis: {level:.6g} {F}, switching "
+                             f"at +-{band:.4g} {V}{note}", term)]
     sat = _saturation(f, w)
     if sat is None:
         return None
     name, top, k = sat
     level, vt = c * top * math.copysign(1.0, k * g), top / abs(k * g)
     if vt <= opts.coulomb_velocity:
-        return [PhysicalTerm("coulomb", {"level": (level, "N m"),
-                                         "transition_velocity": (vt, "rad/s"), **extra},
-                             f"Coulomb friction ({name}-smoothed): {level:.6g} N m, "
-                             f"transition {vt:.4g} rad/s{note}", term)]
+        return [PhysicalTerm("coulomb", {"level": (level, F),
+                                         "transition_velocity": (vt, V), **extra},
+                             f"Coulomb friction ({name}-smoothed): {level:.6g} {F}, "
+                             f"transition {vt:.4g} {V}{note}", term)]
     return [_unclassified(term, f"a saturating function of velocity ({name}, level "
-                          f"{level:.4g} N m) whose transition velocity {vt:.4g} rad/s is above "
-                          f"the Coulomb threshold {opts.coulomb_velocity:g} rad/s" + note,
-                          {"level": (level, "N m"), "transition_velocity": (vt, "rad/s")})]
+                          f"{level:.4g} {F}) whose transition velocity {vt:.4g} {V} is above "
+                          f"the Coulomb threshold {opts.coulomb_velocity:g} {V}" + note,
+                          {"level": (level, F), "transition_velocity": (vt, V)})]
 
 
 def _saturation(f: sp.Expr, w: sp.Dummy) -> tuple[str, float, float] | None:
@@ -372,17 +418,17 @@ def _saturation(f: sp.Expr, w: sp.Dummy) -> tuple[str, float, float] | None:
 
 
 def _saturating_acceleration(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
-                             extra: dict, note: str) -> list[PhysicalTerm] | None:
+                             extra: dict, note: str, U: AxisUnits) -> list[PhysicalTerm] | None:  # noqa: N803
     sat = _saturation(f, w)
     if sat is None:
         return None
     name, top, k = sat
     inertia, level = c * k * g, c * top * math.copysign(1.0, k * g)
-    return [PhysicalTerm("acceleration", {"inertia": (inertia, "kg m^2"),
-                                          "saturation_level": (level, "N m"), **extra},
+    return [PhysicalTerm("acceleration", {"inertia": (inertia, U.inertia),
+                                          "saturation_level": (level, U.force), **extra},
                          f"saturating acceleration-dependent term ({name}): {inertia:.6g} "
-                         f"kg m^2 for small accelerations, limited to {level:.6g} N m{note}",
-                         term)]
+                         f"{U.inertia} for small accelerations, limited to {level:.6g} "
+                         f"{U.force}{note}", term)]
 
 
 def _linear_coeff(arg: sp.Expr, w: sp.Dummy) -> float | None:
@@ -416,7 +462,7 @@ def _wrap(phi: float) -> float:
 
 
 def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: str,
-             extra: dict, note: str) -> list[PhysicalTerm] | None:
+             extra: dict, note: str, U: AxisUnits) -> list[PhysicalTerm] | None:  # noqa: N803
     found = _sine_of(f, w)
     if found is None:
         return None
@@ -454,20 +500,30 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
     else:
         return None
     phi = _wrap(phi)
-    params = {"amplitude": (amp, "N m"), "period": (2 * math.pi / k, "rad"),
-              "cycles_per_revolution": (k, "1"), "phase": (phi, "rad"), **dominant, **extra}
+    key, cycles, per = _cycles(k, U)
+    params = {"amplitude": (amp, U.force), "period": (2 * math.pi / k, U.position),
+              key: cycles, "phase": (phi, "rad"), **dominant, **extra}
     wrap_note = ""
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
-        wrap_note = "; not a whole number of cycles per revolution: it jumps at each wrap"
+        wrap_note = "; not a whole number of cycles per wrap of the position: it jumps at each wrap"
     return [PhysicalTerm("spatial", params,
-                         f"position-dependent friction, {shape}: amplitude {amp:.6g} N m, "
-                         f"{k:.6g} cycles/rev (period {2 * math.pi / k:.6g} rad), phase "
-                         f"{phi:.4g} rad{wrap_note}{note}", term)]
+                         f"position-dependent friction, {shape}: amplitude {amp:.6g} {U.force}, "
+                         f"{cycles[0]:.6g} {per} (period {2 * math.pi / k:.6g} {U.position}), "
+                         f"phase {phi:.4g} rad{wrap_note}{note}", term)]
+
+
+def _cycles(k: float, U: AxisUnits) -> tuple[str, tuple[float, str], str]:  # noqa: N803
+    """The spatial frequency of ``sin(k q)``: k cycles per revolution (rotary, q in rad),
+    k / 2 pi cycles per metre (linear, q in m). -> (parameter, (value, unit), text unit)."""
+    if U.axis == "linear":
+        return "cycles_per_metre", (k / (2 * math.pi), "1/m"), "cycles/m"
+    return "cycles_per_revolution", (k, "1"), "cycles/rev"
 
 
 def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
                     extra: dict, note: str, opts: ClassifyOptions) -> list[PhysicalTerm]:
     vmax = opts.velocity_range
+    N, V = opts.units.force, opts.units.velocity
     v = np.linspace(vmax / 2000, vmax, 2000)
     F = sp.lambdify(w, c * f, modules=[NUMPY_FUNCTIONS, "numpy"])
     with np.errstate(all="ignore"):
@@ -484,23 +540,24 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
         half = a[-1] + 0.5 * (a[i] - a[-1])
         after = np.nonzero(a[i:] <= half)[0]
         vs = float(v[i + after[0]]) if after.size else vmax
-        params = {"peak": (float(pos[i]), "N m"), "peak_velocity": (float(v[i]), "rad/s"),
-                  "level_at_range": (float(pos[-1]), "N m"),
-                  "stribeck_velocity": (vs, "rad/s"), **extra}
+        params = {"peak": (float(pos[i]), N), "peak_velocity": (float(v[i]), V),
+                  "level_at_range": (float(pos[-1]), N),
+                  "stribeck_velocity": (vs, V), **extra}
         return [PhysicalTerm("stribeck", params,
-                             f"Stribeck-like hump: peak {pos[i]:.4g} N m at {v[i]:.4g} rad/s, "
-                             f"falling to {pos[-1]:.4g} N m at {vmax:g} rad/s{note}", term)]
+                             f"Stribeck-like hump: peak {pos[i]:.4g} {N} at {v[i]:.4g} {V}, "
+                             f"falling to {pos[-1]:.4g} {N} at {vmax:g} {V}{note}", term)]
     # Coulomb + viscous fit by least squares over the range.
     A = np.column_stack([np.ones_like(v), v])
     (fc, d), *_ = np.linalg.lstsq(A, pos, rcond=None)
     if np.max(np.abs(A @ np.array([fc, d]) - pos)) <= 1e-3 * scale:
         out = []
         if abs(fc) > 1e-6 * scale:
-            out.append(PhysicalTerm("coulomb", {"level": (float(fc), "N m"), **extra},
-                                    f"Coulomb friction (fitted to {f}): {fc:.6g} N m{note}",
+            out.append(PhysicalTerm("coulomb", {"level": (float(fc), N), **extra},
+                                    f"Coulomb friction (fitted to {f}): {fc:.6g} {N}{note}",
                                     term))
-        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
-                                f"viscous friction (fitted to {f}): {d:.6g} N m s/rad{note}",
+        D = opts.units.viscous
+        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), D), **extra},
+                                f"viscous friction (fitted to {f}): {d:.6g} {D}{note}",
                                 term))
         return out
     split = _stribeck_split(term, f, v, pos, scale, extra, note, opts)
@@ -564,27 +621,31 @@ _INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}
 def _measured(term: sp.Expr, u: sp.Symbol, role: str,
               opts: ClassifyOptions) -> list[PhysicalTerm] | None:
     """A term no exact pattern fits, classified from its static characteristic."""
+    U = opts.units
+    F = U.force
     if role in ("angle", "angle_wrapped"):
         p = measure_periodic(term, u, role == "angle_wrapped", opts.harmonic_tolerance)
         if p is not None:
             params, note = describe_operators(p.form, "DC gains")
             period = 2 * math.pi / p.cycles
+            key, cycles, per = _cycles(p.cycles, U)
             more = ""
             if abs(p.dominant_cycles - p.cycles) > 1e-9:
-                params["dominant_cycles"] = (p.dominant_cycles, "1")
-                params["dominant_amplitude"] = (p.dominant_amplitude, "N m")
-                more = (f"; strongest harmonic {p.dominant_cycles:.6g} cycles/rev, "
-                        f"{p.dominant_amplitude:.4g} N m")
+                dominant = _cycles(p.dominant_cycles, U)[1]
+                params["dominant_cycles"] = dominant
+                params["dominant_amplitude"] = (p.dominant_amplitude, F)
+                more = (f"; strongest harmonic {dominant[0]:.6g} {per}, "
+                        f"{p.dominant_amplitude:.4g} {F}")
             if p.jump:
-                params["wrap_jump"] = (p.jump, "N m")
-                more += f"; jumps by {p.jump:.4g} N m at each wrap of the angle"
+                params["wrap_jump"] = (p.jump, F)
+                more += f"; jumps by {p.jump:.4g} {F} at each wrap of the position"
             return [PhysicalTerm("spatial", {
-                "amplitude": (p.amplitude, "N m"), "period": (period, "rad"),
-                "cycles_per_revolution": (p.cycles, "1"), "phase": (p.phase, "rad"),
-                "fundamental_amplitude": (p.fundamental_amplitude, "N m"), **params},
-                f"position-dependent friction, periodic: amplitude {p.amplitude:.6g} N m "
-                f"(half peak-to-peak), {p.cycles:.6g} cycles/rev (period {period:.6g} rad), "
-                f"fundamental {p.fundamental_amplitude:.4g} N m at phase {p.phase:.4g} rad"
+                "amplitude": (p.amplitude, F), "period": (period, U.position),
+                key: cycles, "phase": (p.phase, "rad"),
+                "fundamental_amplitude": (p.fundamental_amplitude, F), **params},
+                f"position-dependent friction, periodic: amplitude {p.amplitude:.6g} {F} "
+                f"(half peak-to-peak), {cycles[0]:.6g} {per} (period {period:.6g} {U.position}), "
+                f"fundamental {p.fundamental_amplitude:.4g} {F} at phase {p.phase:.4g} rad"
                 f"{more}{note}", term)]
     if role == "velocity":
         found = _measured_velocity(term, u, opts)
@@ -597,14 +658,14 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
     if a is None:
         return None
     params, note = describe_operators(a.form, f"filter gains at {w:.4g} rad/s")
-    params = {"inertia": (a.inertia, "kg m^2"), "linearity_r2": (a.r2, "1"), **params}
+    params = {"inertia": (a.inertia, U.inertia), "linearity_r2": (a.r2, "1"), **params}
     what = "acceleration-dependent term" if a.r2 >= _LINEAR_R2 else (
         "nonlinear acceleration-dependent term")
-    text = (f"{what}: equivalent inertia {a.inertia:.6g} kg m^2 (least-squares slope over "
-            f"+-{a_range:g} rad/s^2, R^2 {a.r2:.3f})")
+    text = (f"{what}: equivalent inertia {a.inertia:.6g} {U.inertia} (least-squares slope over "
+            f"+-{a_range:g} {U.acceleration}, R^2 {a.r2:.3f})")
     if a.r2 < _LINEAR_R2:
-        params["peak"] = (a.peak, "N m")
-        text += f"; at most {a.peak:.4g} N m over that range"
+        params["peak"] = (a.peak, F)
+        text += f"; at most {a.peak:.4g} {F} over that range"
     if a.form.filters:
         params["frequency"] = (w, "rad/s")
         params["filter_phase"] = (a.phase, "rad")
@@ -622,8 +683,8 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
                                   else f"below {hi:.4g} rad/s")
         if (lo is not None and w < lo or hi is not None and w > hi) and math.isfinite(
                 a.inertia_in_band):
-            params["inertia_in_band"] = (a.inertia_in_band, "kg m^2")
-            text += f", where the inertia is {a.inertia_in_band:.6g} kg m^2"
+            params["inertia_in_band"] = (a.inertia_in_band, U.inertia)
+            text += f", where the inertia is {a.inertia_in_band:.6g} {U.inertia}"
     return [PhysicalTerm("acceleration", params, text + note, term)]
 
 
@@ -647,18 +708,19 @@ def _measured_velocity(term: sp.Expr, u: sp.Symbol,
             return None
         coulomb = False
     params, note = describe_operators(fit.form, "DC gains")
-    how = (f" (fit of its static characteristic over +-{v_range:g} rad/s, R^2 {fit.r2:.3f}"
-           f"{note})")
+    F, D = opts.units.force, opts.units.viscous
+    how = (f" (fit of its static characteristic over +-{v_range:g} {opts.units.velocity}, "
+           f"R^2 {fit.r2:.3f}{note})")
     out = []
     if coulomb:
-        out.append(PhysicalTerm("coulomb", {"level": (fit.coulomb, "N m"), **params},
-                                f"Coulomb friction: {fit.coulomb:.6g} N m{how}", term))
+        out.append(PhysicalTerm("coulomb", {"level": (fit.coulomb, F), **params},
+                                f"Coulomb friction: {fit.coulomb:.6g} {F}{how}", term))
     if abs(fit.viscous) * v_range >= _SIGNIFICANT * fit.peak:
-        out.append(PhysicalTerm("viscous", {"coefficient": (fit.viscous, "N m s/rad"), **params},
-                                f"viscous friction: {fit.viscous:.6g} N m s/rad{how}", term))
+        out.append(PhysicalTerm("viscous", {"coefficient": (fit.viscous, D), **params},
+                                f"viscous friction: {fit.viscous:.6g} {D}{how}", term))
     if abs(fit.offset) >= _SIGNIFICANT * fit.peak:
-        out.append(PhysicalTerm("offset", {"level": (fit.offset, "N m")},
-                                f"constant offset: {fit.offset:.6g} N m{how}", term))
+        out.append(PhysicalTerm("offset", {"level": (fit.offset, F)},
+                                f"constant offset: {fit.offset:.6g} {F}{how}", term))
     return out or None
 
 
@@ -666,7 +728,7 @@ def _measured_velocity(term: sp.Expr, u: sp.Symbol,
 _LINEAR_R2 = 0.95
 
 
-def _offset(term: sp.Expr) -> PhysicalTerm:
+def _offset(term: sp.Expr, U: AxisUnits) -> PhysicalTerm:  # noqa: N803
     """A constant term; through filters, delays and relays, its final value."""
     notes = []
     value = term
@@ -691,8 +753,8 @@ def _offset(term: sp.Expr) -> PhysicalTerm:
     except TypeError:
         return _unclassified(term, f"a constant that does not evaluate to a number: {term}")
     note = f" ({'; '.join(notes)})" if notes else ""
-    return PhysicalTerm("offset", {"level": (level, "N m")},
-                        f"constant offset {level:.6g} N m{note}", term)
+    return PhysicalTerm("offset", {"level": (level, U.force)},
+                        f"constant offset {level:.6g} {U.force}{note}", term)
 
 
 def _unclassified(term: sp.Expr, reason: str,

@@ -53,6 +53,7 @@ def decode_row(
     simplify: SimplifyOptions | None = None,
     classify: ClassifyOptions | None = None,
     systems: bool = True,
+    axis: str = "rotary",
 ) -> RowModel:
     """One row with its expressions, python-control forms and physical terms filled.
 
@@ -63,7 +64,7 @@ def decode_row(
     row : RowModel
     role : str or None
         The physical role of the row's input.
-    simplify, classify, systems
+    simplify, classify, systems, axis
         As for :func:`decode`.
 
     Returns
@@ -76,7 +77,7 @@ def decode_row(
     expr = simplify_expression(raw, model.input_symbols, numeric=False,
                                signs=parameter_signs(model), options=simplify)
     expr_n = simplify_expression(raw_n, model.input_symbols, numeric=True, options=simplify)
-    terms = classify_expression(expr_n, row.input_symbol, role, options=classify)
+    terms = classify_expression(expr_n, row.input_symbol, role, options=classify, axis=axis)
     return RowModel(row.index, row.input, row.input_symbol, row.stages, role=role,
                     expr_raw=raw, expr_raw_numeric=raw_n, expr=expr, expr_numeric=expr_n,
                     terms=terms, linear_parts=stage_parts(row, ts) if systems else (),
@@ -90,6 +91,7 @@ def decode(
     simplify: SimplifyOptions | None = None,
     classify: ClassifyOptions | None = None,
     systems: bool = True,
+    axis: str | None = None,
 ) -> SymbolicModel:
     """Decode a result (or a bare compensator) into its full symbolic model.
 
@@ -97,15 +99,21 @@ def decode(
     ----------
     result : EdmResult or Compensator
     roles : mapping of str to str or None, optional
-        Input name -> physical role, over the defaults of
-        :mod:`edm_sym.engines.symbolic.roles` (``"velocity"``, ``"acceleration"``,
-        ``"angle"``, ``"angle_wrapped"`` or None).
+        Input name -> physical role (``"velocity"``, ``"acceleration"``,
+        ``"angle"`` or ``"position"``, ``"angle_wrapped"`` or
+        ``"position_wrapped"``, or None), over the roles the result records
+        (``EdmResult.roles``) and the defaults of the input names
+        (:mod:`edm_sym.engines.symbolic.roles`).
     simplify : SimplifyOptions, optional
         Number of rewrite passes and the pole-zero tolerance.
     classify : ClassifyOptions, optional
-        Thresholds of the physical classification.
+        Thresholds of the physical classification, in the axis's units
+        (default: ``ClassifyOptions.for_axis(axis)``).
     systems : bool, default True
         Build the python-control transfer functions and row systems.
+    axis : str, optional
+        ``"rotary"`` or ``"linear"``, the SI units of the physical terms;
+        default: the result's ``axis`` (rotary for a bare compensator).
 
     Returns
     -------
@@ -118,9 +126,13 @@ def decode(
         base = build_model(result)
     else:
         base = build_model(result.compensator, sha256=getattr(result, "sha256", None),
-                           target=getattr(result, "target", None))
-    role_map = input_roles(base.inputs, roles)
+                           target=getattr(result, "target", None),
+                           axis=getattr(result, "axis", "rotary"))
+    # The roles the result records (given with --role), then the caller's.
+    role_map = input_roles(base.inputs, {**getattr(result, "roles", {}), **(roles or {})})
+    axis = axis or getattr(result, "axis", "rotary")
+    classify = classify if classify is not None else ClassifyOptions.for_axis(axis)
     rows = tuple(decode_row(base, r, role=role_map[r.input], simplify=simplify,
-                            classify=classify, systems=systems) for r in base.rows)
+                            classify=classify, systems=systems, axis=axis) for r in base.rows)
     return SymbolicModel(base.compensator, base.inputs, base.input_symbols, base.sample_time,
-                         rows, base.params, base.source_sha256, base.target, role_map)
+                         rows, base.params, base.source_sha256, base.target, role_map, axis)

@@ -194,6 +194,9 @@ class SymbolicModel:
         The name of the target column.
     roles : dict of str to str or None
         The physical role of each input (filled by :func:`edm_sym.engines.symbolic.decode`).
+    axis : str
+        ``"rotary"`` or ``"linear"``: the SI units of the terms and of every
+        output (``edm_sym.core.units.axis_units(model.axis)``).
     """
 
     compensator: Compensator
@@ -205,6 +208,7 @@ class SymbolicModel:
     source_sha256: str | None = None
     target: str | None = None
     roles: dict[str, str | None] = field(default_factory=dict, compare=False)
+    axis: str = "rotary"
 
     def __repr__(self) -> str:
         """A header line and one line per row: its simplified expression with numbers.
@@ -306,7 +310,7 @@ def _stage(comp: Compensator, j: int, i: int) -> Stage:
 
 
 def build_model(comp: Compensator, *, sha256: str | None = None,
-                target: str | None = None) -> SymbolicModel:
+                target: str | None = None, axis: str = "rotary") -> SymbolicModel:
     """Decode a compensator into its stages (no simplification).
 
     Parameters
@@ -316,6 +320,8 @@ def build_model(comp: Compensator, *, sha256: str | None = None,
         Digest of the result file, carried for the exports' headers.
     target : str, optional
         Name of the target column.
+    axis : str
+        ``"rotary"`` or ``"linear"`` (the result's ``axis``), for the units outputs print.
     """
     syms = tuple(sp.Symbol(name, real=True) for name in comp.matrix.inputs)
     rows = []
@@ -325,4 +331,4 @@ def build_model(comp: Compensator, *, sha256: str | None = None,
         params += [st.param for st in stages if st.param is not None]
         rows.append(RowModel(j, comp.matrix.inputs[row.input], syms[row.input], stages))
     return SymbolicModel(comp, comp.matrix.inputs, syms, comp.sample_time, tuple(rows),
-                         tuple(params), sha256, target)
+                         tuple(params), sha256, target, axis=axis)

@@ -17,6 +17,11 @@ from collections.abc import Iterable, Mapping
 
 #: The roles an input may have.
 ROLES = ("velocity", "acceleration", "angle", "angle_wrapped")
+#: The names of a log's column roles (:data:`edm_sym.core.data.INPUT_ROLES`, the
+#: ``--role`` option and result.json's ``logs``) for the roles above; ``input``
+#: is a signal without a physical role.
+LOG_ROLE_NAMES: dict[str, str | None] = {"position": "angle", "position_wrapped": "angle_wrapped",
+                                         "input": None}
 
 #: Default input names of each role (lower case).
 DEFAULT_ROLES: dict[str, tuple[str, ...]] = {
@@ -59,7 +64,8 @@ def input_roles(
     inputs : iterable of str
         Input names.
     overrides : mapping of str to str or None, optional
-        Name -> role (one of :data:`ROLES`, or None for "no role").
+        Name -> role (one of :data:`ROLES`, a log role of :data:`LOG_ROLE_NAMES`
+        such as ``"position"``, or None for "no role").
 
     Returns
     -------
@@ -75,8 +81,9 @@ def input_roles(
     for name, role in (overrides or {}).items():
         if name not in out:
             raise ValueError(f"roles: {name!r} is not an input (inputs: {', '.join(names)})")
+        role = LOG_ROLE_NAMES.get(role, role) if isinstance(role, str) else role
         if role is not None and role not in ROLES:
-            raise ValueError(f"roles[{name!r}]: expected one of {', '.join(ROLES)} or None, "
-                             f"found {role!r}")
+            raise ValueError(f"roles[{name!r}]: expected one of {', '.join(ROLES)}, "
+                             f"{', '.join(LOG_ROLE_NAMES)} or None, found {role!r}")
         out[name] = role
     return out

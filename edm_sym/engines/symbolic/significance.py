@@ -33,6 +33,7 @@ import numpy as np
 import sympy as sp
 
 from edm_sym.core.bounds import BOUND_MARGIN, BoundFlag, bound_flags
+from edm_sym.core.units import axis_units
 from edm_sym.engines.symbolic.classify import PhysicalTerm
 from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
 from edm_sym.engines.symbolic.model import RowModel, SymbolicModel
@@ -152,7 +153,7 @@ def _pct(share: float) -> str:
 
 
 def term_summary(term: PhysicalTerm) -> str:
-    """``coulomb (level -0.00064 N m)``: a term's kind and its main parameter."""
+    """``coulomb (level -0.00064 N m)``: a term's kind and its main parameter (in its unit)."""
     if not term.parameters:
         return term.kind
     name, (value, unit) = next(iter(term.parameters.items()))
@@ -186,7 +187,8 @@ def _term_flags(term: PhysicalTerm) -> list[Flag]:
                         f"{p.get('frequency', (float('nan'),))[0]:.4g} rad/s: mostly a derivative "
                         "or integral of the acceleration there"))
     if "wrap_jump" in p:
-        out.append(Flag("wrap_jump", f"jumps by {p['wrap_jump'][0]:.4g} N m at each wrap"))
+        value, unit = p["wrap_jump"]
+        out.append(Flag("wrap_jump", f"jumps by {value:.4g} {unit} at each wrap"))
     return out
 
 
@@ -244,9 +246,10 @@ def judge_rows(
                     continue
                 both = _rms(outputs[j] + outputs[k])
                 if both < opts.cancel_ratio * small:
+                    force = axis_units(model.axis).force
                     flags.append(Flag("cancels", f"cancels with row {k + 1}: together "
-                                      f"{both:.4g} N m RMS ({_pct(both / ref)} of the target's "
-                                      f"RMS), alone {rms[j]:.4g} and {rms[k]:.4g} N m"))
+                                      f"{both:.4g} {force} RMS ({_pct(both / ref)} of the target's "
+                                      f"RMS), alone {rms[j]:.4g} and {rms[k]:.4g} {force}"))
                     negligible = negligible or both / ref < opts.threshold
         row_bounds = tuple(b for b in bounds if b.row == j)
         flags += [Flag("at_bound", b.message()) for b in row_bounds]

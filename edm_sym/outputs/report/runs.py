@@ -111,7 +111,9 @@ def load_log(path: str | Path, result: Any, *, ts: float | None = None,
     need = [*result.inputs, result.target]
     if lugre is not None and lugre.result.velocity_name:
         need.append(lugre.result.velocity_name)
-    data = load_data(path, ts=ts, require=need, default_ts=result.sample_time)
+    # The time column and roles the result records for its abstraction log, where this one has them.
+    data = load_data(path, ts=ts, require=need, default_ts=result.sample_time,
+                     columns=result.column_roles())
     return match_sample_time(data, result.sample_time, model="the result")
 
 
@@ -134,8 +136,7 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
         raise ValueError(f"label: expected 'abstraction' or 'evaluation', found {label!r}")
     sim = simulate(result, data)
     target = np.asarray(data.column(result.target, role="target"), dtype=float)
-    n = len(target)
-    t = np.asarray(data.columns["t"], dtype=float) if "t" in data.columns else np.arange(n) * data.ts
+    t = data.times
     lugre_tau = lugre_rmse = None
     if lugre is not None:
         model = model_of(lugre.result, lugre.name)
