@@ -46,6 +46,7 @@ elites = 1
 tournament = 2
 generations = 2
 continue = "no"
+patience = 5
 local_search = 0
 [[step]]
 n_rows = 1
@@ -135,6 +136,17 @@ def odd(*valid: str) -> st.SearchStrategy[str]:
     return st.integers(0, 9).flatmap(lambda k: st.sampled_from(ODD if k == 9 else list(valid)))
 
 
+def tiny_budget():  # noqa: ANN201
+    """A time budget of 10 s for the abstraction (edm_sym.core.budget), so an edited config
+    (a spliced digit makes 2 generations 2000000) is refused up front instead of running for
+    hours; the refusal is one of the exits the property accepts."""
+    from unittest import mock
+
+    from edm_sym.core import budget
+
+    return mock.patch.object(budget, "TIME_LIMIT_SECONDS", 10.0)
+
+
 def _in_hypothesis() -> bool:
     from hypothesis.control import currently_in_test_context
 
@@ -173,7 +185,7 @@ def _run(capsys: pytest.CaptureFixture, entry: Callable, args: list[str], files:
         else:
             for name in before:  # no input harmed
                 assert after[name] == before[name], f"{name} changed"
-            assert not [n for n in after if n.endswith((".tmp", ".checkpoint"))], sorted(after)
+            assert not [n for n in after if n.endswith(".tmp")], sorted(after)
             check(folder, out)
 
 
@@ -222,7 +234,8 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
     args = ["abstract", "log.csv", "--target", data.draw(odd("tau_ext", "omega")),
             "--inputs", data.draw(odd("omega", "omega,theta_w", "omega, omega", "nope,omega")),
             "--config", "tiny.toml", "-o", "r.json", "--quiet", "--workers", "1"]
-    for option, values in (("--seed", odd("0", "7", "4294967296")), ("--time-limit", odd("5")),
+    limits = st.sampled_from(["3", "3", "3", "nan", "inf", "-1", "0", "abc", "", "1e-300"])
+    for option, values in (("--seed", odd("0", "7", "4294967296")), ("--time-limit", limits),
                            ("--validation-share", odd("0.2", "0.9", "0.95")),
                            ("--select", odd("best", "knee", "simplest-within=5", "simplest-within=x")),
                            ("--ts", odd("0.001"))):
@@ -233,9 +246,13 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
         res = load_result(folder / "r.json")
         assert res.compensator.matrix.rows
         assert out.startswith("wrote r.json")
+        # The checkpoint goes when the run completes; a time limit keeps it for --resume.
+        completed = res.provenance["stop_reason"] == "completed"
+        assert (folder / "r.json.checkpoint").exists() != completed
 
-    _run(capsys, main, args, {"log.csv": data.draw(variant("log.csv")),
-                              "tiny.toml": data.draw(variant("tiny.toml"))}, check)
+    with tiny_budget():
+        _run(capsys, main, args, {"log.csv": data.draw(variant("log.csv")),
+                                  "tiny.toml": data.draw(variant("tiny.toml"))}, check)
 
 
 test_abstract, test_abstract_many = _examples(20, 200)(_prop_abstract)
@@ -324,12 +341,14 @@ def _prop_pipeline(capsys, data) -> None:  # noqa: ANN001
     def check(folder: Path, out: str) -> None:
         summary = json.loads((folder / "evaluation.json").read_text())
         assert summary["abstraction"]["edm"] >= 0
-        load_result(folder / "result.json")
+        assert load_result(folder / "result.json").provenance["stop_reason"] == "completed"
         assert (folder / "gen" / "edm_comp.c").is_file()
+        assert not (folder / "result.json.checkpoint").exists()
 
-    _run(capsys, main, ["pipeline", "pipeline.toml", "--quiet"],
-         {"pipeline.toml": data.draw(variant("pipeline.toml")),
-          "tiny.toml": data.draw(variant("tiny.toml")), "log.csv": VALID["log.csv"]}, check)
+    with tiny_budget():
+        _run(capsys, main, ["pipeline", "pipeline.toml", "--quiet"],
+             {"pipeline.toml": data.draw(variant("pipeline.toml")),
+              "tiny.toml": data.draw(variant("tiny.toml")), "log.csv": VALID["log.csv"]}, check)
 
 
 test_pipeline, test_pipeline_many = _examples(10, 80)(_prop_pipeline)
