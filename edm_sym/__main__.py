@@ -2,6 +2,6 @@
 
 import sys
 
-from edm_sym.application.cli import main
+from edm_sym.application.cli import run
 
-sys.exit(main())
+sys.exit(run())

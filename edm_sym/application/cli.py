@@ -600,6 +600,28 @@ def export_main(argv: Sequence[str] | None = None) -> int:
     return _interruptible("edm-export", lambda: _run(argv, _export_parser()))
 
 
+def _process(entry: Callable[[], int]) -> int:
+    """Run an entry point as a whole process: once its status is known, a late Ctrl-C or
+    SIGTERM is ignored, so none can fire while the interpreter shuts down (threads and
+    extension modules being torn down) and turn exit 130 into a crash or a signal death."""
+    import signal
+
+    code = entry()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    return code
+
+
+def run() -> int:
+    """The ``edm`` console script and ``python -m edm_sym``: :func:`main` as a process."""
+    return _process(main)
+
+
+def export_run() -> int:
+    """The ``edm-export`` console script: :func:`export_main` as a process."""
+    return _process(export_main)
+
+
 def _export_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.",
                      epilog="examples:\n  edm-export result.json --target c\n"
@@ -612,4 +634,4 @@ def _export_parser() -> argparse.ArgumentParser:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(run())

@@ -482,6 +482,8 @@ def abstract(
         cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
     hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
                         validate=validate)
+    # The sizes first (config alone), then whether the log can support them.
+    check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
     _require_samples(data, hold.n_train, cfg)
     data.require_varying(inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones).
@@ -500,7 +502,6 @@ def abstract(
         rng.bit_generator.state = state.rng_state
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
-    check_budget(cfg, x.shape[1], len(inputs), workers=workers, time_limit=time_limit)
     batch = max(s.ga.population * s.n_rows for s in cfg.steps)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
                           cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
