@@ -139,7 +139,10 @@ def load_pipeline(path: str | Path) -> Pipeline:
     if config:
         from edm_sym.engines.abstraction import load_config
 
-        base = load_config(path.resolve().parent / config)
+        try:
+            base = load_config(path.resolve().parent / config)
+        except ConfigError as exc:  # named as the pipeline's key, then the config's own message
+            raise ConfigError(f"{name}: abstraction.config", str(exc)) from None
     axis = _get(f"{name}: data", data, "axis", str, None) or (base.axis if base else None) or "rotary"
     if axis not in ("rotary", "linear"):
         raise ConfigError(f"{name}: data.axis", f"expected rotary or linear, found {axis!r}")

@@ -347,7 +347,7 @@ def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
             return [PhysicalTerm(kind, {pname: (v, unit), **extra},
                                  f"{what}: {v:.6g} {unit}{note}", term)]
         stiff = f"{U.force}/{U.position}"
-        return [_unclassified(term, f"linear in the position: a stiffness of {c * g:.6g} {stiff}, "
+        return [_unclassified(term, f"linear in the {_moved(U)}: a stiffness of {c * g:.6g} {stiff}, "
                               "not a friction term" + note, {"stiffness": (c * g, stiff)})]
     if role == "velocity":
         hit = _coulomb(term, c, f, w, g, extra, note, opts)
@@ -491,11 +491,17 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
               key: cycles, "phase": (phi, "rad"), **extra}
     wrap_note = ""
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
-        wrap_note = "; not a whole number of cycles per wrap of the position: it jumps at each wrap"
+        per_wrap = "revolution" if U.axis == "rotary" else "wrap of the position"
+        wrap_note = f"; not a whole number of cycles per {per_wrap}: it jumps at each wrap"
     return [PhysicalTerm("spatial", params,
                          f"position-dependent friction, {shape}: amplitude {amp:.6g} {U.force}, "
                          f"{cycles[0]:.6g} {per} (period {2 * math.pi / k:.6g} {U.position}), "
                          f"phase {phi:.4g} rad{wrap_note}{note}", term)]
+
+
+def _moved(U: AxisUnits) -> str:  # noqa: N803
+    """What the position of the axis is called in the terms' texts."""
+    return "angle" if U.axis == "rotary" else "position"
 
 
 def _cycles(k: float, U: AxisUnits) -> tuple[str, tuple[float, str], str]:  # noqa: N803
@@ -573,7 +579,7 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
                         f"{p.dominant_amplitude:.4g} {F}")
             if p.jump:
                 params["wrap_jump"] = (p.jump, F)
-                more += f"; jumps by {p.jump:.4g} {F} at each wrap of the position"
+                more += f"; jumps by {p.jump:.4g} {F} at each wrap of the {_moved(U)}"
             return [PhysicalTerm("spatial", {
                 "amplitude": (p.amplitude, F), "period": (period, U.position),
                 key: cycles, "phase": (p.phase, "rad"),
