@@ -18,21 +18,21 @@ never imports scikit-learn.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from edm_sym.core.data import ColumnRoles, DataLog
-from edm_sym.core.errors import (
-    ConfigError,
-    DataFormatError,
-    EdmError,
-    NumericsWarning,
-    ResultFormatError,
-)
-from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
-from edm_sym.core.result import EdmResult, load_result, save_result
-from edm_sym.core.version import __version__
-from edm_sym.engines.simulate import Simulation, simulate
-from edm_sym.engines.sources import load_data
+from edm_sym.core import display as _display  # no dependencies: safe before Ctrl-C handling
+
+# Nothing heavy is imported here: `edm` and `edm-export` import this package first, and
+# they must be able to catch Ctrl-C and SIGTERM before numpy and scipy load (docs/cli.md).
+# The public names resolve on first access (__getattr__ below).
+if TYPE_CHECKING:
+    from edm_sym.core.data import ColumnRoles, DataLog
+    from edm_sym.core.errors import ConfigError, DataFormatError, EdmError, NumericsWarning, ResultFormatError
+    from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
+    from edm_sym.core.result import EdmResult, load_result, save_result
+    from edm_sym.core.version import __version__
+    from edm_sym.engines.simulate import Simulation, simulate
+    from edm_sym.engines.sources import load_data
 
 __all__ = [
     "ColumnRoles",
@@ -128,18 +128,49 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
     return _export(result, target, out_dir, **options)
 
 
-#: Names resolved on first access, so that their optional dependencies load only then.
-_LAZY = {"EDMRegressor": "edm_sym.application.estimator"}
+def _model_latex(model: Any) -> str:
+    from edm_sym.outputs.printing.latex import model_latex  # the one place that writes LaTeX
+
+    return model_latex(model)
+
+
+def _result_latex(result: EdmResult) -> str:
+    return _model_latex(decode(result, classify=False, systems=False))
+
+
+# Jupyter's rich display of results and models: core and engines know no LaTeX, so the
+# package face (which may import every layer) hands them the printer's renderers.
+_display.register_latex("model", _model_latex)
+_display.register_latex("result", _result_latex)
+
+#: Names resolved on first access: name -> module.
+_LAZY = {
+    "DataLog": "edm_sym.core.data", "ColumnRoles": "edm_sym.core.data",
+    "ConfigError": "edm_sym.core.errors", "DataFormatError": "edm_sym.core.errors",
+    "EdmError": "edm_sym.core.errors", "NumericsWarning": "edm_sym.core.errors",
+    "ResultFormatError": "edm_sym.core.errors",
+    "Compensator": "edm_sym.core.matrix", "ElementMatrix": "edm_sym.core.matrix",
+    "Gene": "edm_sym.core.matrix", "Row": "edm_sym.core.matrix", "make_matrix": "edm_sym.core.matrix",
+    "EdmResult": "edm_sym.core.result", "load_result": "edm_sym.core.result",
+    "save_result": "edm_sym.core.result",
+    "__version__": "edm_sym.core.version",
+    "Simulation": "edm_sym.engines.simulate", "simulate": "edm_sym.engines.simulate",
+    "load_data": "edm_sym.engines.sources",
+    # needs scikit-learn (the extra edm_sym[sklearn])
+    "EDMRegressor": "edm_sym.application.estimator",
+}
 
 
 def __getattr__(name: str) -> Any:
-    """``edm_sym.EDMRegressor``: from :mod:`edm_sym.application.estimator` (needs scikit-learn), on use."""
+    """The public names, imported on first use (``EDMRegressor`` needs scikit-learn)."""
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'edm_sym' has no attribute {name!r}")
     import importlib
 
-    return getattr(importlib.import_module(module), name)
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
 
 
 def __dir__() -> list[str]:

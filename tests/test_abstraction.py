@@ -343,9 +343,26 @@ def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: 
 def test_the_progress_bar_shows_step_generation_best_and_rate(
     log: DataLog, capsys: pytest.CaptureFixture
 ) -> None:
-    run(log, SMALL, seed=0, workers=1, progress=True)
+    from edm_sym.application.progress import ProgressReporter
+
+    with ProgressReporter("test", bar=True) as reporter:
+        run(log, SMALL, seed=0, workers=1, callback=reporter.abstraction)
     err = capsys.readouterr().err
-    assert "step 2/2 3x3" in err and "best" in err and "eval/s" in err and "gen 6" in err
+    assert "step 2/2 (3x3)" in err and "best" in err and "eval/s" in err and "gen 6" in err
+
+
+def test_the_engine_prints_nothing_and_reports_the_generations_left(
+    log: DataLog, capsys: pytest.CaptureFixture
+) -> None:
+    seen = []
+    run(log, SMALL, seed=0, workers=1, callback=seen.append)
+    assert capsys.readouterr() == ("", "")
+    # continue = "no", 6 generations per step, no restarts: the fewest generations left
+    # count down to 0 over both steps.
+    assert [(i.step, i.generation) for i in seen][:2] == [(1, 0), (1, 1)]
+    assert [i.generations_left for i in seen] == [6 - g + (6 if s == 1 else 0)
+                                                  for s, g in ((i.step, i.generation) for i in seen)]
+    assert seen[-1].generations_left == 0 and seen[-1].shape == (3, 3) and seen[-1].steps == 2
 
 
 def test_the_config_example_in_the_docs_is_valid() -> None:

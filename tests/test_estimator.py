@@ -339,3 +339,13 @@ def _expected_failed_checks(estimator: EDMRegressor) -> dict[str, str]:
                          expected_failed_checks=_expected_failed_checks)
 def test_sklearn_estimator_checks(estimator: EDMRegressor, check) -> None:  # noqa: ANN001
     check(estimator)
+
+
+def test_to_control_equals_predict(fitted: EDMRegressor, log: pd.DataFrame) -> None:
+    import control as ct
+
+    sys = fitted.to_control()
+    assert sys.input_labels == ["omega", "alpha"] and sys.dt == TS
+    u = log[["omega", "alpha"]].to_numpy().T
+    resp = ct.input_output_response(sys, np.arange(u.shape[1]) * TS, u, squeeze=False)
+    assert np.max(np.abs(resp.outputs[0] - fitted.predict(log[["omega", "alpha"]]))) <= 1e-9

@@ -46,6 +46,10 @@ TRACKING_BOUNDS = {
     "auger": (2.0, 1.2),
     "ballscrew": (2.0, 1.1),
     "lugre": (1.8, 1.0),
+    "bearing": (1.8, 1.0),
+    "stribeck": (1.8, 1.0),
+    "inertia": (1.2, 0.4),
+    "ripple3": (1.5, 0.7),
 }
 
 
@@ -457,10 +461,17 @@ def test_truth_explains_tau_ext(name: str) -> None:
     p = log.preset
     total = p.torque_constant_nominal * log.state["i_ref"] - p.inertia_nominal * log.state["alpha"]
     np.testing.assert_allclose(log.truth["total"], total, rtol=1e-9, atol=1e-9)
-    # tau_ext is Q(s) of the truth (one sample later: the balance of sample k is
-    # centred on t_{k-1}); what is left is encoder rounding.
-    expected = lowpass(log.truth["total"], p.g_rtob, log.ts)
-    assert rms(log.tau_ext[1:] - expected[:-1]) < 0.02 * rms(log.tau_ext)
+    # tau_ext is Q(s) of the truth one sample later (the balance of sample k is
+    # centred on t_{k-1}), with the acceleration terms averaged over samples k-1
+    # and k-2: the truth's alpha[k] is the acceleration over [t_k, t_{k+1}), and
+    # the balance weighs J alpha with a triangle over [t_{k-2}, t_k]. That matters
+    # when tau_ext is mostly inertia (the `inertia` preset: 2.5 % RMS at k-1 alone);
+    # what is left is encoder rounding.
+    accel = log.truth["inertia_mismatch"] + log.truth["torque_constant_mismatch"]
+    rest = log.truth["total"] - accel
+    aligned = rest[1:-1] + 0.5 * (accel[1:-1] + accel[:-2])
+    expected = lowpass(aligned, p.g_rtob, log.ts)
+    assert rms(log.tau_ext[2:] - expected) < 0.02 * rms(log.tau_ext)
 
 
 def test_auger_has_every_disturbance() -> None:

@@ -75,6 +75,15 @@ def test_example_report_compiles_cleanly(tmp_path: Path) -> None:
         assert heading in text
     assert "LuGre (conventional)" in text and "EDM (this compensator)" in text
     assert result.sha256 in text
+    # The method's paper is cited and listed; the fitness is named as the weighted eq. 8
+    # with its unit; the LuGre parameters have SI units.
+    from edm_sym.outputs.report.context import PAPER
+
+    assert "the method of [1]" in text and f"References [1] {PAPER['title']}." in text
+    assert "Weighted fitness (eq. 8) " in text
+    lugre = text.split("Parameters of the LuGre model", 1)[1]
+    for unit in ("rad/s", "N m", "rad", "N m/rad", "N m s/rad"):
+        assert f" {unit} " in lugre, unit
 
 
 def test_write_report_pdf_keeps_only_tex_figures_and_pdf(tmp_path: Path) -> None:

@@ -3,7 +3,7 @@
 Bad input (config, columns, options) raises :class:`~edm_sym.core.errors.ConfigError`
 or :class:`~edm_sym.core.errors.DataFormatError`, which ``edm`` prints as one line
 with exit status 2. A time limit ends the run with exit 0, Ctrl-C (or
-SIGTERM) with exit 1; both write the best result found so far, and the
+SIGTERM) with exit 130; both write the best result found so far, and the
 checkpoint ``<output>.checkpoint`` lets ``--resume`` continue the run to the
 result an uninterrupted run gives.
 """
@@ -33,15 +33,11 @@ def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
-def _warn_bounds(result: EdmResult, output: Path) -> None:
-    """The closing summary's flags: parameters at their range bounds (docs/describe.md)."""
-    from edm_sym.core.bounds import bound_summary
+def _warn_flags(result: EdmResult, output: Path, data) -> None:  # noqa: ANN001
+    """The closing summary's flags: parameters at their range bounds, negligible rows."""
+    from edm_sym.application.summary import print_summary, result_flags
 
-    lines = bound_summary(result.compensator)
-    for line in lines:
-        print(f"edm abstract: warning: {line}", file=sys.stderr)
-    if lines:
-        print(f"edm abstract: see `edm describe {output}` for every row's flags", file=sys.stderr)
+    print_summary("edm abstract", flags=result_flags(result, data), describe=output)
 
 
 def run_cli(args: argparse.Namespace) -> int:
@@ -97,22 +93,20 @@ def run_cli(args: argparse.Namespace) -> int:
     if args.resume and not ckpt.exists():
         print(f"edm abstract: no checkpoint {ckpt}; starting from the beginning",
               file=sys.stderr)
-    progress = not args.quiet and sys.stderr.isatty()
+    from edm_sym.application.progress import ProgressReporter
+
     old = signal.signal(signal.SIGTERM, _raise_interrupt)
     try:
-        result = abstract(data, target=target, inputs=inputs, config=config,
-                          seed=args.seed, time_limit=args.time_limit, progress=progress,
-                          checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                          validate=validate, select=getattr(args, "select", None), axis=axis)
+        with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
+            result = abstract(data, target=target, inputs=inputs, config=config,
+                              seed=args.seed, time_limit=args.time_limit,
+                              callback=reporter.abstraction,
+                              checkpoint=ckpt, resume=args.resume, workers=args.workers,
+                              validate=validate, select=getattr(args, "select", None), axis=axis)
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)
     reason = result.provenance.get("stop_reason")
-    if reason == "interrupted":
-        print(f"edm abstract: interrupted; wrote the best so far to {output} "
-              f"(continue with --resume)", file=sys.stderr)
-    elif reason == "time_limit":
-        print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")
     for line in summary_lines(result.validation):
@@ -122,8 +116,24 @@ def run_cli(args: argparse.Namespace) -> int:
         member = par["front"][par["selected"] - 1]
         print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
               f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
-    _warn_bounds(result, output)
+    _warn_flags(result, output, data)
+    # How the run ended is the last line, after the summary's flags.
+    if reason == "interrupted":
+        print(f"edm abstract: interrupted; wrote the best so far to {output} "
+              f"(continue with --resume)", file=sys.stderr)
+    elif reason == "time_limit":
+        print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     return 130 if reason == "interrupted" else 0
+
+
+def _unit(args: argparse.Namespace) -> str:
+    """The target's unit, for the progress lines (the axis option, when there is one)."""
+    from edm_sym.core.units import axis_units
+
+    try:
+        return axis_units(getattr(args, "axis", None) or "rotary").force
+    except ValueError:
+        return ""
 
 
 def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201

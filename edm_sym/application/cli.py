@@ -15,10 +15,10 @@ import os
 import sys
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ResultFormatError, ToolMissingError
+from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
 from edm_sym.core.fileio import check_outputs
 
 
@@ -189,7 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the result file (default result.json; a checkpoint is kept beside it)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
     p.add_argument("--validation-share", type=float, metavar="SHARE",
                    help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
@@ -233,7 +234,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
     p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--reuse", action="store_true",
                    help="keep an existing lugre.json / result.json (evaluate and export only)")
     p.set_defaults(func=_cmd_pipeline)
@@ -269,6 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default scipy; docs/lugre.md)")
     p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json",
                    help="the LuGre file (default lugre.json)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
     _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
@@ -317,7 +321,20 @@ def _cmd_export(args: argparse.Namespace) -> int:
                      data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
     for path in written:
         print(path)
+    _export_summary(result, args)
     return 0
+
+
+def _export_summary(result, args: argparse.Namespace) -> None:  # noqa: ANN001
+    """The closing summary of an export: the fitness the result records, and its flags."""
+    from edm_sym.application.summary import NOT_MEASURED, fitness_line, print_summary, result_flags
+    from edm_sym.engines.sources import load_data
+
+    prog = "edm-export" if not hasattr(args, "command") else "edm export"
+    spec = args.eval_data or args.data
+    log = load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) if spec else None
+    notes = [fitness_line(result)] + ([] if log is not None else [NOT_MEASURED])
+    print_summary(prog, fitness=notes, flags=result_flags(result, log), describe=args.result)
 
 
 def _export_names(args: argparse.Namespace) -> list[str]:
@@ -332,6 +349,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
     from edm_sym.core.fitness import rms
     from edm_sym.core.units import axis_units
+    from edm_sym.engines.models import load_model
     from edm_sym.engines.sources import load_data
 
     model_path = Path(args.model)
@@ -339,34 +357,18 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     check_outputs([out], [args.model, args.data])
     given = _columns(args)
     # The model is validated completely before the data is read.
-    if _model_kind(model_path) == "edm-lugre":
-        from edm_sym.engines.lugre import load_lugre, simulate_lugre
-
-        lugre = load_lugre(model_path)
-        target, velocity = lugre.target_name, lugre.velocity_name
-        axis = args.axis or "rotary"
-        data = load_data(args.data, ts=args.ts, require=[velocity], default_ts=lugre.sample_time,
-                         columns=given)
-        data = _match_ts(model_path.name, lugre.sample_time, data, args.resample)
-        cols = {_time_name(data): data.times}
-        cols["tau_cmp"] = simulate_lugre(lugre.params, data.columns[velocity], data.ts)
-    else:
-        from edm_sym.core.result import load_result
-        from edm_sym.engines.simulate import simulate
-
-        result = load_result(model_path)
-        target, axis = result.target, result.axis
-        if args.axis is not None and args.axis != axis:
-            raise UsageError(f"edm simulate: --axis: expected {axis} as in {model_path.name}, "
-                             f"found {args.axis}")
-        # The time column and roles the result records, under those given now.
-        data = load_data(args.data, ts=args.ts, require=result.inputs, default_ts=result.sample_time,
-                         columns=given.over(result.column_roles()))
-        data = _match_ts(model_path.name, result.sample_time, data, args.resample)
-        sim = simulate(result, data)
-        cols = {_time_name(data): data.times}
-        cols.update({f"row_{j}": row for j, row in enumerate(sim.rows, start=1)})
-        cols["tau_cmp"] = sim.total
+    model = load_model(model_path)
+    target = model.target
+    if args.axis is not None and model.axis is not None and args.axis != model.axis:
+        raise UsageError(f"edm simulate: --axis: expected {model.axis} as in {model_path.name}, "
+                         f"found {args.axis}")
+    axis = model.axis or args.axis or "rotary"
+    # The time column and roles the model records, under those given now.
+    data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time,
+                     columns=given.over(model.column_roles()))
+    data = _match_ts(model_path.name, model.sample_time, data, args.resample)
+    run = model.run(data)
+    cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
     rmse = None
     if target in data.columns:
         cols["residual"] = data.columns[target] - cols["tau_cmp"]
@@ -397,23 +399,6 @@ def _time_name(data) -> str:  # noqa: ANN001
     return data.time_column or "t"
 
 
-def _model_kind(path: Path) -> str:
-    try:
-        doc = json.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
-    if not isinstance(doc, dict):
-        raise ResultFormatError(f"{path.name}: (top level)",
-                                f"expected a JSON object, found {type(doc).__name__}")
-    kind = doc.get("format")
-    if kind not in ("edm-result", "edm-lugre"):
-        raise ResultFormatError(f"{path.name}: format",
-                                f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')
-    return kind
-
-
 def _cmd_plant(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
     from edm_sym.engines.plant import PRESETS, simulate_plant
@@ -432,7 +417,7 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_pipeline(args: argparse.Namespace) -> int:
     from edm_sym.application.pipeline import run_pipeline
 
-    run_pipeline(args.pipeline, progress=not args.quiet and sys.stderr.isatty(), reuse=args.reuse)
+    run_pipeline(args.pipeline, progress=not args.quiet, reuse=args.reuse)
     return 0
 
 
@@ -472,8 +457,10 @@ def _option_or_role(value: str | None, given, role: str, option: str) -> str:  #
 
 
 def _cmd_lugre(args: argparse.Namespace) -> int:
+    from edm_sym.application.progress import ProgressReporter
+    from edm_sym.application.summary import print_summary
     from edm_sym.core.units import axis_units
-    from edm_sym.engines.lugre import identify_lugre, save_lugre
+    from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.sources import load_data
 
     given = _columns(args)
@@ -481,8 +468,10 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     velocity = _option_or_role(args.velocity, given, "velocity", "--velocity")
     check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
-    res = identify_lugre(data.columns[target], data.columns[velocity], data.ts,
-                         method=args.method, seed=args.seed, time_limit=args.time_limit)
+    with ProgressReporter("edm lugre", quiet=args.quiet) as reporter:
+        res = identify_lugre(data.columns[target], data.columns[velocity], data.ts,
+                             method=args.method, seed=args.seed, time_limit=args.time_limit,
+                             progress=reporter.lugre)
     save_lugre(args.output, res, target=target, velocity=velocity,
                data_sha256=data.sha256, seed=args.seed)
     unit = axis_units(args.axis or "rotary").force
@@ -490,6 +479,9 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     for name, score in (res.comparison or {}).items():
         print(f"{name} fitness {score.fitness:.10g} {unit} ({score.evaluations} evaluations)")
     print(f"rmse {res.rmse:.10g} {unit}")
+    print_summary("edm lugre", fitness=[f"fitness (weighted eq. 8): training {res.rmse:.6g} "
+                                        f"{unit}, validation: none held out"],
+                  flags=shape_bound_flags(res.params, data.columns[velocity], data.ts))
     return 0
 
 
@@ -578,13 +570,37 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         return EXIT_FAILED
 
 
+def _interruptible(prog: str, body: Callable[[], int]) -> int:
+    """Run a whole command, start-up included, so that SIGINT and SIGTERM end it with 130.
+
+    The handler is installed before the parser is built and before any heavy
+    import (``edm_sym`` imports nothing heavy itself), and an interrupt that
+    arrives outside :func:`_dispatch` (building the parser, printing a message)
+    still ends in one line, never a traceback.
+    """
+    import signal
+
+    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        return body()
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``edm``."""
-    return _run(argv, build_parser())
+    return _interruptible("edm", lambda: _run(argv, build_parser()))
 
 
 def export_main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``edm-export`` (the same as ``edm export``)."""
+    return _interruptible("edm-export", lambda: _run(argv, _export_parser()))
+
+
+def _export_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="edm-export", description="Render an EDM result as C, Python or LaTeX.",
                      epilog="examples:\n  edm-export result.json --target c\n"
                             "  edm-export result.json --target all --pdf -o gen/\n"
@@ -592,7 +608,7 @@ def export_main(argv: Sequence[str] | None = None) -> int:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_version(parser)
     _add_export_args(parser)
-    return _run(argv, parser)
+    return parser
 
 
 if __name__ == "__main__":  # pragma: no cover

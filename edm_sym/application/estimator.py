@@ -86,7 +86,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
     workers : int, default 1
         Processes of the abstraction (None: every usable core).
     progress : bool, default False
-        Show the abstraction's progress bar on stderr.
+        Show the abstraction's progress on stderr: a bar on a terminal, a
+        line every few seconds elsewhere (a notebook's log, CI).
 
     Attributes
     ----------
@@ -179,9 +180,12 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         columns = {name: np.array(X[:, j], dtype=np.float64) for j, name in enumerate(names)}
         columns[self.target_name] = np.array(y, dtype=np.float64)
         data = DataLog(columns, ts, source=FIT_SOURCE)
-        result = abstract(data, target=self.target_name, inputs=names, config=self._config(),
-                          seed=self.seed, time_limit=self.time_limit, workers=self.workers,
-                          progress=bool(self.progress))
+        from edm_sym.application.progress import ProgressReporter
+
+        with ProgressReporter("EDMRegressor.fit", quiet=not self.progress) as reporter:
+            result = abstract(data, target=self.target_name, inputs=names,
+                              config=self._config(), seed=self.seed, time_limit=self.time_limit,
+                              workers=self.workers, callback=reporter.abstraction)
         self.result_ = result
         self.n_features_in_ = X.shape[1]
         self.feature_names_in_ = np.asarray(names, dtype=object)
@@ -312,6 +316,28 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
 
         check_is_fitted(self, "result_")
         return export(self.result_, "python", out_dir, **options)
+
+    def to_control(self, **options: Any) -> Any:
+        """The fitted compensator as a discrete python-control system (``dt = Ts``).
+
+        Parameters
+        ----------
+        **options
+            ``output`` (default ``"tau_cmp"``) and ``name``, as for
+            :meth:`edm_sym.engines.symbolic.model.SymbolicModel.to_control`.
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+            Inputs named as the features of :meth:`fit`, one output; its
+            :func:`control.input_output_response` equals :meth:`predict`.
+        """
+        from edm_sym.engines.symbolic.model import build_model
+
+        check_is_fitted(self, "result_")
+        # The stages suffice: no simplification, no classification.
+        comp = self.result_.compensator
+        return build_model(comp, target=self.result_.target).to_control(**options)
 
     # --- helpers ---
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from edm_sym.core.budget import check_state
 from edm_sym.core.data import is_plant_spec
 from edm_sym.core.errors import ExternalToolError, ToolMissingError
 from edm_sym.outputs.render import REPORT, render, target_names, write_files
@@ -52,6 +53,10 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     ------
     ValueError
         On a bad ``target``, ``prefix`` or ``real``; nothing is written.
+    BudgetError
+        When the compensator's state exceeds the limit of
+        :data:`edm_sym.core.budget.STATE_LIMIT_BYTES` (256 MiB); above 1 MiB
+        a :class:`~edm_sym.core.errors.BudgetWarning` gives the figure.
     ToolMissingError
         With ``pdf=True`` and no latexmk; the .tex, figures and code are written.
     OutputError
@@ -60,6 +65,11 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     validate_prefix(prefix)
     validate_real(real)
     names = target_names(target)
+    # The state a compensator keeps is sized before anything is decoded or written.
+    comp = result.compensator
+    check_state([g.element.state_size(comp.value(g), comp.sample_time)
+                 for row in comp.matrix.rows for g in row.genes],
+                real if "c" in names else "double", source_of(result).name)
     from edm_sym.engines.symbolic import build_model, decode  # sympy only when exporting
 
     source = source_of(result)

@@ -209,12 +209,17 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     path : path-like
         The pipeline TOML file.
     progress : bool
-        Show the genetic algorithm's progress bar.
+        Show the progress of the LuGre identification and the genetic
+        algorithm on stderr (a bar on a terminal, a line every few seconds
+        elsewhere).
     reuse : bool
         Keep an existing ``lugre.json`` / ``result.json`` beside the file
-        instead of identifying again (evaluation and export still run).
+        instead of identifying again (evaluation and export still run); an
+        interrupted ``result.json`` is not kept but continued from its
+        checkpoint ``result.json.checkpoint``.
     out : file, optional
-        Where the summary is printed (default: standard output).
+        Where the files written and the RMSE table are printed (default:
+        standard output); the fitness and the flags go to standard error.
 
     Returns
     -------
@@ -222,10 +227,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         The evaluation summary (also written to ``evaluation.json``).
     """
     from edm_sym.application.exporting import export
+    from edm_sym.application.progress import ProgressReporter
+    from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
-    from edm_sym.engines.abstraction import abstract, load_config
-    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, simulate_lugre
-    from edm_sym.engines.simulate import simulate
+    from edm_sym.engines.abstraction import abstract, default_config, load_config
+    from edm_sym.engines.abstraction.run import check_budget
+    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
+    from edm_sym.engines.models import model_of
 
     out = out if out is not None else sys.stdout
     pipe = load_pipeline(path)
@@ -242,30 +250,43 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         Path("generated") / pipe.folder.name
     # Every output is checked before the long work: none may be an input, all must be writable.
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
-    check_outputs([lugre_file, result_file, pipe.folder / "evaluation.json", out_dir / "edm_comp.h"],
-                  [path, pipe.config, *data_files], option="pipeline output")
+    ckpt = result_file.with_name(result_file.name + ".checkpoint")
+    check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
+                   out_dir / "edm_comp.h"], [path, pipe.config, *data_files], option="pipeline output")
+    # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
+    keep_result = reuse and result_file.exists() and \
+        load_result(result_file).provenance.get("stop_reason") != "interrupted"
+    # The abstraction's sizes are checked before the LuGre identification runs.
+    config = load_config(pipe.config) if pipe.config else None
+    if not keep_result:
+        check_budget(config or default_config(), len(abst), len(pipe.inputs),
+                     time_limit=pipe.time_limit)
 
     lugre = None
     if pipe.lugre is not None:
         velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
         if not (reuse and lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
-            res = identify_lugre(
-                abst.columns[pipe.target], abst.column(velocity, role="velocity column"), abst.ts,
-                method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"), seed=seed,
-                time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
-                weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
-                                       f"{name}: lugre.weighting"))
+            with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
+                res = identify_lugre(
+                    abst.columns[pipe.target], abst.column(velocity, role="velocity column"),
+                    abst.ts, method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"),
+                    seed=seed,
+                    time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
+                    weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
+                                           f"{name}: lugre.weighting"),
+                    progress=reporter.lugre)
             save_lugre(lugre_file, res, target=pipe.target, velocity=velocity,
                        data_sha256=abst.sha256, seed=seed)
         lugre = load_lugre(lugre_file)
         print(f"lugre: {lugre_file}", file=out)
 
-    if not (reuse and result_file.exists()):
-        config = load_config(pipe.config) if pipe.config else None
-        result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
-                          seed=pipe.seed, time_limit=pipe.time_limit, progress=progress,
-                          axis=pipe.axis)
+    if not keep_result:
+        with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
+            result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
+                              seed=pipe.seed, time_limit=pipe.time_limit,
+                              callback=reporter.abstraction,
+                              checkpoint=ckpt, resume=reuse and ckpt.exists(), axis=pipe.axis)
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data
@@ -281,11 +302,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     print(f"result: {result_file}", file=out)
 
     summary: dict[str, Any] = {}
+    models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None else {})
     for label, log in logs.items():
-        row = {"edm": rms(log.columns[pipe.target] - simulate(result, log).total)}
-        if lugre is not None:
-            tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
-            row["lugre"] = rms(log.columns[pipe.target] - tau)
+        row = {kind: rms(log.columns[pipe.target] - m.run(log).torque) for kind, m in models.items()}
+        if "lugre" in row:
             row["ratio"] = row["edm"] / row["lugre"]
         summary[label] = row
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
@@ -300,4 +320,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
                      pdf=_get(f"{name}: export", ex, "pdf", bool, False))
     for p in written:
         print(f"wrote {p}", file=out)
+    flags = result_flags(result, logs.get("evaluation", abst))
+    if lugre is not None:
+        flags += shape_bound_flags(lugre.params, abst.columns[lugre.velocity_name], abst.ts)
+    print_summary("edm pipeline", fitness=[fitness_line(result)], flags=flags,
+                  describe=result_file)
     return summary

@@ -57,6 +57,23 @@ class ConfigError(EdmError, ValueError):
         super().__init__(f"{where}: {problem}")
 
 
+class BudgetError(EdmError, ValueError):
+    """Work that cannot fit: more memory or time than a machine has (edm_sym.core.budget).
+
+    Parameters
+    ----------
+    where : str
+        The file and key, or the option, whose sizes ask for the work.
+    problem : str
+        The estimate, the limit it exceeds, and what to make smaller.
+    """
+
+    def __init__(self, where: str, problem: str):
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")
+
+
 class OutputError(EdmError, OSError):
     """The output folder or a file in it cannot be created or written."""
 
@@ -71,3 +88,7 @@ class ExternalToolError(RuntimeError):
 
 class NumericsWarning(UserWarning):
     """Doubtful numerics: an unstable filter, a parameter at its range limit, ..."""
+
+
+class BudgetWarning(UserWarning):
+    """A size that fits but is worth a word: a compensator state larger than a microcontroller's RAM."""

@@ -10,13 +10,15 @@ is an input (also through a link) or that cannot be written.
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import Any
 
-from edm_sym.core.errors import OutputError
+from edm_sym.core.errors import TOO_DEEP, EdmError, OutputError
 
 
 def _current_umask() -> int:
@@ -149,3 +151,51 @@ def check_outputs(outputs: Iterable[str | os.PathLike], inputs: Iterable[object]
         why = _writable(out)
         if why:
             raise OutputError(f"{option} {out}: {why}")
+
+
+def _finite_only(token: str) -> float:
+    raise ValueError(f"{token} is not allowed (numbers must be finite)")
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise ValueError(f"duplicate key {key!r}")
+        seen[key] = value
+    return seen
+
+
+def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) -> tuple[Any, bytes]:
+    """Read a JSON document strictly: finite numbers, no duplicate keys, bounded nesting.
+
+    The one reader of the project's JSON files (result.json, LUGRE.json, any
+    model file); every defect becomes ``error(where, problem)`` naming the file
+    (and the line and column of a syntax error).
+
+    Returns
+    -------
+    (document, raw bytes)
+    """
+    path = Path(path)
+    name = path.name
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise error(str(path), "no such file") from None
+    except OSError as exc:
+        raise error(str(path), f"cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    try:
+        doc = json.loads(text, parse_constant=_finite_only, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as exc:
+        raise error(f"{name}: line {exc.lineno} column {exc.colno}",
+                    f"expected JSON, found invalid JSON ({exc.msg})") from None
+    except ValueError as exc:
+        raise error(name, f"expected JSON, found invalid JSON ({exc})") from None
+    except RecursionError:
+        raise error(name, TOO_DEEP) from None
+    return doc, raw

@@ -22,8 +22,8 @@ from typing import Any
 from edm_sym.core.bounds import bound_flags
 from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import REGISTRY, ParamRange
-from edm_sym.core.errors import TOO_DEEP, DataFormatError, ResultFormatError
-from edm_sym.core.fileio import write_atomic
+from edm_sym.core.errors import DataFormatError, ResultFormatError
+from edm_sym.core.fileio import read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.units import AXES, AxisUnits, axis_units
 from edm_sym.core.validation import json_path, schema_problem
@@ -131,6 +131,29 @@ class EdmResult:
     def units(self) -> AxisUnits:
         """The SI units of this result's axis (``axis_units(self.axis)``)."""
         return axis_units(self.axis)
+
+    def __repr__(self) -> str:
+        """A header line and one line per row (the dataclass dump would fill the screen)."""
+        from edm_sym.core.display import matrix_lines
+
+        m = self.compensator.matrix
+        val = self.validation.get("validation") if isinstance(self.validation, Mapping) else None
+        from edm_sym.core.units import axis_units
+
+        unit = axis_units(getattr(self, "axis", "rotary")).force
+        fit = "inf" if self.fitness is None else f"{self.fitness:.4g} {unit}"
+        if isinstance(val, Mapping) and val.get("fitness") and val["fitness"][0] is not None:
+            fit += f", validation {val['fitness'][0]:.4g} {unit}"
+        head = (f"EdmResult(target {self.target!r}, inputs {', '.join(m.inputs)}, "
+                f"{m.n_elements}x{len(m.rows)} matrix, Ts = {self.sample_time:g} s, "
+                f"fitness {fit})")
+        return "\n".join([head] + [f"  {line}" for line in matrix_lines(self.compensator)])
+
+    def _repr_latex_(self) -> str | None:
+        """The compensator as LaTeX, one row per line (Jupyter; decodes with sympy)."""
+        from edm_sym.core.display import latex_repr
+
+        return latex_repr("result", self)
 
     @property
     def matrix(self) -> ElementMatrix:
@@ -468,19 +491,6 @@ def load_result(path: str | Path) -> EdmResult:
         When the file is missing, not JSON, or not a valid edm-result.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot be read ({exc.strerror})") from None
-    try:
-        doc = json.loads(raw.decode("utf-8"), parse_constant=_reject_constant)
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as exc:
-        raise ResultFormatError(str(path), f"expected JSON, found invalid text ({exc})") from None
-    except RecursionError:
-        raise ResultFormatError(str(path), TOO_DEEP) from None
+    doc, raw = read_json(path, ResultFormatError)
     res = parse_result(doc, path.name)
     return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))
-
-
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"{name} is not allowed in result files")

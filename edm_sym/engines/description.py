@@ -140,7 +140,8 @@ def _fitness_text(fit: Mapping[str, Any]) -> str:
             f"{k} {_value_text(x)}" for k, x in v.items())))
     d = fit.get("data")
     if d:
-        parts.append(f"on {d['source']}: RMSE {_value_text(d['rmse'])}, target RMS "
+        rows = f" (held-out rows {d['rows'][0]}-{d['rows'][1]})" if d.get("rows") else ""
+        parts.append(f"on {d['source']}{rows}: RMSE {_value_text(d['rmse'])}, target RMS "
                      f"{_value_text(d['target_rms'])}")
     else:
         parts.append("no data: contributions not measured (pass --data)")
@@ -218,6 +219,30 @@ def recorded_data(result: EdmResult) -> str | Path | None:
     return base / spec
 
 
+def held_out_rows(result: EdmResult, log: DataLog) -> tuple[int, int] | None:
+    """The rows of ``log`` the search held out, when ``log`` is the log it was fitted to.
+
+    A result that records a held-out segment (``validation.held_out``, kind
+    ``segment``, rows ``[n_train, N]``) of a log with the digest
+    ``provenance.data_sha256`` gives those rows for a log of that digest and
+    length; any other log (an evaluation log, a file held out whole) gives None:
+    all of it is data the search did not fit, or the caller's choice.
+    """
+    val = result.validation if isinstance(result.validation, Mapping) else {}
+    held = val.get("held_out")
+    if not isinstance(held, Mapping) or held.get("kind") != "segment":
+        return None
+    rows = held.get("rows")
+    digest = (result.provenance or {}).get("data_sha256")
+    if not (isinstance(rows, list | tuple) and len(rows) == 2
+            and all(isinstance(r, int) for r in rows)):
+        return None
+    start, stop = rows
+    if digest is None or log.sha256 != digest or stop != len(log) or not 0 <= start < stop:
+        return None
+    return start, stop
+
+
 def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles | None,
           resample: bool) -> DataLog:
     """The log on the result's grid: its recorded time column and roles under the given ones,
@@ -256,6 +281,8 @@ def describe(
         ``plant:PRESET/EXCITATION`` spec). Default: the data the result records
         (:func:`recorded_data`: its evaluation log, else its abstraction log);
         without any, nothing is measured and every row is flagged ``unmeasured``.
+        When it is the log the search was fitted to and the result records a
+        held-out segment of it, only those rows are judged (:func:`held_out_rows`).
     ts : float, optional
         Sample time of a log without a time column (default: the result's).
     options : SignificanceOptions, optional
@@ -319,10 +346,18 @@ def describe(
         outputs = simulate_rows(comp, comp.matrix.rows, x)
         target = log.column(result.target, role="target column")
         inputs = [x[row.input] for row in comp.matrix.rows]
+        # On the log the search was fitted to, judge on its held-out rows alone
+        # (simulated after the training rows, as the search scored them).
+        held = held_out_rows(result, log)
+        if held is not None:
+            sl = slice(*held)
+            outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
         resid = target - outputs.sum(axis=0)
-        data_fit = {"source": str(log.source), "samples": len(log),
+        data_fit = {"source": str(log.source), "samples": len(target),
                     "target_rms": [float(np.sqrt(np.mean(target ** 2))), force],
                     "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
+        if held is not None:
+            data_fit["rows"] = list(held)
     judged = judge_rows(model, outputs, target, inputs, options=options)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)

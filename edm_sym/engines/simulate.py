@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from edm_sym.core.budget import check, simulation_estimate
 from edm_sym.core.data import DataLog
 from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator, Row
@@ -99,9 +100,18 @@ def simulate(result, data) -> Simulation:  # noqa: ANN001  (duck-typed on purpos
     -------
     Simulation
         Per-row outputs ``rows`` (m, N) and their sum ``total`` (N,).
+
+    Raises
+    ------
+    BudgetError
+        When the rows' outputs would not fit in the memory available.
     """
     comp = result if isinstance(result, Compensator) else result.compensator
-    x = input_array(comp.matrix.inputs, data)
+    names = comp.matrix.inputs
+    n = len(data) if isinstance(data, DataLog) else len(np.asarray(data[names[0]]))
+    check(simulation_estimate(n_samples=n, n_rows=len(comp.matrix.rows), n_inputs=len(names)),
+          getattr(data, "source", None) or "data", "use a shorter log or a result with fewer rows")
+    x = input_array(names, data)
     rows = simulate_rows(comp, comp.matrix.rows, x)
     return Simulation(rows, rows.sum(axis=0))
 

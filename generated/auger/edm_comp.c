@@ -16,11 +16,6 @@ static inline edm_comp_real_t edm_comp_sign(edm_comp_real_t x)
     return (x > 0.0) ? 1.0 : ((x < 0.0) ? -1.0 : 0.0);
 }
 
-static inline edm_comp_real_t edm_comp_sat(edm_comp_real_t x, edm_comp_real_t lo, edm_comp_real_t hi)
-{
-    return (x < lo) ? lo : ((x > hi) ? hi : x);
-}
-
 static inline edm_comp_real_t edm_comp_dead_zone(edm_comp_real_t x, edm_comp_real_t a)
 {
     return (x > a) ? (x - a) : ((x < -a) ? (x + a) : 0.0);
@@ -28,12 +23,14 @@ static inline edm_comp_real_t edm_comp_dead_zone(edm_comp_real_t x, edm_comp_rea
 
 static inline edm_comp_real_t edm_comp_sym_log(edm_comp_real_t x, edm_comp_real_t a)
 {
-    return edm_comp_sign(x) * log1p(fabs(x) / a);
+    const edm_comp_real_t q = fabs(x) / a;
+    return edm_comp_sign(x) * log1p((q < 1e+30) ? q : 1e+30);
 }
 
 static inline edm_comp_real_t edm_comp_tan(edm_comp_real_t x)
 {
-    return edm_comp_sat(tan(x), -1000000.0, 1000000.0);
+    const edm_comp_real_t t = tan(x);
+    return (fabs(t) >= 1000000.0) ? ((sin(x) < 0.0) ? -1000000.0 : 1000000.0) : t;
 }
 
 void edm_comp_init(edm_comp_state_t *s)

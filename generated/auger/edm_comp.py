@@ -41,14 +41,11 @@ SAMPLE_TIME: float = 0.001
 NUM_ROWS: int = 5
 SHA256: str = '125c73bcb14bb946770f74198f3b9cf088cea357f4093d69e677a43de2ccc82d'
 _TAN_LIMIT = 1000000.0
+_LOG_QUOTIENT_LIMIT = 1e+30
 
 
 def _sign(x):
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
-
-
-def _sat(x, lo, hi):
-    return lo if x < lo else (hi if x > hi else x)
 
 
 def _dead_zone(x, a):
@@ -56,11 +53,14 @@ def _dead_zone(x, a):
 
 
 def _sym_log(x, a):
-    return _sign(x) * math.log1p(abs(x) / a)
+    return _sign(x) * math.log1p(min(abs(x) / a, _LOG_QUOTIENT_LIMIT))
 
 
 def _tan(x):
-    return _sat(math.tan(x), -_TAN_LIMIT, _TAN_LIMIT)
+    t = math.tan(x)
+    if abs(t) >= _TAN_LIMIT:
+        return -_TAN_LIMIT if math.sin(x) < 0 else _TAN_LIMIT
+    return t
 
 
 class Compensator:

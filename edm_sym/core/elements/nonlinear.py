@@ -10,7 +10,7 @@ import math
 from typing import Any
 
 from edm_sym.core.elements.base import Param, ParamRange, RelayElement, StaticElement
-from edm_sym.core.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, POW_INPUT_LIMIT, TAN_LIMIT
 
 LEVEL = Param("level", "unit of the input",
               lambda ts, t_sum: ParamRange(1e-4, 1e2, "log"), "1e-4 .. 100 (log)")
@@ -91,7 +91,8 @@ class Logarithm(StaticElement):
     category = "nonlinear"
     formula = "y = sgn(x) ln(1 + |x| / a)"
     guard = ("odd extension: defined for every x (a plain ln x is undefined for x <= 0); "
-             "behaves as x / a near 0 and as ln|x| for |x| >> a")
+             "behaves as x / a near 0 and as ln|x| for |x| >> a; |x| / a limited to "
+             f"{LOG_QUOTIENT_LIMIT:g} first, so no quotient overflows in float")
     param = Param("scale", "unit of the input", LEVEL.default, LEVEL.rule)
 
     @staticmethod
@@ -154,7 +155,9 @@ class SineAmplitude(StaticElement):
         return a * s
 
 
-TAN_GUARD = f"tan limited to +-{TAN_LIMIT:g}, so its poles give a finite output"
+TAN_GUARD = (f"tan limited to +-{TAN_LIMIT:g}, so its poles give a finite output; where it "
+             f"reaches the limit the sign of sin decides, so a pole gives one value in float and "
+             f"double alike")
 
 
 class TangentPhase(StaticElement):

@@ -14,10 +14,17 @@ from typing import Any
 
 import numpy as np
 
-#: |tan| is limited to this value, so the tangent's poles give a finite output.
+#: |tan| is limited to this value, so the tangent's poles give a finite output. Where
+#: |tan x| reaches it (within about 1e-6 rad of a pole), the output is this value with the
+#: sign of sin x: the same on both sides of the pole, so a phase that lands on the pole
+#: (tan_phase at p = 0 or 1 is tan(-+pi/2)) gives one answer in double and in float,
+#: although pi/2 rounds to either side of the pole in the two precisions.
 TAN_LIMIT = 1.0e6
 #: |x| is limited to this value before a power, so no power overflows.
 POW_INPUT_LIMIT = 1.0e6
+#: |x| / a is limited to this value before the guarded logarithm, so the quotient of a
+#: large input by a small scale never overflows (in float it would above 3.4e38).
+LOG_QUOTIENT_LIMIT = 1.0e30
 
 
 class NumpyOps:
@@ -58,8 +65,8 @@ class NumpyOps:
 
     @staticmethod
     def sym_log(x: Any, a: float) -> Any:
-        """Guarded logarithm: ``sign(x) ln(1 + |x| / a)``, odd and finite everywhere."""
-        return np.sign(x) * np.log1p(np.abs(x) / a)
+        """Guarded logarithm: ``sign(x) ln(1 + min(|x| / a, LOG_QUOTIENT_LIMIT))``, odd and finite."""
+        return np.sign(x) * np.log1p(np.minimum(np.abs(x) / a, LOG_QUOTIENT_LIMIT))
 
     @staticmethod
     def sym_pow(x: Any, a: float) -> Any:
@@ -68,8 +75,9 @@ class NumpyOps:
 
     @staticmethod
     def tan(x: Any) -> Any:
-        """Guarded tangent: ``tan(x)`` limited to +-TAN_LIMIT."""
-        return np.clip(np.tan(x), -TAN_LIMIT, TAN_LIMIT)
+        """Guarded tangent: ``tan(x)``; where ``|tan x| >= TAN_LIMIT``, that limit signed as ``sin x``."""
+        t = np.tan(x)
+        return np.where(np.abs(t) >= TAN_LIMIT, np.where(np.sin(x) < 0, -TAN_LIMIT, TAN_LIMIT), t)
 
     @staticmethod
     def asin(x: Any) -> Any:
@@ -110,7 +118,7 @@ class ScalarOps:
 
     @staticmethod
     def sym_log(x: float, a: float) -> float:
-        return _sign(x) * math.log1p(abs(x) / a)
+        return _sign(x) * math.log1p(min(abs(x) / a, LOG_QUOTIENT_LIMIT))
 
     @staticmethod
     def sym_pow(x: float, a: float) -> float:
@@ -118,7 +126,10 @@ class ScalarOps:
 
     @staticmethod
     def tan(x: float) -> float:
-        return _clip(math.tan(x), -TAN_LIMIT, TAN_LIMIT)
+        t = math.tan(x)
+        if abs(t) >= TAN_LIMIT:
+            return -TAN_LIMIT if math.sin(x) < 0 else TAN_LIMIT
+        return t
 
     @staticmethod
     def asin(x: float) -> float:

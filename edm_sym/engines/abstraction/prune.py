@@ -10,12 +10,16 @@ last step's best matrix. At every stage it tries each simplification:
 * halve a delay (``dead_time``, ``shift``): a delay the data cannot support
   shrinks towards zero, and a filter it cannot support becomes ``through``;
 
-scores every candidate by the **criterion** (eq. 8 on the held-out part
-with the final step's weighting; its RMSE there when that weighting is 0 on
-every held-out sample; the training eq. 8 when nothing is held out), takes
-the best one, then refits the row gains of the result by weighted least
-squares on the **training** part (kept when it lowers the criterion), and
-goes on until one row with nothing to drop is left. Every model on the way
+(Before that, every parameter the search left at a range bound is moved
+just inside it, :func:`relieve_bounds`, when the criterion stays within the
+tolerance: a bound the data does not need is no estimate, and would keep the
+row from being named as physics.) It scores every candidate by the
+**criterion** (eq. 8 on the held-out part with the final step's weighting;
+its RMSE there when that weighting is 0 on every held-out sample; the
+training eq. 8 when nothing is held out), takes the best one, then refits
+the row gains of the result by weighted least squares on the **training**
+part (kept when it lowers the criterion), and goes on until one row with
+nothing to drop is left. Every model on the way
 is a candidate member of the front; the front keeps, for each complexity,
 the best criterion, and only members no simpler member beats or equals.
 
@@ -39,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.bounds import complexity
+from edm_sym.core.bounds import BOUND_MARGIN, bound_flags, complexity
 from edm_sym.core.elements import BY_NAME
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.engines.abstraction.polish import scale_position
@@ -165,7 +169,51 @@ def _refit(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix
     return None if new == m else new
 
 
-def prune(comp: Compensator, scorer: Scorer) -> list[Member]:
+#: Where :func:`relieve_bounds` puts a parameter it moves off a bound: this far inside, in p.
+RELIEF = 2 * BOUND_MARGIN
+
+
+def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
+                   ) -> tuple[Compensator, int]:
+    """Move parameters off their range bounds where the data does not need the bound.
+
+    A parameter at (or within the margin of) a bound (:func:`edm_sym.core.bounds.bound_flags`)
+    is a limit of the search, not an estimate, and keeps its row from being named
+    as physics. Each one in turn is moved ``RELIEF`` inside its range (the row
+    gains refitted on the training part when that helps); the move is kept when
+    the criterion stays within ``tolerance`` of ``comp``'s, the same tolerance
+    that lets pruning drop an element: the data then does not ask for the bound.
+
+    Returns
+    -------
+    comp : Compensator
+        With the moves kept.
+    moved : int
+        How many parameters were moved.
+    """
+    limit = scorer.criterion(comp) * (1.0 + tolerance)
+    moved = 0
+    for flag in bound_flags(comp):
+        row = comp.matrix.rows[flag.row]
+        genes = list(row.genes)
+        genes[flag.col] = Gene(genes[flag.col].code,
+                               RELIEF if flag.side == "low" else 1.0 - RELIEF)
+        rows = list(comp.matrix.rows)
+        rows[flag.row] = Row(row.input, genes)
+        m = ElementMatrix(comp.matrix.inputs, rows)
+        options = [m] + [r for r in (_refit(comp, m, scorer),) if r is not None]
+        # A refit may put the parameter (a gain) back on its bound: that is no move.
+        options = [c for c in options if not any(
+            (b.row, b.col) == (flag.row, flag.col) for b in bound_flags(_with(comp, c)))]
+        scored = [(scorer.criterion(_with(comp, c)), q) for q, c in enumerate(options)]
+        crit, q = min(scored) if scored else (math.inf, -1)
+        if crit <= limit:
+            comp = _with(comp, options[q])
+            moved += 1
+    return comp, moved
+
+
+def prune(comp: Compensator, scorer: Scorer, *, start: str = "search") -> list[Member]:
     """The greedy backward elimination from ``comp``'s matrix; returns the front.
 
     Parameters
@@ -174,6 +222,8 @@ def prune(comp: Compensator, scorer: Scorer) -> list[Member]:
         The search's model (its ranges and sample time serve every member).
     scorer : Scorer
         Scores on the training and held-out parts.
+    start : str
+        The ``change`` recorded for ``comp`` itself.
 
     Returns
     -------
@@ -182,7 +232,7 @@ def prune(comp: Compensator, scorer: Scorer) -> list[Member]:
         criterion, keeping only members that beat every simpler one.
     """
     cur = comp.matrix
-    seen = {cur: Member(cur, complexity(comp, cur), scorer.criterion(comp), "search")}
+    seen = {cur: Member(cur, complexity(comp, cur), scorer.criterion(comp), start)}
     while True:
         c_cur = seen[cur].complexity
         best: Member | None = None
@@ -255,7 +305,10 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     rule = check_select(rule, "select") if rule is not None else settings.selection
     from edm_sym.core.result import matrix_to_json
 
-    front = prune(comp, scorer)
+    search = comp
+    comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
+    start = "search" + (f", {moved} parameter(s) moved off a range bound" if moved else "")
+    front = prune(comp, scorer, start=start)
     if not front:  # no model with a finite criterion: nothing to choose from
         return comp, {}
     k = select(front, rule)
@@ -272,5 +325,5 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         })
     record = {"complexity": COMPLEXITY, "criterion": scorer.criterion_name,
               "tolerance": settings.tolerance, "select": rule, "selected": k + 1,
-              "search_complexity": complexity(comp, comp.matrix), "front": members}
+              "search_complexity": complexity(search, search.matrix), "front": members}
     return _with(comp, front[k].matrix), record

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -45,7 +44,7 @@ from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progr
 from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.polish import GAIN, gain_fit
 from edm_sym.engines.abstraction.prune import apply_parsimony
-from edm_sym.engines.abstraction.schedule import AbstractionConfig, StepConfig, default_config
+from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.validation import Scorer, plan_holdout
 from edm_sym.engines.simulate import fitness, simulate_rows
 
@@ -75,6 +74,17 @@ class GenerationInfo:
         hit rate, element-samples and seconds in simulation).
     best_matrix : ElementMatrix
         The step's best individual so far.
+    steps : int
+        Steps of the schedule.
+    shape : tuple of int
+        ``(n_elements, n_rows)`` of this step's matrix.
+    generations_left : int
+        The fewest generations the run still needs if its best stopped
+        improving now (the stopping rule's patience or block end, the
+        restarts left, and every later step's shortest run): a time-left
+        estimate for progress lines, not a promise.
+    time_limit : float or None
+        The run's wall-time limit in seconds.
     """
 
     step: int
@@ -84,6 +94,23 @@ class GenerationInfo:
     elapsed: float
     stats: EvalStats
     best_matrix: ElementMatrix | None = None
+    steps: int = 1
+    shape: tuple[int, int] = (0, 0)
+    generations_left: int = 0
+    time_limit: float | None = None
+
+
+def _fewest_generations(ga: GaSettings, generation: int, since_improvement: int,
+                        restarts_done: int) -> int:
+    """Generations a step still runs if its best never improves again (Progress.after's rule)."""
+    to_block_end = ga.generations - generation % ga.generations
+    if ga.continue_mode == "always" and generation // ga.generations + 1 < ga.max_blocks:
+        to_block_end = ga.generations * ga.max_blocks - generation
+    by_patience = ga.patience - since_improvement if ga.patience else to_block_end
+    now = max(0, min(to_block_end, by_patience))
+    fresh = min(ga.generations * (ga.max_blocks if ga.continue_mode == "always" else 1),
+                ga.patience or ga.generations * ga.max_blocks)
+    return now + max(0, ga.restarts - restarts_done) * fresh
 
 
 class _Stop(Exception):
@@ -154,7 +181,7 @@ class _Runner:
                  ts: float, ranges: dict[str, ParamRange], human: Population | None,
                  inputs: Sequence[str],
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
-                 checkpoint: Path | None, time_limit: float | None, progress: bool,
+                 checkpoint: Path | None, time_limit: float | None,
                  callback: Callable[[GenerationInfo], bool | None] | None):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
@@ -162,12 +189,6 @@ class _Runner:
         self.state, self.rng, self.checkpoint = state, rng, checkpoint
         self.time_limit, self.callback = time_limit, callback
         self.start = time.monotonic()
-        self.bar = None
-        if progress:
-            from tqdm import tqdm
-
-            self.bar = tqdm(unit="gen", file=sys.stderr, dynamic_ncols=True, leave=True,
-                            bar_format="{desc} [{elapsed}]")
 
     # -- commit -------------------------------------------------------------
     def _commit(self, current: StepState | None, finished: FinishedStep | None = None) -> None:
@@ -181,18 +202,18 @@ class _Runner:
     def _after_generation(self, cur: StepState) -> None:
         elapsed = time.monotonic() - self.start
         best = float(np.min(cur.fitness))
-        if self.bar is not None:
-            step = self.cfg.steps[cur.step]
-            rate = self.evaluator.stats.individuals / elapsed if elapsed > 0 else 0.0
-            self.bar.set_description_str(
-                f"step {cur.step + 1}/{len(self.cfg.steps)} {step.n_elements}x{step.n_rows}"
-                f" | gen {cur.generation} | best {best:.6g} | {rate:.0f} eval/s", refresh=False)
-            self.bar.update(1)
         if self.callback is not None:
+            steps = self.cfg.steps
+            step = steps[cur.step]
+            left = _fewest_generations(step.ga, cur.generation, cur.since_improvement,
+                                       cur.restarts) if not cur.done else 0
+            left += sum(_fewest_generations(s.ga, 0, 0, 0) for s in steps[cur.step + 1:])
             info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
                                   replace(self.evaluator.stats),
                                   cur.population.matrix(int(np.argmin(cur.fitness)),
-                                                        self.inputs))
+                                                        self.inputs),
+                                  steps=len(steps), shape=(step.n_elements, step.n_rows),
+                                  generations_left=left, time_limit=self.time_limit)
             if self.callback(info):
                 raise _Stop("stopped")
         if self.time_limit is not None and elapsed >= self.time_limit:
@@ -338,10 +359,6 @@ class _Runner:
         return (Population.concat([elites, fresh]), np.concatenate([fit[order], ffit]),
                 len(fresh) + extra)
 
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
     # -- result -------------------------------------------------------------------
     def records(self) -> list[FinishedStep]:
         """Finished steps plus the step in progress (at its last boundary)."""
@@ -365,7 +382,6 @@ def abstract(
     seed: int = 0,
     time_limit: float | None = None,
     executor: Executor | None = None,
-    progress: bool = False,
     checkpoint: Path | None = None,
     resume: bool = False,
     workers: int | None = None,
@@ -395,8 +411,6 @@ def abstract(
     executor : concurrent.futures.Executor, optional
         Where rows are simulated (e.g. ``dask.distributed.Client(...).get_executor()``);
         it is not shut down. None: a process pool over ``workers`` cores.
-    progress : bool
-        Show a tqdm progress bar on stderr.
     checkpoint : pathlib.Path, optional
         Where to write the run's state after every generation (removed when
         the run completes).
@@ -406,7 +420,9 @@ def abstract(
         Processes of the default pool (default: every usable core; 1: no pool).
     callback : callable, optional
         Called with a :class:`GenerationInfo` after every generation; a true
-        return value ends the run there, like a time limit.
+        return value ends the run there, like a time limit. The engine prints
+        nothing: progress bars and lines are such a callback
+        (:class:`edm_sym.application.progress.ProgressReporter`).
     validate : DataLog, optional
         A second log held out as a whole (the GA then fits all of ``data``).
     validation_share : float, optional
@@ -484,13 +500,14 @@ def abstract(
         rng.bit_generator.state = state.rng_state
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
+    check_budget(cfg, x.shape[1], len(inputs), workers=workers, time_limit=time_limit)
     batch = max(s.ga.population * s.n_rows for s in cfg.steps)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
                           cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
     evaluator.start()
     runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
-                     time_limit=time_limit, progress=progress, callback=callback)
+                     time_limit=time_limit, callback=callback)
     reason = "completed"
     try:
         runner.run()
@@ -502,7 +519,6 @@ def abstract(
         if not runner.records():
             raise
     finally:
-        runner.close()
         evaluator.close()
     steps = []
     for r in runner.records():
@@ -542,6 +558,42 @@ def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> Non
             f"expected at least {need} samples to fit (more than the {largest.n_rows}x"
             f"{largest.n_elements} matrix's parameters), found {n_train}; use a longer log, a "
             "smaller schedule or a smaller held-out share")
+
+
+def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
+                 workers: int | None = None, time_limit: float | None = None) -> None:
+    """Refuse a run that cannot fit this machine, before it starts (:mod:`edm_sym.core.budget`).
+
+    Parameters
+    ----------
+    cfg : AbstractionConfig
+    n_samples : int
+        Samples the GA fits.
+    n_inputs : int
+        Input columns.
+    workers : int, optional
+        Processes (default: every usable core).
+    time_limit : float, optional
+        The run's wall-time limit [s]: then only the first generation must fit the time limit.
+
+    Raises
+    ------
+    BudgetError
+        Naming the config and the largest step, with the estimate and the limit.
+    """
+    from edm_sym.core.budget import StepSize, abstraction_estimate, check
+    from edm_sym.engines.abstraction.rowsim import default_workers
+
+    sizes = [StepSize(s.ga.population, s.n_rows, s.n_elements,
+                      min(s.ga.generations, s.ga.patience) if s.ga.patience else s.ga.generations)
+             for s in cfg.steps]
+    est = abstraction_estimate(sizes, n_samples=n_samples, n_inputs=n_inputs,
+                               cache_bytes=int(cfg.cache_mb * 2**20),
+                               workers=int(workers) if workers else default_workers(),
+                               time_limit=time_limit)
+    check(est, cfg.source, "use a smaller population or matrix, or a shorter log",
+          time_hint="use a smaller population or matrix, fewer generations (or patience), "
+                    "a shorter log or a time limit")
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

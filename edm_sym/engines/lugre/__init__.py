@@ -11,10 +11,12 @@ from edm_sym.engines.lugre.identify import (
     BOTH,
     METHODS,
     LuGreProblem,
+    LuGreProgress,
     MethodOutcome,
     identify_lugre,
     register_method,
     search_space,
+    shape_bound_flags,
 )
 from edm_sym.engines.lugre.model import (
     PARAMETER_NAMES,
@@ -32,6 +34,7 @@ __all__ = [
     "PARAMETER_NAMES",
     "LuGreParams",
     "LuGreProblem",
+    "LuGreProgress",
     "LuGreProvenance",
     "LuGreResult",
     "MethodOutcome",
@@ -44,6 +47,7 @@ __all__ = [
     "register_method",
     "save_lugre",
     "search_space",
+    "shape_bound_flags",
     "simulate_lugre",
     "steady_state",
     "weighted_rmse",

@@ -21,8 +21,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from edm_sym.core.errors import TOO_DEEP, ResultFormatError
-from edm_sym.core.fileio import write_atomic
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.core.fileio import read_json, write_atomic
 from edm_sym.core.validation import json_path, schema_problem, show_value
 from edm_sym.core.version import __version__
 from edm_sym.engines.lugre.model import PARAMETER_NAMES, LuGreParams
@@ -57,19 +57,6 @@ def package_version() -> str:
         The version string.
     """
     return __version__
-
-
-def _reject_constant(token: str) -> float:
-    raise ValueError(f"{token} is not allowed (numbers must be finite)")
-
-
-def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    seen: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in seen:
-            raise ValueError(f"duplicate key {key!r}")
-        seen[key] = value
-    return seen
 
 
 def _find_nonfinite(value: Any, path: list[Any]) -> list[Any] | None:
@@ -169,24 +156,7 @@ def load_lugre(path: str | os.PathLike) -> LuGreResult:
     """
     path = Path(path)
     name = path.name
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ResultFormatError(str(path), "no such file") from None
-    except UnicodeDecodeError as exc:
-        raise ResultFormatError(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise ResultFormatError(str(path), f"cannot read: {exc.strerror or exc}") from None
-    try:
-        document = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_no_duplicates)
-    except json.JSONDecodeError as exc:
-        raise ResultFormatError(
-            f"{name}: line {exc.lineno} column {exc.colno}", f"invalid JSON: {exc.msg}"
-        ) from None
-    except ValueError as exc:
-        raise ResultFormatError(name, f"invalid JSON: {exc}") from None
-    except RecursionError:
-        raise ResultFormatError(name, TOO_DEEP) from None
+    document, _ = read_json(path, ResultFormatError)
     return parse_lugre(document, name)
 
 

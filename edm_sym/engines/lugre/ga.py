@@ -120,6 +120,7 @@ def identify_ga(problem: LuGreProblem, *, seed: int, settings: GaSettings = LUGR
             pop = Population.concat([ranked.take(np.arange(elites)), kids])
             fit = np.concatenate([ranked_fit[:elites], fitness(kids)])
             progress = progress.after(settings, float(np.min(fit)))
+            objective.generation = progress.generation
     except _TimeUp:
         pass
     assert objective.best is not None

@@ -27,7 +27,7 @@ import inspect
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -51,10 +51,12 @@ __all__ = [
     "METHODS",
     "IdentifyMethod",
     "LuGreProblem",
+    "LuGreProgress",
     "MethodOutcome",
     "identify_lugre",
     "register_method",
     "search_space",
+    "shape_bound_flags",
 ]
 
 
@@ -75,6 +77,11 @@ class LuGreProblem:
     deadline : float or None
         :func:`time.monotonic` value at which a method must stop and return
         its best parameters so far; None for no limit.
+    progress : callable or None
+        Called with a :class:`LuGreProgress` after every evaluation (the
+        engine prints nothing; the caller renders and throttles it).
+    method : str
+        The method's name, for ``progress``.
     """
 
     target: np.ndarray
@@ -82,6 +89,9 @@ class LuGreProblem:
     ts: float
     weights: np.ndarray
     deadline: float | None = None
+    progress: Callable[[LuGreProgress], None] | None = None
+    method: str = ""
+    start: float = field(default_factory=time.monotonic)
 
     @property
     def torque_scale(self) -> float:
@@ -118,6 +128,44 @@ class LuGreProblem:
             True once :func:`time.monotonic` reaches ``deadline``.
         """
         return self.deadline is not None and time.monotonic() >= self.deadline
+
+
+@dataclass(frozen=True)
+class LuGreProgress:
+    """What an identification's ``progress`` callback is told after every evaluation.
+
+    Attributes
+    ----------
+    method : str
+        The method running (``"scipy"`` or ``"ga"``).
+    generation : int
+        Generations (iterations of the global search) done.
+    evaluations : int
+        Model simulations so far in this method.
+    best : float
+        Best fitness (eq. 8) so far.
+    elapsed : float
+        Seconds since the method started.
+    budget : int or None
+        Most evaluations the method runs without a time limit (None: the
+        stopping rule decides).
+    deadline_in : float or None
+        Seconds to the time limit, or None.
+    """
+
+    method: str
+    generation: int
+    evaluations: int
+    best: float
+    elapsed: float
+    budget: int | None = None
+    deadline_in: float | None = None
+
+
+#: Most evaluations of the ``"scipy"`` method: differential evolution (150
+#: iterations after the initial population, 10 x 4 individuals each) and 800
+#: Nelder-Mead steps.
+SCIPY_BUDGET = 151 * 40 + 800
 
 
 @dataclass(frozen=True)
@@ -229,6 +277,8 @@ class _VarPro:
         self.yw = problem.target * self.sw
         self.tau_c_min = 1e-9 * problem.torque_scale
         self.evaluations = 0
+        self.generation = 0
+        self.budget: int | None = None
         self.best_f = math.inf
         self.best: tuple[np.ndarray, np.ndarray] | None = None
         v_max, step = problem.velocity_scale, problem.velocity_scale * problem.ts
@@ -277,6 +327,13 @@ class _VarPro:
         self.evaluations += 1
         if f < self.best_f:
             self.best_f, self.best = f, (theta.copy(), coef)
+        report = self.problem.progress
+        if report is not None:
+            now = time.monotonic()
+            deadline = self.problem.deadline
+            report(LuGreProgress(self.problem.method, self.generation, self.evaluations,
+                                 self.best_f, now - self.problem.start, self.budget,
+                                 None if deadline is None else max(0.0, deadline - now)))
         return f
 
     def params(self, theta: np.ndarray, coef: np.ndarray) -> LuGreParams:
@@ -294,6 +351,62 @@ class _VarPro:
         )
 
 
+#: The four shape parameters as the flags name them: (name, what it is).
+SHAPE_NAMES = (("v_s", "Stribeck velocity"), ("tau_s/tau_c", "stiction ratio"),
+               ("tau_c/sigma0", "bristle deflection"), ("z0 share", "initial bristle state"))
+
+
+def shape_bound_flags(params: LuGreParams, velocity: ArrayLike, ts: float, *,
+                      margin: float = 0.01) -> list[str]:
+    """The identified shape parameters that sit on a bound of the search box.
+
+    The methods search ``theta = (log10 v_s, log10 r, log10 l, zf)`` in a box
+    derived from the data (:class:`_VarPro`); a value within ``margin`` (a
+    share of the box's side) of a bound is a limit of the search, not an
+    estimate, like an EDM parameter at its range bound.
+
+    Parameters
+    ----------
+    params : LuGreParams
+        The identified parameters.
+    velocity : array_like
+        The velocity of the log they were identified on (it sets the box).
+    ts : float
+        Its sample time [s].
+    margin : float, default 0.01
+
+    Returns
+    -------
+    list of str
+        One line per parameter at a bound; empty when none is.
+    """
+    v = _as_velocity(velocity)
+    problem = LuGreProblem(target=np.zeros(len(v)), velocity=v, ts=_check_ts(ts),
+                           weights=np.ones(len(v)))
+    bounds = _VarPro(problem).bounds
+    ell = params.tau_c / params.sigma0 if params.sigma0 > 0 else math.nan
+    r = params.tau_s / params.tau_c if params.tau_c > 0 else math.nan
+    theta = (math.log10(params.v_s) if params.v_s > 0 else -math.inf,
+             math.log10(r) if r > 0 else -math.inf,
+             math.log10(ell) if ell > 0 else -math.inf,
+             params.z0 / (ell * max(r, 1.0)) if ell > 0 else math.nan)
+    out = []
+    for k, ((lo, hi), value) in enumerate(zip(bounds, theta, strict=True)):
+        if not math.isfinite(value) and not math.isinf(value):
+            continue
+        share = (value - lo) / (hi - lo)
+        if margin < share < 1.0 - margin:
+            continue
+        side, bound = ("low", lo) if share <= margin else ("high", hi)
+        name, meaning = SHAPE_NAMES[k]
+        shown = (lambda x: f"{x:.4g}") if k == 3 else (lambda x: f"{10.0 ** x:.4g}")
+        found = shown(value) if math.isfinite(value) else "0"
+        out.append(f"LuGre {name} ({meaning}) = {found} is at its {side} bound "
+                   f"{shown(bound)} of the search; its value is a limit of the search, "
+                   "not an estimate")
+    return out
+
+
 def _seed_kwargs(seed: int) -> dict[str, object]:
     # scipy >= 1.15 takes ``rng``; older versions only ``seed``.
     if "rng" in inspect.signature(optimize.differential_evolution).parameters:
@@ -305,8 +418,10 @@ def _seed_kwargs(seed: int) -> dict[str, object]:
 def _identify_scipy(problem: LuGreProblem, *, seed: int) -> MethodOutcome:
     """Differential evolution then Nelder-Mead over the shape parameters."""
     objective = _VarPro(problem)
+    objective.budget = SCIPY_BUDGET
 
     def stop(*_args: object, **_kwargs: object) -> bool:
+        objective.generation += 1
         return problem.time_is_up()
 
     try:
@@ -363,6 +478,7 @@ def identify_lugre(
     seed: int = 0,
     time_limit: float | None = None,
     weights: ArrayLike | None = None,
+    progress: Callable[[LuGreProgress], None] | None = None,
 ) -> LuGreResult:
     """Identify LuGre parameters that reproduce ``target`` from ``velocity``.
 
@@ -388,6 +504,10 @@ def identify_lugre(
         next.
     weights : array_like or None, optional
         Weighting function Lambda of eq. 8 per sample (default all ones).
+    progress : callable or None, optional
+        Called with a :class:`LuGreProgress` after every evaluation; the
+        engine prints nothing (``edm lugre`` renders it with
+        :class:`edm_sym.application.progress.ProgressReporter`).
 
     Returns
     -------
@@ -431,7 +551,8 @@ def identify_lugre(
     found: dict[str, tuple[LuGreParams, MethodScore]] = {}
     for k, name in enumerate(names):
         deadline = None if time_limit is None else start + float(time_limit) * (k + 1) / len(names)
-        problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline)
+        problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline,
+                               progress=progress, method=name)
         outcome = METHODS[name](problem, seed=int(seed))
         found[name] = (outcome.params, MethodScore(problem.fitness(outcome.params), outcome.evaluations))
     best = min(names, key=lambda name: found[name][1].fitness)  # min keeps the first on a tie

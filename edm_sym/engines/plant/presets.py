@@ -170,6 +170,33 @@ class PlantPreset:
             )
 
     @property
+    def true_terms(self) -> tuple[str, ...]:
+        """tuple of str: the physical terms ``tau_ext`` holds, as the classifier names them.
+
+        In free motion the RTOB sees ``(K_tn/K_t)(friction + J alpha) - J_n alpha``
+        (docs/plant.md, "Ground truth"), so: ``"coulomb"`` when ``coulomb > 0``,
+        ``"viscous"`` when ``viscous > 0``, ``"acceleration"`` when the
+        equivalent inertia :attr:`inertia_error` is not zero (beyond rounding), ``"spatial"``
+        with a ripple, ``"stribeck"`` when ``stiction > coulomb``; in the order
+        of the classifier's kinds. Never ``"offset"``.
+        """
+        present = {
+            "coulomb": self.coulomb > 0.0,
+            "viscous": self.viscous > 0.0,
+            # Rounding aside: ballscrew's +5 % K_tn and +5 % J_n cancel exactly.
+            "acceleration": abs(self.inertia_error) > 1e-9 * self.inertia,
+            "spatial": bool(self.ripple),
+            "stribeck": self.stiction > self.coulomb,
+        }
+        return tuple(kind for kind, here in present.items() if here)
+
+    @property
+    def inertia_error(self) -> float:
+        """float: ``(K_tn/K_t) J - J_n`` [kg m^2], the inertia ``tau_ext`` sees times alpha."""
+        return self.torque_constant_nominal / self.torque_constant * self.inertia - (
+            self.inertia_nominal)
+
+    @property
     def has_lugre(self) -> bool:
         """bool: whether the LuGre (Coulomb/Stribeck/bristle) friction is present."""
         return self.coulomb > 0.0
@@ -283,6 +310,113 @@ PRESETS: dict[str, PlantPreset] = {
         bristle_damping=2.4,
         viscous=0.01,
         ripple=(),
+        g_dob=500.0,
+        g_rtob=200.0,
+        velocity_gain=150.0,
+        velocity_integral=0.0,
+        g_velocity=2000.0,
+        g_acceleration=1000.0,
+        encoder_counts=2**20,
+        current_noise=0.02,
+    ),
+    # -- plants with known truth (docs/plant.md#plants-with-known-truth) ----------
+    # Each has one clear mix of disturbances and nothing else, so what `edm describe`
+    # names can be checked against PlantPreset.true_terms (tests/test_truth.py).
+    "bearing": PlantPreset(
+        name="bearing",
+        description=(
+            "rolling bearings without ripple: Coulomb and viscous friction, no Stribeck "
+            "peak, inertia under-estimated by the drive"
+        ),
+        inertia=1.0e-3,
+        inertia_nominal=0.85e-3,
+        torque_constant=0.5,
+        torque_constant_nominal=0.5,
+        coulomb=0.5,
+        stiction=0.5,
+        stribeck_velocity=1.0,
+        bristle_stiffness=1.0e4,
+        bristle_damping=1.0,
+        viscous=0.015,
+        ripple=(),
+        g_dob=500.0,
+        g_rtob=200.0,
+        velocity_gain=150.0,
+        velocity_integral=0.0,
+        g_velocity=2000.0,
+        g_acceleration=1000.0,
+        encoder_counts=2**20,
+        current_noise=0.02,
+    ),
+    "stribeck": PlantPreset(
+        name="stribeck",
+        description=(
+            "a dry sliding guide: a strong Stribeck peak (stiction 2.25 x Coulomb, "
+            "v_s = 3 rad/s) over Coulomb and viscous friction, exact inertia, no ripple"
+        ),
+        inertia=6.0e-4,
+        inertia_nominal=6.0e-4,
+        torque_constant=0.5,
+        torque_constant_nominal=0.5,
+        coulomb=0.4,
+        stiction=0.9,
+        stribeck_velocity=3.0,
+        bristle_stiffness=1.0e4,
+        bristle_damping=1.0,
+        viscous=0.01,
+        ripple=(),
+        g_dob=500.0,
+        g_rtob=200.0,
+        velocity_gain=150.0,
+        velocity_integral=0.0,
+        g_velocity=2000.0,
+        g_acceleration=1000.0,
+        encoder_counts=2**20,
+        current_noise=0.02,
+    ),
+    "inertia": PlantPreset(
+        name="inertia",
+        description=(
+            "a frictionless direct drive on air bearings whose nominal inertia is "
+            "20 % low: tau_ext holds the inertia mismatch alone"
+        ),
+        inertia=1.0e-3,
+        inertia_nominal=0.8e-3,
+        torque_constant=0.5,
+        torque_constant_nominal=0.5,
+        coulomb=0.0,
+        stiction=0.0,
+        stribeck_velocity=1.0,
+        bristle_stiffness=1.0e4,
+        bristle_damping=0.0,
+        viscous=0.0,
+        ripple=(),
+        g_dob=500.0,
+        g_rtob=200.0,
+        velocity_gain=150.0,
+        velocity_integral=0.0,
+        g_velocity=2000.0,
+        g_acceleration=1000.0,
+        encoder_counts=2**20,
+        current_noise=0.02,
+    ),
+    "ripple3": PlantPreset(
+        name="ripple3",
+        description=(
+            "a three-lobe cam on the axis: Coulomb and viscous friction and a position "
+            "ripple of 3 cycles per revolution, exact inertia"
+        ),
+        inertia=8.0e-4,
+        inertia_nominal=8.0e-4,
+        torque_constant=0.5,
+        torque_constant_nominal=0.5,
+        coulomb=0.3,
+        stiction=0.3,
+        stribeck_velocity=1.0,
+        bristle_stiffness=1.0e4,
+        bristle_damping=1.0,
+        viscous=0.008,
+        ripple=(RippleHarmonic(cycles=3, amplitude=0.1, phase=0.5),),
         g_dob=500.0,
         g_rtob=200.0,
         velocity_gain=150.0,

@@ -120,10 +120,13 @@ class ClassifyOptions:
     axis : str, default "rotary"
         ``"rotary"`` or ``"linear"``: the units of the terms' parameters
         (:func:`edm_sym.core.units.axis_units`) and of the thresholds below.
-    coulomb_velocity : float, default 0.1 (linear: 0.005)
+    coulomb_velocity : float, default 0.25 (linear: 0.005)
         [rad/s or m/s] A saturating function of velocity counts as Coulomb friction
         when its level divided by its slope at the origin is at most this
-        velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)).
+        velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)). A servo log
+        sampled at 1 ms moves its velocity by about that much per sample at
+        a few hundred rad/s^2, so a transition below it cannot be told from
+        a step.
     velocity_range : float, default 10.0 (linear: 0.5)
         [rad/s or m/s] The velocities over which shapes are judged (Stribeck-like
         humps, Coulomb + viscous fits).
@@ -142,7 +145,7 @@ class ClassifyOptions:
     """
 
     axis: str = "rotary"
-    coulomb_velocity: float = 0.1
+    coulomb_velocity: float = 0.25
     velocity_range: float = 10.0
     acceleration_frequency: float = 4 * math.pi
     acceleration_range: float = 1000.0
@@ -466,6 +469,7 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
     sn, k, phi = found
     k = k * g
     amp = c
+    dominant: dict[str, tuple[float, str]] = {}
     if isinstance(sn, sp.sin) and f == sn or isinstance(sn, sp.cos) and f == sn:
         if k < 0:
             k, phi, amp = -k, -phi, -amp
@@ -483,12 +487,22 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
             return None
         k = abs(k)
         shape = f"periodic, non-sinusoidal ({f})"
+        # F(sin) holds harmonics of k: sin(3.7 sin q) is mostly 3 cycles/rev.
+        with np.errstate(all="ignore"):
+            y = np.asarray(F(np.sin((np.arange(720) + 0.5) * (2 * np.pi / 720))),
+                           dtype=float) * np.ones(720)
+        mag = np.abs(np.fft.rfft(y))[1:] if np.all(np.isfinite(y)) else np.zeros(1)
+        top = int(np.argmax(mag)) + 1
+        if top > 1:
+            dominant = {"dominant_cycles": (top * k, "1"),
+                        "dominant_amplitude": (float(2 * mag[top - 1] / y.size), "N m")}
+            shape += f", strongest harmonic {top * k:.6g} cycles/rev"
     else:
         return None
     phi = _wrap(phi)
     key, cycles, per = _cycles(k, U)
     params = {"amplitude": (amp, U.force), "period": (2 * math.pi / k, U.position),
-              key: cycles, "phase": (phi, "rad"), **extra}
+              key: cycles, "phase": (phi, "rad"), **dominant, **extra}
     wrap_note = ""
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
         per_wrap = "revolution" if U.axis == "rotary" else "wrap of the position"
@@ -552,8 +566,59 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
                                 f"viscous friction (fitted to {f}): {d:.6g} {D}{note}",
                                 term))
         return out
+    split = _stribeck_split(term, f, v, pos, scale, extra, note, opts)
+    if split is not None:
+        return split
     return [_unclassified(term, f"an odd function of velocity ({term}) that is neither "
                           "Coulomb, viscous nor Stribeck-like over the velocity range" + note)]
+
+
+#: Share of the velocity range, at its top, where a Stribeck curve has settled.
+_TAIL = 0.2
+
+
+def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, scale: float,
+                    extra: dict, note: str, opts: ClassifyOptions
+                    ) -> list[PhysicalTerm] | None:
+    """An odd velocity function that is Coulomb + viscous at speed and deviates below.
+
+    The GA writes a Stribeck curve as several rows: ``Fs sign(v)`` in one, and in
+    another a function that bends the sum down to the Coulomb level at speed
+    (``c sin(Sat(v))``, ``-c tanh(k v)``). Over the top ``_TAIL`` of the range
+    the function must be ``Fc + D v`` within 1 % of its peak; that asymptote
+    gives the Coulomb and viscous parts, and what differs from it at lower
+    speed, when it reaches ``_SIGNIFICANT`` of the peak, is the Stribeck part,
+    unless it has halved by ``coulomb_velocity``: then it is the smoothing of
+    the Coulomb step, which the data cannot tell from a step.
+    """
+    top = v >= (1.0 - _TAIL) * v[-1]
+    A = np.column_stack([np.ones(int(top.sum())), v[top]])
+    (fc, d), *_ = np.linalg.lstsq(A, pos[top], rcond=None)
+    if np.max(np.abs(A @ np.array([fc, d]) - pos[top])) > 0.01 * scale:
+        return None
+    dev = pos - (fc + d * v)
+    i = int(np.argmax(np.abs(dev)))
+    peak = float(dev[i])
+    if abs(peak) < _SIGNIFICANT * scale:
+        return None
+    after = np.nonzero(np.abs(dev[i:]) <= 0.5 * abs(peak))[0]
+    vs = float(v[i + after[0]]) if after.size else float(v[-1])
+    how = f" (the asymptote of {f} over the top {100 * _TAIL:g} % of +-{v[-1]:g} rad/s)"
+    out = []
+    if abs(fc) >= _SIGNIFICANT * scale:
+        out.append(PhysicalTerm("coulomb", {"level": (float(fc), "N m"), **extra},
+                                f"Coulomb friction: {fc:.6g} N m{how}{note}", term))
+    if abs(d) * v[-1] >= _SIGNIFICANT * scale:
+        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
+                                f"viscous friction: {d:.6g} N m s/rad{how}{note}", term))
+    if vs <= opts.coulomb_velocity:
+        return out or None
+    out.append(PhysicalTerm("stribeck", {"peak": (peak, "N m"),
+                                         "peak_velocity": (float(v[i]), "rad/s"),
+                                         "stribeck_velocity": (vs, "rad/s"), **extra},
+                            f"Stribeck-like: {peak:.4g} N m above Coulomb + viscous at "
+                            f"{v[i]:.4g} rad/s, half of that at {vs:.4g} rad/s{note}", term))
+    return out
 
 
 _INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}

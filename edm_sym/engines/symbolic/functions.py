@@ -13,7 +13,7 @@ from typing import Any
 
 import sympy as sp
 
-from edm_sym.core.elements.ops import POW_INPUT_LIMIT, SCALAR, TAN_LIMIT
+from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, POW_INPUT_LIMIT, SCALAR, TAN_LIMIT
 
 
 class _Numeric(sp.Function):
@@ -46,7 +46,7 @@ class DeadZone(_Numeric):
 
 
 class SymLog(_Numeric):
-    """Guarded logarithm ``SymLog(x, a) = sign(x) ln(1 + |x|/a)``."""
+    """Guarded logarithm ``SymLog(x, a) = sign(x) ln(1 + min(|x|/a, LOG_QUOTIENT_LIMIT))``."""
 
     nargs = 2
     _scalar = staticmethod(SCALAR.sym_log)
@@ -60,7 +60,7 @@ class SymPow(_Numeric):
 
 
 class GTan(_Numeric):
-    """Guarded tangent: ``tan(x)`` limited to +-TAN_LIMIT."""
+    """Guarded tangent: ``tan(x)``; ``+-TAN_LIMIT`` with the sign of ``sin x`` where it reaches that."""
 
     nargs = 1
     _scalar = staticmethod(SCALAR.tan)
@@ -120,4 +120,5 @@ def _numpy_functions() -> dict[str, Any]:
 
 
 NUMPY_FUNCTIONS.update(_numpy_functions())
-GUARD_CONSTANTS = {"TAN_LIMIT": TAN_LIMIT, "POW_INPUT_LIMIT": POW_INPUT_LIMIT, "pi": math.pi}
+GUARD_CONSTANTS = {"TAN_LIMIT": TAN_LIMIT, "POW_INPUT_LIMIT": POW_INPUT_LIMIT,
+                   "LOG_QUOTIENT_LIMIT": LOG_QUOTIENT_LIMIT, "pi": math.pi}

@@ -224,3 +224,63 @@ def simulate_system(sys: ct.NonlinearIOSystem, x: np.ndarray) -> np.ndarray:
     t = np.arange(x.size) * sys.dt
     resp = ct.input_output_response(sys, t, x)
     return np.asarray(resp.outputs, dtype=float).reshape(-1)
+
+
+def compensator_system(model: Any, *, output: str = "tau_cmp",
+                       name: str | None = None) -> ct.NonlinearIOSystem:
+    """The whole compensator as one discrete python-control system (``dt = Ts``), from rest.
+
+    Parameters
+    ----------
+    model : SymbolicModel
+        From :func:`~edm_sym.engines.symbolic.model.build_model` or
+        :func:`~edm_sym.engines.symbolic.decode` (the stages suffice).
+    output : str, default "tau_cmp"
+        The output's name.
+    name : str, optional
+        The system's name (default ``"edm_compensator"``).
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        Inputs: every input of the model, in its order (named as the
+        columns, so :func:`control.interconnect` connects them by name; an
+        input no row reads is an input all the same, and its value is
+        ignored). One output, the sum of the rows. States: every row's
+        stages' states, ``r<row>_c<col>_z<i>`` ... (see :func:`state_labels`),
+        zero at the start as in the reference simulator. Updates and output
+        run the realisations the simulator runs, so
+        :func:`control.input_output_response` gives its numbers.
+    """
+    rows = []
+    labels: list[str] = []
+    k = 0
+    for row in model.rows:
+        chain = []
+        for st in row.stages:
+            chain.append((k, st.realisation.update))
+            k += st.realisation.state_size
+        rows.append((model.inputs.index(row.input), tuple(chain)))
+        labels += [f"r{row.index + 1}_{label}" for label in state_labels(row)]
+    nstates = k
+
+    def run(x: Any, u: Any) -> tuple[float, np.ndarray]:
+        x = np.asarray(x, dtype=float).reshape(nstates)
+        u = np.asarray(u, dtype=float).reshape(-1)
+        nxt = x.copy()
+        total = 0.0
+        for col, chain in rows:
+            v = float(u[col])
+            for offset, step in chain:
+                v = step(v, x, nxt, offset)
+            total += v
+        return total, nxt
+
+    def updfcn(t: float, x: Any, u: Any, params: Any) -> np.ndarray:
+        return run(x, u)[1]
+
+    def outfcn(t: float, x: Any, u: Any, params: Any) -> np.ndarray:
+        return np.array([run(x, u)[0]])
+
+    return ct.nlsys(updfcn, outfcn, inputs=list(model.inputs), outputs=[output],
+                    states=labels, dt=model.sample_time, name=name or "edm_compensator")

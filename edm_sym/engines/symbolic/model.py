@@ -210,6 +210,31 @@ class SymbolicModel:
     roles: dict[str, str | None] = field(default_factory=dict, compare=False)
     axis: str = "rotary"
 
+    def __repr__(self) -> str:
+        """A header line and one line per row: its simplified expression with numbers.
+
+        A model from :func:`build_model` (no expressions yet) shows each row's
+        elements and values instead.
+        """
+        from edm_sym.core.display import matrix_lines
+
+        head = (f"SymbolicModel({len(self.rows)} rows, inputs {', '.join(self.inputs)}, "
+                f"Ts = {self.sample_time:g} s" + (f", target {self.target!r}" if self.target else "")
+                + ")")
+        if any(r.expr_numeric is None for r in self.rows):
+            return "\n".join([head] + [f"  {line}" for line in matrix_lines(self.compensator)])
+        lines = [head]
+        for r in self.rows:
+            short = r.expr_numeric.xreplace({f: sp.Float(f, 4) for f in r.expr_numeric.atoms(sp.Float)})
+            lines.append(f"  row {r.index + 1} ({r.input}): {sp.sstr(short, full_prec=False)}")
+        return "\n".join(lines)
+
+    def _repr_latex_(self) -> str | None:
+        """The compensator as LaTeX, one row per line, for Jupyter (the report's printer)."""
+        from edm_sym.core.display import latex_repr
+
+        return latex_repr("model", self)
+
     def total(self, *, numeric: bool = True, simplified: bool = True) -> sp.Expr:
         """The compensation torque: the sum of the row expressions (after decoding).
 
@@ -230,6 +255,34 @@ class SymbolicModel:
             raise ValueError("total: the rows have no expressions yet; use "
                              "edm_sym.engines.symbolic.decode, not build_model")
         return sp.Add(*parts)
+
+    def to_control(self, *, output: str = "tau_cmp", name: str | None = None) -> Any:
+        """The whole compensator as a discrete python-control system (``dt = Ts``).
+
+        Parameters
+        ----------
+        output : str, default "tau_cmp"
+            The output's name.
+        name : str, optional
+            The system's name (default ``"edm_compensator"``).
+
+        Returns
+        -------
+        control.NonlinearIOSystem
+            Inputs named as the model's inputs (all of them, in order; an input
+            no row reads is ignored), one output, the rows' states from rest;
+            :func:`control.input_output_response` equals the reference
+            simulator (docs/symbolic.md#python-control). It goes into a loop
+            with :func:`control.interconnect`, connected by signal names.
+
+        Examples
+        --------
+        >>> sys = edm_sym.decode(result).to_control()          # doctest: +SKIP
+        >>> resp = control.input_output_response(sys, t, u)    # doctest: +SKIP
+        """
+        from edm_sym.engines.symbolic.lti import compensator_system
+
+        return compensator_system(self, output=output, name=name)
 
 
 def _stage(comp: Compensator, j: int, i: int) -> Stage:

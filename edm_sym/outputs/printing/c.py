@@ -24,7 +24,7 @@ import sympy as sp
 from sympy.codegen.ast import float32, float64, real
 from sympy.printing.c import C99CodePrinter
 
-from edm_sym.core.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, POW_INPUT_LIMIT, TAN_LIMIT
 from edm_sym.outputs.printing.helpers import HelperCalls, StageLines
 
 #: The real types a compensator can be printed in.
@@ -56,14 +56,17 @@ _HELPERS: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
         "return (x > a) ? (x - a) : ((x < -a) ? (x + a) : {zero});",
     )),
     "sym_log": (("sign",), "{R} x, {R} a", (
-        "return {P}_sign(x) * log1p{f}(fabs{f}(x) / a);",
+        "const {R} q = fabs{f}(x) / a;",
+        "return {P}_sign(x) * log1p{f}((q < {log_limit}) ? q : {log_limit});",
     )),
     "sym_pow": (("sign",), "{R} x, {R} a", (
         "const {R} m = fabs{f}(x);",
         "return {P}_sign(x) * pow{f}((m < {pow_limit}) ? m : {pow_limit}, a);",
     )),
-    "tan": (("sat",), "{R} x", (
-        "return {P}_sat(tan{f}(x), {m_tan_limit}, {tan_limit});",
+    # At a pole the sign of sin x decides, not the side pi/2 rounds to (ops.TAN_LIMIT).
+    "tan": ((), "{R} x", (
+        "const {R} t = tan{f}(x);",
+        "return (fabs{f}(t) >= {tan_limit}) ? ((sin{f}(x) < {zero}) ? {m_tan_limit} : {tan_limit}) : t;",
     )),
     "asin": (("sat",), "{R} x", (
         "return asin{f}({P}_sat(x, {m1}, {one}));",
@@ -206,7 +209,7 @@ class EdmC99Printer(HelperCalls, StageLines, C99CodePrinter):
             "R": self.real_t, "P": self.prefix, "f": self.func_suffix,
             "zero": self.literal(0.0), "one": self.literal(1.0), "m1": self.literal(-1.0),
             "tan_limit": self.literal(TAN_LIMIT), "m_tan_limit": self.literal(-TAN_LIMIT),
-            "pow_limit": self.literal(POW_INPUT_LIMIT),
+            "pow_limit": self.literal(POW_INPUT_LIMIT), "log_limit": self.literal(LOG_QUOTIENT_LIMIT),
         }
         out = []
         for name, (_, params, body) in _HELPERS.items():

@@ -299,3 +299,33 @@ def latex(expr: Any, **settings: Any) -> str:
         SymPy LaTeX printer settings (and ``digits``).
     """
     return EdmLatexPrinter(settings).doprint(expr)
+
+
+def model_latex(model: Any) -> str:
+    """A decoded model as display math: one aligned line per row, then their sum.
+
+    Parameters
+    ----------
+    model : SymbolicModel
+        Rows with expressions (:func:`edm_sym.engines.symbolic.decode`); a
+        model from ``build_model`` shows its rows as the stages compose them.
+
+    Returns
+    -------
+    str
+        ``$$\\begin{aligned} y_{1} &= ... \\\\ \\tau_{cmp} &= y_{1} + ... \\end{aligned}$$``
+        with 4 significant digits.
+    """
+    from edm_sym.engines.symbolic.rowexpr import row_expression
+
+    p = EdmLatexPrinter({"digits": 4})
+    lines = []
+    for row in model.rows:
+        expr = row.expr_numeric
+        if expr is None:
+            expr = row_expression(row, ts=model.sample_time, numeric=True)
+        lines.append(rf"y_{{{row.index + 1}}} &= {p.doprint(expr)} && \text{{row {row.index + 1}, "
+                     rf"{escape_text(row.input)}}}")
+    total = " + ".join(f"y_{{{row.index + 1}}}" for row in model.rows) or "0"
+    lines.append(rf"\tau_{{\mathrm{{cmp}}}} &= {total}")
+    return "$$\\begin{aligned}" + r" \\ ".join(lines) + r"\end{aligned}$$"

@@ -17,7 +17,7 @@ from typing import Any
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from edm_sym.core.elements.ops import POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, POW_INPUT_LIMIT, TAN_LIMIT
 from edm_sym.outputs.printing.helpers import HelperCalls, StageLines
 
 # name -> (helpers it calls, parameters, body lines); bodies are ScalarOps'.
@@ -25,15 +25,19 @@ _HELPERS: dict[str, tuple[tuple[str, ...], str, tuple[str, ...]]] = {
     "sign": ((), "x", ("return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)",)),
     "sat": ((), "x, lo, hi", ("return lo if x < lo else (hi if x > hi else x)",)),
     "dead_zone": ((), "x, a", ("return x - a if x > a else (x + a if x < -a else 0.0)",)),
-    "sym_log": (("sign",), "x, a", ("return _sign(x) * math.log1p(abs(x) / a)",)),
+    "sym_log": (("sign",), "x, a", ("return _sign(x) * math.log1p(min(abs(x) / a, _LOG_QUOTIENT_LIMIT))",)),
     "sym_pow": (("sign",), "x, a", ("return _sign(x) * min(abs(x), _POW_INPUT_LIMIT) ** a",)),
-    "tan": (("sat",), "x", ("return _sat(math.tan(x), -_TAN_LIMIT, _TAN_LIMIT)",)),
+    "tan": ((), "x", ("t = math.tan(x)",
+                      "if abs(t) >= _TAN_LIMIT:",
+                      "    return -_TAN_LIMIT if math.sin(x) < 0 else _TAN_LIMIT",
+                      "return t")),
     "asin": (("sat",), "x", ("return math.asin(_sat(x, -1.0, 1.0))",)),
     "acos": (("sat",), "x", ("return math.acos(_sat(x, -1.0, 1.0))",)),
 }
 
 #: Module constants the helpers read: name -> value.
-HELPER_CONSTANTS = {"_TAN_LIMIT": TAN_LIMIT, "_POW_INPUT_LIMIT": POW_INPUT_LIMIT}
+HELPER_CONSTANTS = {"_TAN_LIMIT": TAN_LIMIT, "_POW_INPUT_LIMIT": POW_INPUT_LIMIT,
+                    "_LOG_QUOTIENT_LIMIT": LOG_QUOTIENT_LIMIT}
 
 
 def py_literal(value: float) -> str:

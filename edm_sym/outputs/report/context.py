@@ -224,14 +224,40 @@ def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
     } for s in result.steps]
 
 
+#: The method's paper. /work/shared/paper holds its text, whose title this is; the
+#: copy has no author line, venue or year, so none is printed rather than guessed.
+PAPER = {"title": "Hierarchical Abstraction of Compensator for Reaction Torque Observer "
+                  "Based on Element Description Method",
+         "authors": None, "venue": None, "year": None}
+
+
+def _citation(p: EdmLatexPrinter) -> str:
+    """The bibliography entry of the method's paper, from the fields :data:`PAPER` has."""
+    parts = [p.text(PAPER["authors"])] if PAPER["authors"] else []
+    parts.append(r"\emph{" + p.text(PAPER["title"]) + "}")
+    parts += [p.text(str(PAPER[k])) for k in ("venue", "year") if PAPER[k]]
+    return ", ".join(parts) + "."
+
+
+def _units(obj: Any) -> Any:
+    """The SI units of the axis a result (or LuGre file) belongs to (rotary until it records one)."""
+    from edm_sym.core.units import axis_units
+
+    return axis_units(getattr(obj, "axis", None) or "rotary")
+
+
 def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun) -> dict[str, Any]:
     from edm_sym.engines.lugre import PARAMETER_NAMES
 
+    u = _units(ref)
+    units = {"v_s": u.velocity, "tau_c": u.force, "tau_s": u.force, "z0": u.position,
+             "sigma0": f"{u.force}/{u.position}", "sigma1": u.viscous, "sigma2": u.viscous}
     symbols = {"v_s": r"\dot\nu_s", "tau_c": r"\tau_c", "tau_s": r"\tau_s", "z0": "z_0",
                "sigma0": r"\sigma_0", "sigma1": r"\sigma_1", "sigma2": r"\sigma_2"}
     lr = ref.result
     params = [{"symbol": p.math(symbols.get(n, p.text(n))), "name": p.text(n),
-               "value": p.math(EdmLatexPrinter({"digits": 5}).number(getattr(lr.params, n)))}
+               "value": p.math(EdmLatexPrinter({"digits": 5}).number(getattr(lr.params, n))),
+               "unit": p.unit(units[n])}
               for n in PARAMETER_NAMES]
     return {
         "name": p.mono(ref.name), "log": p.text(run.label), "log_name": p.mono(run.name),
@@ -304,7 +330,8 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
          + f" ({mat.n_elements} elements per row, {mat.n_rows} rows)"),
         ("Hierarchical steps", str(len(result.steps)) if result.steps
          else "none recorded (hand-written or imported model)"),
-        ("Fitness in the result file", p.math(p.number(result.fitness)) + r"~N\,m"
+        ("Weighted fitness (eq. 8)",
+         p.math(r"\Gamma = " + p.number(result.fitness)) + "~" + p.unit(_units(result).force)
          if result.fitness is not None else "not recorded"),
     ]
     for r in runs:
@@ -365,6 +392,8 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "versions": [{"name": p.text(n), "version": p.text(v)} for n, v in inp.versions],
         "commands": _commands(p, inp),
         "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
+        "force_unit": p.unit(_units(result).force),
+        "paper": _citation(p),
         **front_context(p, result, fig),
     }
     return check_report_context(ctx)

@@ -17,6 +17,7 @@ import numpy as np
 from edm_sym.core.data import TIME_RTOL, DataLog, match_sample_time
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.fitness import rms
+from edm_sym.engines.models import model_of
 from edm_sym.engines.simulate import simulate
 from edm_sym.engines.sources import load_data
 from edm_sym.engines.symbolic.contributions import Contributions, contributions
@@ -138,14 +139,14 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
     t = data.times
     lugre_tau = lugre_rmse = None
     if lugre is not None:
-        from edm_sym.engines.lugre import simulate_lugre
-
-        lr = lugre.result
-        if abs(lr.sample_time - data.ts) > TIME_RTOL * data.ts:
+        model = model_of(lugre.result, lugre.name)
+        if abs(model.sample_time - data.ts) > TIME_RTOL * data.ts:
             raise DataFormatError(f"{lugre.name}: sample_time",
                                   f"expected {data.ts:g} s as in {data.source} (within {TIME_RTOL:g} "
-                                  f"relative), found {lr.sample_time:g} s")
-        lugre_tau = np.asarray(simulate_lugre(lr.params, data.column(lr.velocity_name), data.ts))
+                                  f"relative), found {model.sample_time:g} s")
+        for col in model.inputs:
+            data.column(col)
+        lugre_tau = model.run(data).torque
         lugre_rmse = rms(target - lugre_tau)
     contrib = contributions(result, data, target)
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,

@@ -16,11 +16,6 @@ static inline edm_comp_f32_real_t edm_comp_f32_sign(edm_comp_f32_real_t x)
     return (x > 0.0f) ? 1.0f : ((x < 0.0f) ? -1.0f : 0.0f);
 }
 
-static inline edm_comp_f32_real_t edm_comp_f32_sat(edm_comp_f32_real_t x, edm_comp_f32_real_t lo, edm_comp_f32_real_t hi)
-{
-    return (x < lo) ? lo : ((x > hi) ? hi : x);
-}
-
 static inline edm_comp_f32_real_t edm_comp_f32_dead_zone(edm_comp_f32_real_t x, edm_comp_f32_real_t a)
 {
     return (x > a) ? (x - a) : ((x < -a) ? (x + a) : 0.0f);
@@ -28,12 +23,14 @@ static inline edm_comp_f32_real_t edm_comp_f32_dead_zone(edm_comp_f32_real_t x, 
 
 static inline edm_comp_f32_real_t edm_comp_f32_sym_log(edm_comp_f32_real_t x, edm_comp_f32_real_t a)
 {
-    return edm_comp_f32_sign(x) * log1pf(fabsf(x) / a);
+    const edm_comp_f32_real_t q = fabsf(x) / a;
+    return edm_comp_f32_sign(x) * log1pf((q < 1.00000002e+30f) ? q : 1.00000002e+30f);
 }
 
 static inline edm_comp_f32_real_t edm_comp_f32_tan(edm_comp_f32_real_t x)
 {
-    return edm_comp_f32_sat(tanf(x), -1000000.0f, 1000000.0f);
+    const edm_comp_f32_real_t t = tanf(x);
+    return (fabsf(t) >= 1000000.0f) ? ((sinf(x) < 0.0f) ? -1000000.0f : 1000000.0f) : t;
 }
 
 void edm_comp_f32_init(edm_comp_f32_state_t *s)

@@ -28,7 +28,8 @@ static inline edm_comp_real_t edm_comp_dead_zone(edm_comp_real_t x, edm_comp_rea
 
 static inline edm_comp_real_t edm_comp_sym_log(edm_comp_real_t x, edm_comp_real_t a)
 {
-    return edm_comp_sign(x) * log1p(fabs(x) / a);
+    const edm_comp_real_t q = fabs(x) / a;
+    return edm_comp_sign(x) * log1p((q < 1e+30) ? q : 1e+30);
 }
 
 static inline edm_comp_real_t edm_comp_sym_pow(edm_comp_real_t x, edm_comp_real_t a)
@@ -39,7 +40,8 @@ static inline edm_comp_real_t edm_comp_sym_pow(edm_comp_real_t x, edm_comp_real_
 
 static inline edm_comp_real_t edm_comp_tan(edm_comp_real_t x)
 {
-    return edm_comp_sat(tan(x), -1000000.0, 1000000.0);
+    const edm_comp_real_t t = tan(x);
+    return (fabs(t) >= 1000000.0) ? ((sin(x) < 0.0) ? -1000000.0 : 1000000.0) : t;
 }
 
 static inline edm_comp_real_t edm_comp_asin(edm_comp_real_t x)

@@ -39,6 +39,7 @@ NUM_ROWS: int = 4
 SHA256: str = 'd065a54aa36a53f189deefa2ae921325b4be5e088abfed5062cbe8e58d496013'
 _TAN_LIMIT = 1000000.0
 _POW_INPUT_LIMIT = 1000000.0
+_LOG_QUOTIENT_LIMIT = 1e+30
 
 
 def _sign(x):
@@ -54,7 +55,7 @@ def _dead_zone(x, a):
 
 
 def _sym_log(x, a):
-    return _sign(x) * math.log1p(abs(x) / a)
+    return _sign(x) * math.log1p(min(abs(x) / a, _LOG_QUOTIENT_LIMIT))
 
 
 def _sym_pow(x, a):
@@ -62,7 +63,10 @@ def _sym_pow(x, a):
 
 
 def _tan(x):
-    return _sat(math.tan(x), -_TAN_LIMIT, _TAN_LIMIT)
+    t = math.tan(x)
+    if abs(t) >= _TAN_LIMIT:
+        return -_TAN_LIMIT if math.sin(x) < 0 else _TAN_LIMIT
+    return t
 
 
 def _asin(x):

@@ -28,7 +28,8 @@ static inline kinds_f32_real_t kinds_f32_dead_zone(kinds_f32_real_t x, kinds_f32
 
 static inline kinds_f32_real_t kinds_f32_sym_log(kinds_f32_real_t x, kinds_f32_real_t a)
 {
-    return kinds_f32_sign(x) * log1pf(fabsf(x) / a);
+    const kinds_f32_real_t q = fabsf(x) / a;
+    return kinds_f32_sign(x) * log1pf((q < 1.00000002e+30f) ? q : 1.00000002e+30f);
 }
 
 static inline kinds_f32_real_t kinds_f32_sym_pow(kinds_f32_real_t x, kinds_f32_real_t a)
@@ -39,7 +40,8 @@ static inline kinds_f32_real_t kinds_f32_sym_pow(kinds_f32_real_t x, kinds_f32_r
 
 static inline kinds_f32_real_t kinds_f32_tan(kinds_f32_real_t x)
 {
-    return kinds_f32_sat(tanf(x), -1000000.0f, 1000000.0f);
+    const kinds_f32_real_t t = tanf(x);
+    return (fabsf(t) >= 1000000.0f) ? ((sinf(x) < 0.0f) ? -1000000.0f : 1000000.0f) : t;
 }
 
 static inline kinds_f32_real_t kinds_f32_asin(kinds_f32_real_t x)

@@ -1,0 +1,149 @@
+"""The closing summary of the long commands (docs/cli.md#progress-and-summary).
+
+``edm abstract``, ``edm lugre``, ``edm pipeline`` and ``edm-export`` end with
+what they wrote (standard output, one file per line, as before), then a short
+summary on standard error: the fitness (eq. 8, weighted, training and
+validation) and the flags a user must not miss before using the model:
+
+* parameters at their range bounds (:func:`edm_sym.core.bounds.bound_summary`),
+  and LuGre shape parameters on a bound of their search box
+  (:func:`edm_sym.engines.lugre.shape_bound_flags`);
+* negligible rows: a row whose output's RMS is below 1 % of the target's
+  (the threshold of :class:`~edm_sym.engines.symbolic.significance.SignificanceOptions`),
+  measured on a log when the command has one. ``edm describe`` gives every
+  flag of every row and term.
+
+The summary is computed without sympy, so it costs a simulation of the rows
+at most.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from edm_sym.core.bounds import bound_summary
+from edm_sym.core.fitness import rms
+
+__all__ = ["fitness_line", "negligible_rows", "print_summary", "result_flags"]
+
+#: A row below this share of the target's RMS is negligible (as in ``edm describe``).
+NEGLIGIBLE = 0.01
+
+
+def fitness_line(result: Any) -> str:
+    """``fitness (weighted eq. 8): training 0.0421 N m, validation 0.0433 N m``.
+
+    Parameters
+    ----------
+    result : EdmResult
+
+    Returns
+    -------
+    str
+        The training score (the result's ``fitness`` when it holds no
+        held-out validation) and the validation score, or ``validation: none
+        held out``.
+    """
+    val = result.validation if isinstance(result.validation, Mapping) else {}
+    parts = []
+    for part in ("training", "validation"):
+        score = val.get(part)
+        if isinstance(score, Mapping) and score.get("fitness"):
+            value, unit = score["fitness"]
+            parts.append(f"{part} " + ("n/a (Lambda = 0 there)" if value is None
+                                       else f"{value:.6g} {unit}"))
+    if not parts:
+        fit = result.fitness
+        parts.append("training " + ("inf" if fit is None else f"{fit:.6g} N m"))
+    if len(parts) == 1:
+        parts.append("validation: none held out")
+    return "fitness (weighted eq. 8): " + ", ".join(parts)
+
+
+def negligible_rows(result: Any, log: Any) -> list[str]:
+    """The rows whose output is below :data:`NEGLIGIBLE` of the target's RMS on ``log``.
+
+    Parameters
+    ----------
+    result : EdmResult
+    log : DataLog
+        Holds the result's inputs and target.
+
+    Returns
+    -------
+    list of str
+        One line per negligible row (none when the target is all zero).
+    """
+    from edm_sym.engines.simulate import simulate_rows
+
+    comp = result.compensator
+    target = log.column(result.target, role="target column")
+    ref = rms(target)
+    if not ref > 0:
+        return []
+    with np.errstate(all="ignore"):
+        outputs = simulate_rows(comp, comp.matrix.rows, log.stack(comp.matrix.inputs))
+    out = []
+    for j, y in enumerate(outputs):
+        share = rms(y) / ref
+        if share < NEGLIGIBLE:
+            out.append(f"row {j + 1} ({comp.matrix.inputs[comp.matrix.rows[j].input]}) is "
+                       f"negligible: {100 * share:.2g} % of the target's RMS on "
+                       f"{log.source} (threshold {100 * NEGLIGIBLE:g} %)")
+    return out
+
+
+def result_flags(result: Any, log: Any = None) -> list[str]:
+    """Flags of an EDM result: parameters at a range bound, and negligible rows on ``log``.
+
+    Parameters
+    ----------
+    result : EdmResult
+    log : DataLog, optional
+        Without it, the negligible rows are not measured (see :data:`NOT_MEASURED`).
+
+    Returns
+    -------
+    list of str
+    """
+    lines = bound_summary(result.compensator)
+    if log is not None:
+        lines += negligible_rows(result, log)
+    return lines
+
+
+#: The summary's note when no log was at hand to measure the rows on.
+NOT_MEASURED = "negligible rows: not measured (no log given; `edm describe RESULT.json` measures them)"
+
+
+def print_summary(prog: str, *, fitness: Iterable[str] = (), flags: Sequence[str] = (),
+                  describe: str | Path | None = None, stream: IO[str] | None = None) -> None:
+    """Print the summary's fitness lines and flags, one per line, prefixed by ``prog``.
+
+    Parameters
+    ----------
+    prog : str
+        E.g. ``edm abstract``.
+    fitness : iterable of str
+        The fitness lines.
+    flags : sequence of str
+        Each printed as ``PROG: warning: ...``; ``flags: none`` when empty.
+    describe : path-like, optional
+        A result file: when there are flags, a last line points to ``edm describe`` on it.
+    stream : file, optional
+        Default: standard error.
+    """
+    stream = stream if stream is not None else sys.stderr
+    for line in fitness:
+        print(f"{prog}: {line}", file=stream)
+    for line in flags:
+        print(f"{prog}: warning: {line}", file=stream)
+    if not flags:
+        print(f"{prog}: flags: none", file=stream)
+    elif describe is not None:
+        print(f"{prog}: see `edm describe {describe}` for every row's flags", file=stream)

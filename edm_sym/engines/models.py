@@ -1,0 +1,180 @@
+"""A compensation model run on a log: EDM or LuGre, chosen here and nowhere else.
+
+``edm simulate``, the pipeline's evaluation and the report's Table III all ask
+the same question of a model file: which columns does it read, at which sample
+time, and what compensation torque does it give on a log? :func:`load_model`
+reads either kind of file (``format`` ``"edm-result"`` or ``"edm-lugre"``,
+docs/result-format.md and docs/lugre.md) and :func:`model_of` wraps a loaded
+result; callers then use one interface, :class:`CompensationModel`
+(docs/architecture.md, "Layers").
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from edm_sym.core.data import DataLog
+from edm_sym.core.errors import ResultFormatError
+from edm_sym.core.fileio import read_json
+from edm_sym.core.result import EdmResult, load_result
+
+__all__ = ["FORMATS", "CompensationModel", "EdmModel", "LuGreModel", "ModelRun", "load_model", "model_of"]
+
+#: The ``format`` value of each model file kind.
+FORMATS = ("edm-result", "edm-lugre")
+
+
+@dataclass(frozen=True)
+class ModelRun:
+    """A model's output over one log.
+
+    Attributes
+    ----------
+    torque : numpy.ndarray
+        The compensation torque (or force), one value per sample.
+    parts : mapping of str to numpy.ndarray
+        Named parts that sum to it (``row_1``, ``row_2`` ... for EDM; none for LuGre).
+    """
+
+    torque: np.ndarray
+    parts: Mapping[str, np.ndarray]
+
+
+class CompensationModel(Protocol):
+    """What every model kind offers to the commands and the report."""
+
+    kind: str  #: "edm" or "lugre"
+    name: str  #: the file (or label) named in messages
+    target: str | None  #: the column the model compensates, when recorded
+    inputs: tuple[str, ...]  #: the columns it reads
+    sample_time: float  #: [s]
+    axis: str | None  #: "rotary" or "linear"; None when the file does not record it
+
+    def column_roles(self) -> Any:
+        """The time column and roles the file records (a ColumnRoles), or None."""
+        ...
+
+    def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
+        """The model over ``data`` (which holds every column of ``inputs``)."""
+        ...
+
+
+@dataclass(frozen=True)
+class EdmModel:
+    """An element-matrix compensator (an :class:`~edm_sym.core.result.EdmResult`)."""
+
+    result: EdmResult
+    name: str = "result.json"
+    kind: str = "edm"
+
+    @property
+    def target(self) -> str:
+        return self.result.target
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return tuple(self.result.inputs)
+
+    @property
+    def sample_time(self) -> float:
+        return float(self.result.sample_time)
+
+    @property
+    def axis(self) -> str:
+        return self.result.axis
+
+    def column_roles(self) -> Any:
+        return self.result.column_roles()
+
+    def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
+        from edm_sym.engines.simulate import simulate
+
+        sim = simulate(self.result, data)
+        parts = {f"row_{j}": row for j, row in enumerate(sim.rows, start=1)}
+        return ModelRun(np.asarray(sim.total), parts)
+
+
+@dataclass(frozen=True)
+class LuGreModel:
+    """The LuGre baseline (a :class:`~edm_sym.engines.lugre.LuGreResult`); it reads the velocity only."""
+
+    result: Any
+    name: str = "lugre.json"
+    kind: str = "lugre"
+
+    @property
+    def target(self) -> str | None:
+        return self.result.target_name
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return (self.result.velocity_name,) if self.result.velocity_name else ()
+
+    @property
+    def sample_time(self) -> float:
+        return float(self.result.sample_time)
+
+    @property
+    def axis(self) -> None:
+        return None  # LUGRE.json records no axis: the command's --axis says it
+
+    def column_roles(self) -> None:
+        return None
+
+    def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
+        from edm_sym.engines.lugre import simulate_lugre
+
+        if not self.inputs:
+            raise ResultFormatError(f"{self.name}: velocity_name",
+                                    "expected the velocity column's name, found none")
+        columns = data.columns if isinstance(data, DataLog) else data
+        step = data.ts if isinstance(data, DataLog) else (ts if ts is not None else self.sample_time)
+        velocity = np.asarray(columns[self.inputs[0]], dtype=float)
+        return ModelRun(np.asarray(simulate_lugre(self.result.params, velocity, step)), {})
+
+
+def model_of(result: Any, name: str | None = None) -> EdmModel | LuGreModel:
+    """Wrap a loaded result (EdmResult or LuGreResult) as a :class:`CompensationModel`."""
+    if isinstance(result, EdmResult):
+        return EdmModel(result, name or (Path(result.source).name if result.source else "result.json"))
+    from edm_sym.engines.lugre import LuGreResult
+
+    if isinstance(result, LuGreResult):
+        return LuGreModel(result, name or "lugre.json")
+    raise TypeError(f"expected an EdmResult or a LuGreResult, found {type(result).__name__}")
+
+
+def file_format(path: str | Path) -> str:
+    """The ``format`` of a model file, checked before the file is read as either kind.
+
+    Raises
+    ------
+    ResultFormatError
+        Unreadable file, invalid JSON, or a format that is neither kind.
+    """
+    path = Path(path)
+    doc, _ = read_json(path, ResultFormatError)
+    if not isinstance(doc, dict):
+        raise ResultFormatError(f"{path.name}: (top level)",
+                                f"expected a JSON object, found {type(doc).__name__}")
+    kind = doc.get("format")
+    if kind not in FORMATS:
+        raise ResultFormatError(f"{path.name}: format",
+                                f'expected "edm-result" or "edm-lugre", found {json.dumps(kind)}')
+    return kind
+
+
+def load_model(path: str | Path) -> EdmModel | LuGreModel:
+    """Read a model file of either kind, validated completely (before any data is read)."""
+    path = Path(path)
+    if file_format(path) == "edm-lugre":
+        from edm_sym.engines.lugre import load_lugre
+
+        return LuGreModel(load_lugre(path), path.name)
+    return EdmModel(load_result(path), path.name)
