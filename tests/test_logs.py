@@ -331,3 +331,20 @@ def test_emps_example_is_a_linear_axis_end_to_end(tmp_path: Path) -> None:
     assert "linear axis, target in N" in desc.table()
     written = edm_sym.export(result, "c", tmp_path)
     assert [p.name for p in written] == ["edm_comp.h", "edm_comp.c"]
+
+
+def test_describe_accepts_clock_drift_and_says_so(linear_result: Path, tmp_path: Path) -> None:
+    log, _ = friction_log(1.0)
+    c = log.columns
+    drifted = {"time_s": c["t"] * (1 + 5e-4), "dqm": c["omega"], "ddqm": c["alpha"],
+               "F": c["tau_ext"]}
+    path = write_csv(tmp_path / "drift.csv", drifted)
+    desc = edm_sym.describe(linear_result, path)
+    assert any("relative drift 0.0005, accepted" in n for n in desc.notes)
+    assert desc.fitness["data"]["samples"] == 1000
+    # Beyond the tolerance: refused with both values and the way out named.
+    drifted["time_s"] = c["t"] * 1.01
+    far = write_csv(tmp_path / "far.csv", drifted)
+    with pytest.raises(DataFormatError, match=r"far.csv: sample time: expected 0.001 s as in "
+                                              r"r.json .* found 0.00101 s; --resample"):
+        edm_sym.describe(linear_result, far)

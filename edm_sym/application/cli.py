@@ -238,6 +238,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--reuse", action="store_true",
                    help="keep an existing lugre.json / result.json (evaluate and export only)")
+    p.add_argument("--axis", choices=["rotary", "linear"],
+                   help="the axis, over the file's [data] axis (default: the file's, else rotary)")
     p.set_defaults(func=_cmd_pipeline)
 
     p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
@@ -417,7 +419,7 @@ def _cmd_plant(args: argparse.Namespace) -> int:
 def _cmd_pipeline(args: argparse.Namespace) -> int:
     from edm_sym.application.pipeline import run_pipeline
 
-    run_pipeline(args.pipeline, progress=not args.quiet, reuse=args.reuse)
+    run_pipeline(args.pipeline, progress=not args.quiet, reuse=args.reuse, axis=args.axis)
     return 0
 
 

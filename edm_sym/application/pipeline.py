@@ -38,7 +38,7 @@ import math
 import os
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -139,7 +139,10 @@ def load_pipeline(path: str | Path) -> Pipeline:
     if config:
         from edm_sym.engines.abstraction import load_config
 
-        base = load_config(path.resolve().parent / config)
+        try:
+            base = load_config(path.resolve().parent / config)
+        except ConfigError as exc:  # named as the pipeline's key, then the config's own message
+            raise ConfigError(f"{name}: abstraction.config", str(exc)) from None
     axis = _get(f"{name}: data", data, "axis", str, None) or (base.axis if base else None) or "rotary"
     if axis not in ("rotary", "linear"):
         raise ConfigError(f"{name}: data.axis", f"expected rotary or linear, found {axis!r}")
@@ -198,7 +201,7 @@ def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
 
 
 def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False,
-                 out: Any = None) -> dict[str, Any]:
+                 out: Any = None, axis: str | None = None) -> dict[str, Any]:
     """Run the whole flow of a pipeline file.
 
     Parameters
@@ -217,6 +220,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     out : file, optional
         Where the files written and the RMSE table are printed (default:
         standard output); the fitness and the flags go to standard error.
+    axis : str, optional
+        ``"rotary"`` or ``"linear"`` over the file's ``[data] axis`` (``--axis``).
 
     Returns
     -------
@@ -234,6 +239,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
 
     out = out if out is not None else sys.stdout
     pipe = load_pipeline(path)
+    if axis is not None:  # --axis, over the file's
+        pipe = replace(pipe, axis=axis)
     name = Path(path).name
     logs = {"abstraction": load_data(pipe.data_path(pipe.abstraction_data),
                                      require=[*pipe.inputs, pipe.target], columns=pipe.columns)}
@@ -289,8 +296,6 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
             stored["eval_data"] = pipe.evaluation_data
         if lugre is not None:
             stored["lugre"] = lugre_file.name
-        from dataclasses import replace
-
         save_result(replace(result, report_inputs=stored), result_file)
         if result.provenance.get("stop_reason") == "interrupted":
             # The best result so far is saved; the rest of the flow must not run on it.

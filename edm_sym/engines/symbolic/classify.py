@@ -99,12 +99,13 @@ class PhysicalTerm:
     expr: sp.Expr | None = field(default=None, compare=False)
 
 
-#: Default thresholds per axis, in its units: a rotary motor axis turns at up to
-#: some 10 rad/s, a linear (ball-screw) axis moves at up to some 0.5 m/s; the
-#: Coulomb threshold is 1 % of that range on both.
+#: Default thresholds per axis, in its units (rotary: the field defaults of
+#: ClassifyOptions): a rotary motor axis turns at up to some 10 rad/s, a linear
+#: (ball-screw) axis moves at up to some 0.5 m/s; the Coulomb threshold is 2.5 %
+#: of that range on both, the acceleration range 100 or 20 times it.
 AXIS_DEFAULTS: dict[str, dict[str, float]] = {
-    "rotary": {"coulomb_velocity": 0.1, "velocity_range": 10.0, "acceleration_range": 1000.0},
-    "linear": {"coulomb_velocity": 0.005, "velocity_range": 0.5, "acceleration_range": 10.0},
+    "rotary": {},  # the field defaults below
+    "linear": {"coulomb_velocity": 0.0125, "velocity_range": 0.5, "acceleration_range": 10.0},
 }
 
 
@@ -120,7 +121,7 @@ class ClassifyOptions:
     axis : str, default "rotary"
         ``"rotary"`` or ``"linear"``: the units of the terms' parameters
         (:func:`edm_sym.core.units.axis_units`) and of the thresholds below.
-    coulomb_velocity : float, default 0.25 (linear: 0.005)
+    coulomb_velocity : float, default 0.25 (linear: 0.0125)
         [rad/s or m/s] A saturating function of velocity counts as Coulomb friction
         when its level divided by its slope at the origin is at most this
         velocity (``tanh(k v)``: 1/k; ``atan(k v)``: pi/(2k)). A servo log
@@ -350,7 +351,7 @@ def _match(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, leaf: _Leaf,
             return [PhysicalTerm(kind, {pname: (v, unit), **extra},
                                  f"{what}: {v:.6g} {unit}{note}", term)]
         stiff = f"{U.force}/{U.position}"
-        return [_unclassified(term, f"linear in the position: a stiffness of {c * g:.6g} {stiff}, "
+        return [_unclassified(term, f"linear in the {_moved(U)}: a stiffness of {c * g:.6g} {stiff}, "
                               "not a friction term" + note, {"stiffness": (c * g, stiff)})]
     if role == "velocity":
         hit = _coulomb(term, c, f, w, g, extra, note, opts)
@@ -494,9 +495,10 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
         mag = np.abs(np.fft.rfft(y))[1:] if np.all(np.isfinite(y)) else np.zeros(1)
         top = int(np.argmax(mag)) + 1
         if top > 1:
-            dominant = {"dominant_cycles": (top * k, "1"),
-                        "dominant_amplitude": (float(2 * mag[top - 1] / y.size), "N m")}
-            shape += f", strongest harmonic {top * k:.6g} cycles/rev"
+            _, strongest, per_unit = _cycles(top * k, U)
+            dominant = {"dominant_cycles": strongest,
+                        "dominant_amplitude": (float(2 * mag[top - 1] / y.size), U.force)}
+            shape += f", strongest harmonic {strongest[0]:.6g} {per_unit}"
     else:
         return None
     phi = _wrap(phi)
@@ -505,11 +507,17 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
               key: cycles, "phase": (phi, "rad"), **dominant, **extra}
     wrap_note = ""
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
-        wrap_note = "; not a whole number of cycles per wrap of the position: it jumps at each wrap"
+        per_wrap = "revolution" if U.axis == "rotary" else "wrap of the position"
+        wrap_note = f"; not a whole number of cycles per {per_wrap}: it jumps at each wrap"
     return [PhysicalTerm("spatial", params,
                          f"position-dependent friction, {shape}: amplitude {amp:.6g} {U.force}, "
                          f"{cycles[0]:.6g} {per} (period {2 * math.pi / k:.6g} {U.position}), "
                          f"phase {phi:.4g} rad{wrap_note}{note}", term)]
+
+
+def _moved(U: AxisUnits) -> str:  # noqa: N803
+    """What the position of the axis is called in the terms' texts."""
+    return "angle" if U.axis == "rotary" else "position"
 
 
 def _cycles(k: float, U: AxisUnits) -> tuple[str, tuple[float, str], str]:  # noqa: N803
@@ -597,21 +605,22 @@ def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, s
         return None
     after = np.nonzero(np.abs(dev[i:]) <= 0.5 * abs(peak))[0]
     vs = float(v[i + after[0]]) if after.size else float(v[-1])
-    how = f" (the asymptote of {f} over the top {100 * _TAIL:g} % of +-{v[-1]:g} rad/s)"
+    N, V, D = opts.units.force, opts.units.velocity, opts.units.viscous
+    how = f" (the asymptote of {f} over the top {100 * _TAIL:g} % of +-{v[-1]:g} {V})"
     out = []
     if abs(fc) >= _SIGNIFICANT * scale:
-        out.append(PhysicalTerm("coulomb", {"level": (float(fc), "N m"), **extra},
-                                f"Coulomb friction: {fc:.6g} N m{how}{note}", term))
+        out.append(PhysicalTerm("coulomb", {"level": (float(fc), N), **extra},
+                                f"Coulomb friction: {fc:.6g} {N}{how}{note}", term))
     if abs(d) * v[-1] >= _SIGNIFICANT * scale:
-        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), "N m s/rad"), **extra},
-                                f"viscous friction: {d:.6g} N m s/rad{how}{note}", term))
+        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), D), **extra},
+                                f"viscous friction: {d:.6g} {D}{how}{note}", term))
     if vs <= opts.coulomb_velocity:
         return out or None
-    out.append(PhysicalTerm("stribeck", {"peak": (peak, "N m"),
-                                         "peak_velocity": (float(v[i]), "rad/s"),
-                                         "stribeck_velocity": (vs, "rad/s"), **extra},
-                            f"Stribeck-like: {peak:.4g} N m above Coulomb + viscous at "
-                            f"{v[i]:.4g} rad/s, half of that at {vs:.4g} rad/s{note}", term))
+    out.append(PhysicalTerm("stribeck", {"peak": (peak, N),
+                                         "peak_velocity": (float(v[i]), V),
+                                         "stribeck_velocity": (vs, V), **extra},
+                            f"Stribeck-like: {peak:.4g} {N} above Coulomb + viscous at "
+                            f"{v[i]:.4g} {V}, half of that at {vs:.4g} {V}{note}", term))
     return out
 
 
@@ -638,7 +647,7 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
                         f"{p.dominant_amplitude:.4g} {F}")
             if p.jump:
                 params["wrap_jump"] = (p.jump, F)
-                more += f"; jumps by {p.jump:.4g} {F} at each wrap of the position"
+                more += f"; jumps by {p.jump:.4g} {F} at each wrap of the {_moved(U)}"
             return [PhysicalTerm("spatial", {
                 "amplitude": (p.amplitude, F), "period": (period, U.position),
                 key: cycles, "phase": (p.phase, "rad"),
