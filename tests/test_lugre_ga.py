@@ -235,7 +235,7 @@ def test_both_on_the_command_line(tmp_path, capsys):
     loaded = load_lugre(out)
     assert lines[0] == f"wrote {out}"
     assert [line.split()[:2] for line in lines[1:3]] == [["ga", "fitness"], ["scipy", "fitness"]]
-    assert lines[-1] == f"rmse {loaded.rmse:.10g}"
+    assert lines[-1] == f"rmse {loaded.rmse:.10g} N m"  # the axis's unit (rotary by default)
     assert set(loaded.comparison) == {"ga", "scipy"}
     for name, line in zip(("ga", "scipy"), lines[1:3], strict=True):
         assert float(line.split()[2]) == pytest.approx(loaded.comparison[name].fitness, rel=1e-9)

@@ -51,7 +51,7 @@ def decode_row(
     *,
     role: str | None,
     simplify: SimplifyOptions | None = None,
-    classify: ClassifyOptions | None = None,
+    classify: ClassifyOptions | bool | None = None,
     systems: bool = True,
     axis: str = "rotary",
 ) -> RowModel:
@@ -77,7 +77,9 @@ def decode_row(
     expr = simplify_expression(raw, model.input_symbols, numeric=False,
                                signs=parameter_signs(model), options=simplify)
     expr_n = simplify_expression(raw_n, model.input_symbols, numeric=True, options=simplify)
-    terms = classify_expression(expr_n, row.input_symbol, role, options=classify, axis=axis)
+    # classify=False: no physical terms (a repr or a system needs none, and they cost sympy time).
+    terms = () if classify is False else classify_expression(expr_n, row.input_symbol, role,
+                                                              options=classify, axis=axis)
     return RowModel(row.index, row.input, row.input_symbol, row.stages, role=role,
                     expr_raw=raw, expr_raw_numeric=raw_n, expr=expr, expr_numeric=expr_n,
                     terms=terms, linear_parts=stage_parts(row, ts) if systems else (),
@@ -89,7 +91,7 @@ def decode(
     *,
     roles: Mapping[str, str | None] | None = None,
     simplify: SimplifyOptions | None = None,
-    classify: ClassifyOptions | None = None,
+    classify: ClassifyOptions | bool | None = None,
     systems: bool = True,
     axis: str | None = None,
 ) -> SymbolicModel:
@@ -106,9 +108,9 @@ def decode(
         (:mod:`edm_sym.engines.symbolic.roles`).
     simplify : SimplifyOptions, optional
         Number of rewrite passes and the pole-zero tolerance.
-    classify : ClassifyOptions, optional
+    classify : ClassifyOptions or False, optional
         Thresholds of the physical classification, in the axis's units
-        (default: ``ClassifyOptions.for_axis(axis)``).
+        (default: ``ClassifyOptions.for_axis(axis)``); False: no physical terms.
     systems : bool, default True
         Build the python-control transfer functions and row systems.
     axis : str, optional
@@ -131,7 +133,8 @@ def decode(
     # The roles the result records (given with --role), then the caller's.
     role_map = input_roles(base.inputs, {**getattr(result, "roles", {}), **(roles or {})})
     axis = axis or getattr(result, "axis", "rotary")
-    classify = classify if classify is not None else ClassifyOptions.for_axis(axis)
+    if classify is None or classify is True:
+        classify = ClassifyOptions.for_axis(axis)
     rows = tuple(decode_row(base, r, role=role_map[r.input], simplify=simplify,
                             classify=classify, systems=systems, axis=axis) for r in base.rows)
     return SymbolicModel(base.compensator, base.inputs, base.input_symbols, base.sample_time,
