@@ -132,11 +132,16 @@ def test_the_result_records_the_axis_and_each_log_with_its_columns_and_roles(
     assert log["use"] == "abstraction" and log["file"] == "drive.csv"
     assert log["sha256"] == hashlib.sha256(export_csv.read_bytes()).hexdigest()
     assert log["rows"] == 1000 and log["sample_time"] == pytest.approx(TS, rel=1e-9)
-    assert log["columns"] == [{"name": "time_s", "role": "time"},
-                              {"name": "dqm", "role": "velocity"},
-                              {"name": "ddqm", "role": "acceleration"},
-                              {"name": "temp", "role": None},
-                              {"name": "F", "role": "target"}]
+    assert [{k: c[k] for k in ("name", "role")} for c in log["columns"]] == [
+        {"name": "time_s", "role": "time"}, {"name": "dqm", "role": "velocity"},
+        {"name": "ddqm", "role": "acceleration"}, {"name": "temp", "role": None},
+        {"name": "F", "role": "target"}]
+    # Each column's range, which the exports give as an input's expected range.
+    raw = load_data(export_csv, columns=ColumnRoles.parse(time_column="time_s"))
+    for col in log["columns"]:
+        values = raw.columns[col["name"]]
+        assert (col["min"], col["max"]) == (float(values.min()), float(values.max()))
+        assert col["min"] < col["max"]
     # The scores are in the linear axis's force unit.
     assert doc["validation"]["training"]["rmse"][1] == "N"
     assert load_result(linear_result).roles == {"dqm": "velocity", "ddqm": "acceleration"}

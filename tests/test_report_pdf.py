@@ -163,3 +163,23 @@ def test_shipped_example_report_compiles_and_names_the_four_terms(tmp_path: Path
     for info in model.params:
         assert _as_printed(info.value) in text, info.symbol
     assert "LuGre" in text
+    # The summary lists the negligible term; units in prose are set as superscripts.
+    assert "Negligible rows and terms row 4: term offset (level -0.002334 N m) contributes" in text
+    assert "m^2" not in text and "textasciicircum" not in text
+    # Table 1's units are SI, traced along each row (pdftotext sets superscripts inline).
+    table = _pdftext_lines(pdf, "Table 1: Parameters of the element matrix.")
+    units = {int(m.group(1)): m.group(3).replace(" ", "") for m in
+             (re.match(r"^\s*a(\d+)\s.*\s(linear|log)\s+(\S.*?)\s*$", line) for line in table) if m}
+    assert units == {2: "rad/s", 4: "kgm2", 5: "s2", 6: "rad/s", 7: "Nm", 8: "rad/s", 9: "rad/s",
+                     10: "–", 11: "Nm", 12: "rad/s", 13: "rad/s", 14: "rad/s", 16: "Nms/rad",
+                     17: "rad", 18: "rad", 19: "samples", 20: "Nm"}
+    assert "unit of the input" not in " ".join(table) and "output unit per" not in " ".join(table)
+
+
+def _pdftext_lines(pdf: Path, start: str) -> list[str]:
+    """The -layout lines of ``pdf`` from the line holding ``start`` to the next blank pair."""
+    out = subprocess.run(["pdftotext", "-layout", str(pdf), "-"], capture_output=True, text=True,
+                         check=True).stdout.splitlines()
+    k = next(i for i, line in enumerate(out) if start in line)
+    end = next(i for i in range(k + 2, len(out)) if not out[i].strip() and not out[i - 1].strip())
+    return out[k:end]

@@ -254,10 +254,14 @@ class DataLog:
         ----------
         use : str
             What the log was used for: ``"abstraction"`` or ``"validation"``.
+
+        Each column is recorded with its role and its smallest and largest
+        value, which the exports give as an input's expected range.
         """
         return {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
                 "sample_time": float(self.ts),
-                "columns": [{"name": c, "role": self.role_of(c)} for c in self.columns]}
+                "columns": [{"name": c, "role": self.role_of(c), "min": float(np.min(v)),
+                             "max": float(np.max(v))} for c, v in self.columns.items()]}
 
     def require_varying(self, names: Iterable[str]) -> None:
         """Refuse a constant column among ``names`` (an input that carries no information).

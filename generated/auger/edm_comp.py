@@ -27,15 +27,33 @@ Discrete time (sample time 0.001 s), elements with state:
     row 3, element 4, lpf (a_12 = 154.64): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
         (order 1)
     row 5, element 3, shift (a_19 = 5.8791): z^-6, a ring buffer of 6 sample(s)
+Inputs (``u`` in ``INPUTS`` order), each with its SI unit and expected range:
+    theta_w: position wrapped to one revolution [rad], range not recorded; read by row 5
+    theta_uw: position [rad], range not recorded; read by no row, so its value is never used
+        (any value, e.g. 0, will do)
+    omega: velocity [rad/s], range not recorded; read by rows 3, 4
+    alpha: acceleration [rad/s^2], range not recorded; read by rows 1, 2
+No input is clamped: outside its expected range the compensator computes the same
+formulas, so it extrapolates what it learnt there; only the element guards below limit
+anything.
+Guards (what an input outside an element's domain does):
+    row 2, element 3, tan_amp (a_7 = -0.956015): tan limited to +-1e+06, so its poles give a
+        finite output; where it reaches the limit the sign of sin decides, so a pole gives
+        one value in float and double alike
+    row 3, element 1, log (a_9 = 0.12768): odd extension: defined for every x
+        (a plain ln x is undefined for x <= 0); behaves as x / a near 0 and as ln|x| for |x|
+        >> a; |x| / a limited to 1e+30 first, so no quotient overflows in float
 
 Uses only the Python standard library. ``Compensator().step(u)`` consumes one
 sample ``u`` (in ``INPUTS`` order) and returns the compensation torque;
-``simulate(columns)`` runs a fresh compensator over whole columns.
+``simulate(columns)`` runs a fresh compensator over whole columns and needs
+only the columns of ``USED_INPUTS``.
 """
 
 import math
 
 INPUTS: tuple[str, ...] = ('theta_w', 'theta_uw', 'omega', 'alpha')
+USED_INPUTS: tuple[str, ...] = ('theta_w', 'omega', 'alpha')
 TARGET: str = 'tau_ext'
 SAMPLE_TIME: float = 0.001
 NUM_ROWS: int = 5
@@ -171,6 +189,11 @@ class Compensator:
 
 
 def simulate(columns) -> list[float]:
-    """Run a fresh :class:`Compensator` over ``columns`` (a mapping name -> sequence)."""
+    """Run a fresh :class:`Compensator` over ``columns`` (a mapping name -> sequence).
+
+    Only the columns of ``USED_INPUTS`` are read; the other inputs may be missing.
+    """
     comp = Compensator()
-    return [comp.step(u) for u in zip(*(columns[name] for name in INPUTS), strict=True)]
+    n = len(columns[USED_INPUTS[0]])
+    signals = [columns[name] if name in USED_INPUTS else (0.0,) * n for name in INPUTS]
+    return [comp.step(u) for u in zip(*signals, strict=True)]

@@ -190,6 +190,16 @@ class Element:
     #: (reading an input directly, the GA computes those once per input), or None.
     from_sin_cos: ClassVar[Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None] = None
 
+    # -- units (the report traces each parameter's SI unit along its row) ------
+    #: How the output's unit follows from the input's: ``"input"`` (the same unit:
+    #: filters, delays, offsets, limits), ``"one"`` (dimensionless: sign, relay,
+    #: trigonometric, log), ``"power"`` (the input's unit to the power a) or
+    #: ``"scaled"`` (set by the parameter: gains and amplitudes, :attr:`scales_output`).
+    unit_out: ClassVar[str] = "input"
+    #: The unit the input must be in, when the element fixes it (an angle, "rad", for
+    #: the sine and tangent; "1" for arcsine and arccosine); None when any will do.
+    unit_in: ClassVar[str | None] = None
+
     # -- numeric -------------------------------------------------------------
     @classmethod
     def realise(cls, a: float | None, ts: float) -> Realisation:

@@ -33,6 +33,7 @@ CORNER_LEAD_LAG = Param(
 class Gain(StaticElement):
     name = "gain"
     code = 3
+    unit_out = "scaled"
     title = "Gain"
     category = "calculation"
     homogeneous = True
@@ -51,6 +52,7 @@ class PowerGain(StaticElement):
 
     name = "power_gain"
     code = 4
+    unit_out = "scaled"
     title = "Power gain"
     category = "calculation"
     homogeneous = True

@@ -65,6 +65,7 @@ class DeadZone(StaticElement):
 class Hysteresis(RelayElement):
     name = "hysteresis"
     code = 18
+    unit_out = "one"
     title = "Hysteresis"
     category = "nonlinear"
     formula = "relay: y = +1 once x >= a, -1 once x <= -a, else held (starts at 0)"
@@ -75,6 +76,7 @@ class Hysteresis(RelayElement):
 class Sign(StaticElement):
     name = "sign"
     code = 19
+    unit_out = "one"
     title = "Sign function"
     category = "nonlinear"
     formula = "y = sgn(x)   (sgn(0) = 0)"
@@ -87,6 +89,7 @@ class Sign(StaticElement):
 class Logarithm(StaticElement):
     name = "log"
     code = 20
+    unit_out = "one"
     title = "Logarithmic function"
     category = "nonlinear"
     formula = "y = sgn(x) ln(1 + |x| / a)"
@@ -103,6 +106,7 @@ class Logarithm(StaticElement):
 class Power(StaticElement):
     name = "power"
     code = 21
+    unit_out = "power"
     title = "Power"
     category = "nonlinear"
     formula = "y = sgn(x) |x|^a"
@@ -119,6 +123,8 @@ class Power(StaticElement):
 class SinePhase(StaticElement):
     name = "sin_phase"
     code = 22
+    unit_in = "rad"
+    unit_out = "one"
     title = "Sine wave (phase)"
     category = "nonlinear"
     formula = "y = sin(x + a)"
@@ -139,6 +145,8 @@ class SinePhase(StaticElement):
 class SineAmplitude(StaticElement):
     name = "sin_amp"
     code = 23
+    unit_in = "rad"
+    unit_out = "scaled"
     title = "Sine wave (amp.)"
     category = "nonlinear"
     scales_output = True
@@ -163,6 +171,8 @@ TAN_GUARD = (f"tan limited to +-{TAN_LIMIT:g}, so its poles give a finite output
 class TangentPhase(StaticElement):
     name = "tan_phase"
     code = 24
+    unit_in = "rad"
+    unit_out = "one"
     title = "Tangent (phase)"
     category = "nonlinear"
     formula = "y = tan(x + a)"
@@ -179,6 +189,8 @@ class TangentPhase(StaticElement):
 class TangentAmplitude(StaticElement):
     name = "tan_amp"
     code = 25
+    unit_in = "rad"
+    unit_out = "scaled"
     title = "Tangent (amp.)"
     category = "nonlinear"
     scales_output = True
@@ -194,6 +206,8 @@ class TangentAmplitude(StaticElement):
 class ArcSine(StaticElement):
     name = "asin"
     code = 26
+    unit_in = "1"
+    unit_out = "one"
     title = "Arc sine"
     category = "nonlinear"
     formula = "y = asin(x)"
@@ -207,6 +221,8 @@ class ArcSine(StaticElement):
 class ArcCosine(StaticElement):
     name = "acos"
     code = 27
+    unit_in = "1"
+    unit_out = "one"
     title = "Arc cosine"
     category = "nonlinear"
     formula = "y = acos(x)"
@@ -220,6 +236,7 @@ class ArcCosine(StaticElement):
 class ArcTangent(StaticElement):
     name = "atan"
     code = 28
+    unit_out = "one"
     title = "Arc tangent"
     category = "nonlinear"
     formula = "y = atan(a x)"
@@ -233,6 +250,7 @@ class ArcTangent(StaticElement):
 class HyperbolicTangent(StaticElement):
     name = "tanh"
     code = 29
+    unit_out = "one"
     title = "Hyperbolic tangent"
     category = "nonlinear"
     formula = "y = tanh(a x)"

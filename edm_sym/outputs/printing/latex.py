@@ -232,8 +232,12 @@ class EdmLatexPrinter(LatexPrinter):
 
     @staticmethod
     def breakable(text: str) -> str:
-        """Escaped text that may break after ``(``, ``,``, ``*`` and ``=`` (long formulas in prose)."""
-        return re.sub(r"([(,*=])", r"\1\\allowbreak{}", escape_text(text))
+        """Escaped text that may break after ``(``, ``,``, ``*`` and ``=`` (long formulas in prose).
+
+        A power written with a caret (``kg m^2``, ``rad/s^-2``) is set as a superscript.
+        """
+        text = re.sub(r"([(,*=])", r"\1\\allowbreak{}", escape_text(text))
+        return re.sub(r"\\textasciicircum\{\}(-?\d+)", r"\\textsuperscript{\1}", text)
 
     @staticmethod
     def mono(text: str) -> str:

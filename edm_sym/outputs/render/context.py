@@ -17,7 +17,7 @@ import sys
 import textwrap
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -25,9 +25,17 @@ import numpy as np
 
 from edm_sym.core.elements.realisation import LinearFilter, StaticMap
 from edm_sym.core.errors import NumericsWarning
+from edm_sym.core.units import axis_units
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing import REALS, EdmC99Printer, EdmPythonPrinter, c_comment_text
 from edm_sym.outputs.printing.c import is_c_identifier
+from edm_sym.outputs.render.inputs import (
+    NO_GUARDS,
+    OUTSIDE_RANGE,
+    guard_notes,
+    input_docs,
+    recorded_ranges,
+)
 
 #: The format and version of the result files the exports name.
 RESULT_FORMAT = "edm-result"
@@ -52,12 +60,24 @@ class Source:
         The result format version.
     target : str
         The name of the target column the compensator reproduces.
+    axis : str
+        The result's axis, ``"rotary"`` or ``"linear"`` (the units of the inputs and output).
+    roles : mapping of str to str
+        The roles the result records for its inputs (``EdmResult.roles``).
+    ranges : mapping of str to (float, float)
+        The (min, max) of each column recorded for the abstraction log.
+    log : str or None
+        The abstraction log's file name, None when the result records none.
     """
 
     name: str
     sha256: str
     version: int
     target: str
+    axis: str = "rotary"
+    roles: Mapping[str, str] = field(default_factory=dict)
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    log: str | None = None
 
 
 @dataclass(frozen=True)
@@ -190,7 +210,9 @@ def source_of(result: Any) -> Source:
 
     sha = result.sha256 or hashlib.sha256(dumps(result).encode("utf-8")).hexdigest()
     name = Path(result.source).name if getattr(result, "source", None) else "result.json"
-    return Source(name, sha, VERSION, result.target)
+    log, ranges = recorded_ranges(tuple(getattr(result, "logs", ())))
+    return Source(name, sha, VERSION, result.target, getattr(result, "axis", "rotary"),
+                  dict(getattr(result, "roles", {})), ranges, log)
 
 
 def _fmt(v: float) -> str:
@@ -315,8 +337,17 @@ def wrap(text: str, width: int = TEXT_WIDTH) -> list[str]:
 
 
 def _common(model: SymbolicModel, source: Source, rows: tuple[RowPlan, ...]) -> dict[str, Any]:
+    docs = input_docs(model, axis=source.axis, roles=source.roles, ranges=source.ranges,
+                      log=source.log)
     return {
         "source": source,
+        "force_unit": axis_units(source.axis).force,
+        "input_docs": docs,
+        "input_notes": [d.text() for d in docs],
+        "used_inputs": [d.name for d in docs if d.used],
+        "unused_inputs": [d.name for d in docs if not d.used],
+        "outside_range": OUTSIDE_RANGE,
+        "guards": guard_notes(rows) or [NO_GUARDS],
         "format": RESULT_FORMAT,
         "n_elements": model.compensator.matrix.n_elements,
         "num_rows": len(rows),
@@ -325,6 +356,22 @@ def _common(model: SymbolicModel, source: Source, rows: tuple[RowPlan, ...]) -> 
         "dynamics": _dynamic_notes(rows, model.sample_time) or ["none (every element is static)"],
         "sample_time_text": repr(model.sample_time),
     }
+
+
+def _macro_note(doc: Any) -> str:
+    """The comment of an input's index macro: its name, unit and whether a row reads it."""
+    unit = f" [{doc.unit}]" if doc.unit else ""
+    return doc.name + unit + ("" if doc.used else ", read by no row")
+
+
+def _unused_note(macros: list[str]) -> list[str]:
+    """The header's lines on the slots of ``u`` that no row reads (none when every input is read)."""
+    if not macros:
+        return []
+    text = ("u[] keeps a slot for every input of the result, so the indices stay those of "
+            "result.json; the step function never reads the slots of the inputs no row reads ("
+            + ", ".join(macros) + "): they need no value.")
+    return [c_comment_text(t) for t in textwrap.wrap(text, 80)]
 
 
 def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
@@ -383,10 +430,16 @@ def c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
         "source_file": f"{prefix}.c",
         "guard": f"{macro}_H",
         "sample_time": pr.literal(model.sample_time),
-        "inputs": [{"macro": m, "index": i, "name": c_comment_text(n)} for i, (n, m)
-                   in enumerate(zip(model.inputs, input_macros(prefix, model.inputs), strict=True))],
+        "inputs": [{"macro": m, "index": d.index, "name": c_comment_text(_macro_note(d))}
+                   for d, m in zip(ctx["input_docs"], input_macros(prefix, model.inputs),
+                                   strict=True)],
         "summary": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["summary"]],
         "dynamics": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["dynamics"]],
+        "input_notes": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["input_notes"]],
+        "outside_range": [c_comment_text(t) for t in textwrap.wrap(ctx["outside_range"], 78)],
+        "guards": [[c_comment_text(t) for t in wrap(s, 76)] for s in ctx["guards"]],
+        "unused_note": _unused_note([m for d, m in zip(ctx["input_docs"], input_macros(
+            prefix, model.inputs), strict=True) if not d.used]),
         "source_name": c_comment_text(source.name),
         "target": c_comment_text(source.target),
         "members": members,
@@ -427,6 +480,7 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
         "module_file": f"{prefix}.py",
         "imports": ["math"] if pr.uses_math(code) else [],
         "inputs_literal": pr.tuple_of([pr.string(n) for n in model.inputs]),
+        "used_inputs_literal": pr.tuple_of([pr.string(n) for n in ctx["used_inputs"]]),
         "rows_tuple": pr.tuple_of([f"r{r['number']}" for r in out_rows]),
         "target_literal": pr.string(source.target),
         "sha256_literal": pr.string(source.sha256),
@@ -438,23 +492,26 @@ def python_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_c
         "tail_rows": out_rows[1:],
     })
     _check_docstring_text(ctx)
-    ctx["summary"] = [wrap(t) for t in ctx["summary"]]
-    ctx["dynamics"] = [wrap(t) for t in ctx["dynamics"]]
+    for key in ("summary", "dynamics", "input_notes", "guards"):
+        ctx[key] = [wrap(t) for t in ctx[key]]
+    ctx["outside_range"] = textwrap.wrap(ctx["outside_range"], TEXT_WIDTH)
     return check_context(ctx, PY_KEYS)
 
 
 def _check_docstring_text(ctx: Mapping[str, Any]) -> None:
     """Names shown in the module docstring and comments must not end or escape it."""
-    for text in (*ctx["summary"], *ctx["dynamics"], ctx["source"].name, ctx["source"].target):
+    for text in (*ctx["summary"], *ctx["dynamics"], *ctx["input_notes"], *ctx["guards"],
+                 ctx["source"].name, ctx["source"].target):
         if '"""' in text or "\\" in text or "\n" in text:
             raise ValueError(f"names: expected no triple quote, backslash or newline, found {text!r}")
 
 
 C_KEYS = ("prefix", "macro", "real", "real_t", "state_t", "header_file", "source_file", "guard",
           "sample_time", "inputs", "members", "init_lines", "rows", "helpers", "source",
-          "summary", "dynamics")
-PY_KEYS = ("prefix", "module_file", "imports", "inputs_literal", "sample_time", "helpers",
-           "reset_lines", "rows", "source", "summary", "dynamics")
+          "summary", "dynamics", "input_notes", "outside_range", "guards", "force_unit")
+PY_KEYS = ("prefix", "module_file", "imports", "inputs_literal", "used_inputs_literal",
+           "sample_time", "helpers", "reset_lines", "rows", "source", "summary", "dynamics",
+           "input_notes", "outside_range", "guards", "force_unit")
 
 
 def check_context(ctx: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:

@@ -18,7 +18,12 @@ from typing import Any
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import matrix_diagram
-from edm_sym.outputs.report.flags import bounds_fact, judge_report_rows, judged_titles
+from edm_sym.outputs.report.flags import (
+    bounds_fact,
+    judge_report_rows,
+    judged_titles,
+    negligible_fact,
+)
 from edm_sym.outputs.report.front import front_context
 from edm_sym.outputs.report.rows import (
     KIND_TITLES,
@@ -27,6 +32,7 @@ from edm_sym.outputs.report.rows import (
     row_context,
 )
 from edm_sym.outputs.report.runs import LogRun, LuGreRef, SteadyState
+from edm_sym.outputs.report.units import param_units
 
 #: Packages whose versions the report names.
 VERSION_PACKAGES = ("edm_sym", "numpy", "scipy", "sympy", "control", "jinja2", "matplotlib")
@@ -100,8 +106,14 @@ def _recorded(p: EdmLatexPrinter, v: Any) -> str:
 def _params(model: SymbolicModel) -> list[dict[str, str]]:
     p6 = EdmLatexPrinter({"digits": 6})
     p4 = EdmLatexPrinter()
+    traced = param_units(model)  # SI units along each row (edm_sym.outputs.report.units)
     out = []
     for info in model.params:
+        unit = traced.get((info.row, info.col))
+        if unit is None or unit.si is not None:
+            shown = p6.unit(unit.si if unit is not None else info.unit)
+        else:
+            shown = p6.text(f"{unit.relative} (no SI unit: {unit.why})")
         out.append({
             "symbol": p6.math(p6._print(info.symbol)),
             "where": p6.text(f"{info.row + 1}, {info.col + 1}"),
@@ -111,7 +123,7 @@ def _params(model: SymbolicModel) -> list[dict[str, str]]:
             "p": p6.math(p6.number(info.p)),
             "range": p4.math(p4.interval(info.range.low, info.range.high)),
             "scaling": p6.text(info.range.scaling),
-            "unit": p6.text(info.unit),
+            "unit": shown,
         })
     return out
 
@@ -339,11 +351,13 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
                       f"{p.mono(r.name)}, {len(r.t)} samples, {p.math(p.number(r.duration))}~s"))
         if r.sha256:
             facts.append((f"sha256 of the {r.label} log", p.digest(r.sha256)))
-        facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + r"~N\,m"))
+        facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + "~"
+                      + p.unit(_units(result).force)))
     if inp.lugre is not None:
         facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
     facts.append(bounds_fact(p, model))
     judged = judge_report_rows(model, runs)  # honest names (edm_sym.outputs.report.flags)
+    facts.append(negligible_fact(p, judged, bool(runs)))
     rows = [row_context(p, model, row, runs, j) for row, j in zip(model.rows, judged, strict=True)]
     overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),
                  "input": p.math(p._print(row.input_symbol)),
@@ -393,6 +407,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "commands": _commands(p, inp),
         "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
         "force_unit": p.unit(_units(result).force),
+        "viscous_unit": p.unit(_units(result).viscous),
         "paper": _citation(p),
         **front_context(p, result, fig),
     }

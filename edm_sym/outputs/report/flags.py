@@ -59,3 +59,21 @@ def bounds_fact(p: EdmLatexPrinter, model: SymbolicModel) -> tuple[str, str]:
     text = "; ".join(f.message() for f in flags) if flags else "none"
     return ("Parameters at a range bound", p.breakable(text))
 
+
+
+def negligible_fact(p: EdmLatexPrinter, judged: Sequence[JudgedRow], measured: bool) -> tuple[str, str]:
+    """The report's fact line: the negligible (or cancelling) rows and terms, or none.
+
+    Parameters
+    ----------
+    p : EdmLatexPrinter
+    judged : sequence of JudgedRow
+    measured : bool
+        Whether a log was given (without one, nothing is measured).
+    """
+    if not measured:
+        return ("Negligible rows and terms", "not measured (no data log given)")
+    found = [f"row {j.index + 1}: {f.message}" for j in judged for f in j.flags
+             if f.code in ("negligible", "cancels")]
+    return ("Negligible rows and terms", p.breakable("; ".join(found)) if found else
+            "none (every row and term contributes at least the threshold)")

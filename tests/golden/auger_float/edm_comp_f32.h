@@ -28,10 +28,31 @@
  *              row 3, element 4, lpf (a_12 = 154.64): Tustin (bilinear), s = (2/Ts)
  *                  (z - 1)/(z + 1) (order 1)
  *              row 5, element 3, shift (a_19 = 5.8791): z^-6, a ring buffer of 6 sample(s)
+ * Inputs:    u[EDM_COMP_F32_INPUT_*], each with its SI unit and expected range:
+ *              theta_w: position wrapped to one revolution [rad], range not recorded; read
+ *                  by row 5
+ *              theta_uw: position [rad], range not recorded; read by no row, so its value
+ *                  is never used (any value, e.g. 0, will do)
+ *              omega: velocity [rad/s], range not recorded; read by rows 3, 4
+ *              alpha: acceleration [rad/s^2], range not recorded; read by rows 1, 2
+ *            No input is clamped: outside its expected range the compensator computes the
+ *            same formulas, so it extrapolates what it learnt there; only the element
+ *            guards below limit anything.
+ * Guards (what an input outside an element's domain does):
+ *              row 2, element 3, tan_amp (a_7 = -0.956015): tan limited to +-1e+06, so its
+ *                  poles give a finite output; where it reaches the limit the sign of sin
+ *                  decides, so a pole gives one value in float and double alike
+ *              row 3, element 1, log (a_9 = 0.12768): odd extension: defined for every x
+ *                  (a plain ln x is undefined for x <= 0); behaves as x / a near 0 and as
+ *                  ln|x| for |x| >> a; |x| / a limited to 1e+30 first, so no quotient
+ *                  overflows in float
  * Real type: float
  *
  * Call edm_comp_f32_init() once, then edm_comp_f32_step() once per sample, every
  * 0.001 s, with the inputs in the order of the EDM_COMP_F32_INPUT_* indices.
+ * u[] keeps a slot for every input of the result, so the indices stay those of
+ * result.json; the step function never reads the slots of the inputs no row reads
+ * (EDM_COMP_F32_INPUT_THETA_UW): they need no value.
  */
 #ifndef EDM_COMP_F32_H
 #define EDM_COMP_F32_H
@@ -46,10 +67,10 @@ extern "C" {
 #define EDM_COMP_F32_NUM_INPUTS 4
 #define EDM_COMP_F32_NUM_ROWS 5
 #define EDM_COMP_F32_SAMPLE_TIME 0.00100000005f
-#define EDM_COMP_F32_INPUT_THETA_W 0  /* theta_w */
-#define EDM_COMP_F32_INPUT_THETA_UW 1  /* theta_uw */
-#define EDM_COMP_F32_INPUT_OMEGA 2  /* omega */
-#define EDM_COMP_F32_INPUT_ALPHA 3  /* alpha */
+#define EDM_COMP_F32_INPUT_THETA_W 0  /* theta_w [rad] */
+#define EDM_COMP_F32_INPUT_THETA_UW 1  /* theta_uw [rad], read by no row */
+#define EDM_COMP_F32_INPUT_OMEGA 2  /* omega [rad/s] */
+#define EDM_COMP_F32_INPUT_ALPHA 3  /* alpha [rad/s^2] */
 
 typedef float edm_comp_f32_real_t;
 
@@ -68,7 +89,8 @@ typedef struct {
 void edm_comp_f32_init(edm_comp_f32_state_t *s);
 
 /* Consume one sample u (indexed by EDM_COMP_F32_INPUT_*) and return the compensation
- * torque, the sum of the rows; write each row's output into rows unless it is NULL. */
+ * torque [N m], the sum of the rows; write each row's output into rows unless
+ * it is NULL. */
 edm_comp_f32_real_t edm_comp_f32_step(edm_comp_f32_state_t *s,
         const edm_comp_f32_real_t u[EDM_COMP_F32_NUM_INPUTS],
         edm_comp_f32_real_t rows[EDM_COMP_F32_NUM_ROWS]);

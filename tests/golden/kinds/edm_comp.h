@@ -26,6 +26,27 @@
  *                  (z - 1)/(z + 1) (order 1)
  *              row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts)
  *                  (z - 1)/(z + 1) (order 1)
+ * Inputs:    u[EDM_COMP_INPUT_*], each with its SI unit and expected range:
+ *              theta_w: position wrapped to one revolution [rad], range not recorded; read
+ *                  by row 2
+ *              theta_uw: position [rad], range not recorded; read by row 3
+ *              omega: velocity [rad/s], range not recorded; read by rows 1, 4
+ *            No input is clamped: outside its expected range the compensator computes the
+ *            same formulas, so it extrapolates what it learnt there; only the element
+ *            guards below limit anything.
+ * Guards (what an input outside an element's domain does):
+ *              row 2, element 2, tan_amp (a_6 = 2): tan limited to +-1e+06, so its poles
+ *                  give a finite output; where it reaches the limit the sign of sin
+ *                  decides, so a pole gives one value in float and double alike
+ *              row 2, element 4, asin: input limited to [-1, 1] first
+ *              row 3, element 2, log (a_10 = 0.1): odd extension: defined for every x
+ *                  (a plain ln x is undefined for x <= 0); behaves as x / a near 0 and as
+ *                  ln|x| for |x| >> a; |x| / a limited to 1e+30 first, so no quotient
+ *                  overflows in float
+ *              row 3, element 3, power (a_11 = 1.26): odd extension for x < 0
+ *                  (fractional powers of negatives); |x| limited to 1e+06 first, so no
+ *                  power overflows
+ *              row 4, element 2, acos: input limited to [-1, 1] first
  * Real type: double
  *
  * Call edm_comp_init() once, then edm_comp_step() once per sample, every
@@ -44,9 +65,9 @@ extern "C" {
 #define EDM_COMP_NUM_INPUTS 3
 #define EDM_COMP_NUM_ROWS 4
 #define EDM_COMP_SAMPLE_TIME 0.001
-#define EDM_COMP_INPUT_THETA_W 0  /* theta_w */
-#define EDM_COMP_INPUT_THETA_UW 1  /* theta_uw */
-#define EDM_COMP_INPUT_OMEGA 2  /* omega */
+#define EDM_COMP_INPUT_THETA_W 0  /* theta_w [rad] */
+#define EDM_COMP_INPUT_THETA_UW 1  /* theta_uw [rad] */
+#define EDM_COMP_INPUT_OMEGA 2  /* omega [rad/s] */
 
 typedef double edm_comp_real_t;
 
@@ -65,7 +86,8 @@ typedef struct {
 void edm_comp_init(edm_comp_state_t *s);
 
 /* Consume one sample u (indexed by EDM_COMP_INPUT_*) and return the compensation
- * torque, the sum of the rows; write each row's output into rows unless it is NULL. */
+ * torque [N m], the sum of the rows; write each row's output into rows unless
+ * it is NULL. */
 edm_comp_real_t edm_comp_step(edm_comp_state_t *s,
         const edm_comp_real_t u[EDM_COMP_NUM_INPUTS],
         edm_comp_real_t rows[EDM_COMP_NUM_ROWS]);

@@ -24,15 +24,35 @@ Discrete time (sample time 0.001 s), elements with state:
         (z - 1)/(z + 1) (order 1)
     row 4, element 4, lead (a_16 = 9.93459): Tustin (bilinear), s = (2/Ts) (z - 1)/(z + 1)
         (order 1)
+Inputs (``u`` in ``INPUTS`` order), each with its SI unit and expected range:
+    theta_w: position wrapped to one revolution [rad], range not recorded; read by row 2
+    theta_uw: position [rad], range not recorded; read by row 3
+    omega: velocity [rad/s], range not recorded; read by rows 1, 4
+No input is clamped: outside its expected range the compensator computes the same
+formulas, so it extrapolates what it learnt there; only the element guards below limit
+anything.
+Guards (what an input outside an element's domain does):
+    row 2, element 2, tan_amp (a_6 = 2): tan limited to +-1e+06, so its poles give a finite
+        output; where it reaches the limit the sign of sin decides, so a pole gives one
+        value in float and double alike
+    row 2, element 4, asin: input limited to [-1, 1] first
+    row 3, element 2, log (a_10 = 0.1): odd extension: defined for every x
+        (a plain ln x is undefined for x <= 0); behaves as x / a near 0 and as ln|x| for |x|
+        >> a; |x| / a limited to 1e+30 first, so no quotient overflows in float
+    row 3, element 3, power (a_11 = 1.26): odd extension for x < 0
+        (fractional powers of negatives); |x| limited to 1e+06 first, so no power overflows
+    row 4, element 2, acos: input limited to [-1, 1] first
 
 Uses only the Python standard library. ``Compensator().step(u)`` consumes one
 sample ``u`` (in ``INPUTS`` order) and returns the compensation torque;
-``simulate(columns)`` runs a fresh compensator over whole columns.
+``simulate(columns)`` runs a fresh compensator over whole columns and needs
+only the columns of ``USED_INPUTS``.
 """
 
 import math
 
 INPUTS: tuple[str, ...] = ('theta_w', 'theta_uw', 'omega')
+USED_INPUTS: tuple[str, ...] = ('theta_w', 'theta_uw', 'omega')
 TARGET: str = 'tau_ext'
 SAMPLE_TIME: float = 0.001
 NUM_ROWS: int = 4
@@ -174,6 +194,11 @@ class Compensator:
 
 
 def simulate(columns) -> list[float]:
-    """Run a fresh :class:`Compensator` over ``columns`` (a mapping name -> sequence)."""
+    """Run a fresh :class:`Compensator` over ``columns`` (a mapping name -> sequence).
+
+    Only the columns of ``USED_INPUTS`` are read; the other inputs may be missing.
+    """
     comp = Compensator()
-    return [comp.step(u) for u in zip(*(columns[name] for name in INPUTS), strict=True)]
+    n = len(columns[USED_INPUTS[0]])
+    signals = [columns[name] if name in USED_INPUTS else (0.0,) * n for name in INPUTS]
+    return [comp.step(u) for u in zip(*signals, strict=True)]

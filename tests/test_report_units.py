@@ -1,0 +1,73 @@
+"""The report's parameter units, traced along each row (issue 16, item 5)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from edm_sym.core.elements import all_elements
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.core.result import EdmResult
+from edm_sym.engines.symbolic import decode
+from edm_sym.outputs.printing.latex import EdmLatexPrinter
+from edm_sym.outputs.report.units import format_unit, param_units, parse_unit
+
+
+def _units(inputs: tuple[str, ...], rows: list, axis: str = "rotary") -> dict:
+    comp = Compensator(make_matrix(inputs, rows), 1e-3, {}, 10.0)
+    result = EdmResult(comp, "tau", (), {"seed": None, "package_version": "t",
+                                         "data_sha256": None}, axis=axis)
+    return param_units(decode(result, systems=False))
+
+
+@pytest.mark.parametrize(("axis", "viscous", "inertia"), [("rotary", "N m s/rad", "kg m^2"),
+                                                          ("linear", "N s/m", "kg")])
+def test_a_gain_takes_the_unit_from_its_input_to_the_output(axis: str, viscous: str,
+                                                           inertia: str) -> None:
+    u = _units(("omega", "alpha"), [("omega", [("dead_zone", 0.5), ("gain", 0.7)]),
+                                    ("alpha", [("lpf", 0.5), ("gain", 0.7)])], axis)
+    vel = "rad/s" if axis == "rotary" else "m/s"
+    assert u[0, 0].si == vel  # the dead zone's level is in the input's unit
+    assert u[0, 1].si == viscous and u[0, 1].relative == "output unit per input unit"
+    assert u[1, 0].si == "rad/s"  # a corner frequency, whatever the axis
+    assert u[1, 1].si == inertia
+
+
+def test_dimensionless_and_angle_signals_in_a_row() -> None:
+    u = _units(("omega",), [("omega", [("sign", 0.0), ("gain", 0.7)]),
+                            ("omega", [("gain", 0.6), ("sin_amp", 0.7)]),
+                            ("omega", [("atan", 0.5), ("gain", 0.7)])])
+    assert u[0, 1].si == "N m"  # a sign is dimensionless
+    assert u[1, 0].si == "s"  # rad per rad/s: the sine's argument is an angle
+    assert u[1, 1].si == "N m"
+    assert u[2, 0].si == "s/rad"  # the slope of atan(a x) is 1 / unit of x
+    assert u[2, 1].si == "N m"
+
+
+def test_rows_that_fix_no_unit_say_why() -> None:
+    u = _units(("x1", "omega"), [("x1", [("gain", 0.7), ("offset", 0.6)]),
+                                 ("omega", [("gain", 0.6), ("gain", 0.7)]),
+                                 ("omega", [("gain", 0.6), ("sign", 0.0)]),
+                                 ("omega", [("power", 0.6), ("gain", 0.7)])])
+    assert u[0, 0].si is None and "x1 has no physical role" in u[0, 0].why
+    assert u[0, 1].si == "N m"  # an offset at the row's end is in the output's unit
+    assert u[1, 0].si is None and re.search(r"a_\d+ after it scales the output too", u[1, 0].why)
+    assert u[1, 1].si is None
+    assert u[2, 0].si is None and "feeds sign" in u[2, 0].why
+    assert u[3, 0].si == "1"  # the exponent
+    assert u[3, 1].si is None and re.search(r"after the power a_\d+,", u[3, 1].why)
+
+
+def test_unit_text_round_trips_and_prints() -> None:
+    for text in ("N m s/rad", "kg m^2", "rad/s^2", "1", "N s/m", "s/rad", "s^2"):
+        assert format_unit(parse_unit(text)) == text
+    assert parse_unit("N m s/rad") == {"N": 1, "m": 1, "s": 1, "rad": -1}
+    assert format_unit(parse_unit("1/(rad s)")) == "1/(s rad)"
+    assert EdmLatexPrinter.breakable("a kg m^2 b") == r"a kg m\textsuperscript{2} b"
+
+
+def test_every_scaling_element_declares_its_output_unit_scaled() -> None:
+    for el in all_elements():
+        assert el.unit_out in ("input", "one", "power", "scaled"), el.name
+        assert (el.unit_out == "scaled") == el.scales_output, el.name
