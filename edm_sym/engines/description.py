@@ -129,11 +129,12 @@ class Description:
 
 
 def _names(r: RowDescription) -> str:
-    if any(f.code == "negligible" for f in r.flags) and not r.terms:
+    codes = {f.code for f in r.flags}
+    if "negligible" in codes and "joint" not in codes and not r.terms:
         return "negligible"
     kinds = [jt.term.kind for jt in r.terms]
     text = ", ".join(dict.fromkeys(kinds)) or "nothing"
-    others = sorted({f.code for f in r.flags} - {"negligible", "unmeasured"})
+    others = sorted(codes - {"negligible", "unmeasured"})
     return text + (f"  [{', '.join(others)}]" if others else "")
 
 
@@ -398,7 +399,8 @@ def describe(
     classify = ClassifyOptions.for_axis(result.axis)
     role_map = input_roles(comp.matrix.inputs, {**getattr(result, "roles", {}), **(roles or {})})
     if inputs is not None:
-        v_range = data_velocity_range(dict(zip(comp.matrix.inputs, x, strict=True)), role_map, result.sample_time,
+        signals = dict(zip(comp.matrix.inputs, x, strict=True))
+        v_range = data_velocity_range(signals, role_map, result.sample_time,
                                       slice(*held) if held is not None else slice(None))
         if v_range is not None:
             classify = replace(classify, velocity_range=v_range)
