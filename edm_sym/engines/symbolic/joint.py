@@ -206,8 +206,9 @@ def joint_velocity_terms(parts: Sequence[VelocityPart], options: ClassifyOptions
     if fs * sign < 0:  # below the line at low speed: the Coulomb step is smoothed
         low = np.nonzero(y * sign >= 0.5 * abs(fc))[0]
         vt = float(grid[low[0]]) if low.size else vmax
-        coulomb["transition_velocity"] = (vt, V)
-        text += f", reaching half of it at {vt:.4g} {V}"
+        if vt > options.coulomb_velocity:
+            coulomb["transition_velocity"] = (vt, V)
+            text += f", reaching half of it at {vt:.4g} {V}"
     expr = sp.Add(*(p.term.expr for p in parts))
     out = []
     if abs(fc) >= _NAMED * scale:
