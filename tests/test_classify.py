@@ -346,19 +346,21 @@ def test_velocity_nonlinearity_then_derivative_is_acceleration() -> None:
     assert 0.5 * 0.3 * 0.01 < t.parameters["inertia"][0] < 0.95 * 0.3 * 0.01
 
 
-def test_wrapped_angle_rows_are_spatial_by_construction() -> None:
-    # 0.05 tanh(2 theta_w): one revolution rises from 0 to 0.05, then jumps back.
+def test_wrapped_angle_rows_are_spatial_unless_they_follow_the_wrap() -> None:
+    # 0.05 tanh(2 theta_w): one revolution rises from 0 to 0.05, then jumps back. The jump
+    # (0.05) is twice the amplitude: the term follows the wrap, it is no position friction.
     row = ga_row("theta_w", [("gain", 1.0), ("tanh", 2.0), ("gain", 0.05)])
-    t = one(row.terms, "spatial")
-    close(t, "cycles_per_revolution", 1.0, "1")
-    assert t.parameters["amplitude"][0] == pytest.approx(0.025, rel=1e-6)
+    t = one(row.terms, "unclassified")
     assert t.parameters["wrap_jump"][0] == pytest.approx(-0.05, rel=1e-6)
-    assert "jumps" in t.description
-    # Linear in the wrapped angle: a sawtooth, sum of -2 c sin(k q) / k.
-    t = one(terms_of([("gain", enc("gain", 0.4))], inp="theta_w"), "spatial")
-    assert t.parameters["amplitude"][0] == pytest.approx(0.4 * math.pi, rel=1e-6)
-    assert t.parameters["fundamental_amplitude"][0] == pytest.approx(0.8, rel=1e-3)
-    assert abs(abs(t.parameters["phase"][0]) - math.pi) < 1e-3  # c q = c pi - 2 c sin q - ...
+    assert t.parameters["amplitude"][0] == pytest.approx(0.025, rel=1e-6)
+    assert "wrap" in t.description
+    # Linear in the wrapped angle: a sawtooth of the wrap (jump 2 pi c, amplitude pi c).
+    t = one(terms_of([("gain", enc("gain", 0.4))], inp="theta_w"), "unclassified")
+    assert abs(t.parameters["wrap_jump"][0]) == pytest.approx(0.8 * math.pi, rel=1e-6)
+    # A ripple of the wrapped angle that jumps less than its amplitude stays spatial.
+    t = one(terms_of([("gain", enc("gain", 1.3)), ("sin_phase", enc("sin_phase", 0.0)),
+                      ("gain", enc("gain", 0.1))], inp="theta_w"), "spatial")
+    assert "jumps at each wrap" in t.description
     # A saw with four teeth per revolution: four cycles.
     t = one(terms_of([("gain", enc("gain", 4.0)), ("sin_phase", enc("sin_phase", 0.0)),
                       ("asin", 0), ("gain", enc("gain", 0.1))], inp="theta_w"), "spatial")

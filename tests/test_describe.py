@@ -250,7 +250,14 @@ def test_cli_json_on_the_shipped_example(tmp_path: Path) -> None:
     # Row 1's phase-lead corner sits on its lower bound: flagged, not named as physics.
     assert any(f["code"] == "at_bound" for f in desc["rows"][0]["flags"])
     assert desc["rows"][0]["terms"][0]["kind"] == "unclassified"
-    assert [t["kind"] for t in desc["rows"][2]["terms"]] == ["coulomb"]
+    # Rows 3 (a relay of omega) and 4 (a dead zone of omega) are one friction curve:
+    # named together on row 3, the larger; row 4 keeps no terms of its own.
+    assert [t["kind"] for t in desc["rows"][2]["terms"]] == ["coulomb", "viscous", "stribeck"]
+    assert desc["rows"][2]["terms"][0]["parameters"]["level"] == [pytest.approx(0.95, rel=0.01),
+                                                                   "N m"]
+    assert desc["rows"][3]["terms"] == []
+    for row in desc["rows"][2:4]:
+        assert [f["code"] for f in row["flags"]].count("joint") == 1
     assert list(tmp_path.iterdir()) == []
 
 

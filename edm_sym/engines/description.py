@@ -25,6 +25,11 @@ from edm_sym.core.errors import DataFormatError
 from edm_sym.core.result import EdmResult, load_result
 from edm_sym.core.units import axis_units
 from edm_sym.engines.sources import load_data
+from edm_sym.engines.symbolic.classify import ClassifyOptions
+from edm_sym.engines.symbolic.roles import input_roles
+
+#: The velocity range of a log: this percentile of |velocity| (a few spikes do not count).
+VELOCITY_PERCENTILE = 99.0
 
 
 @dataclass(frozen=True)
@@ -124,11 +129,12 @@ class Description:
 
 
 def _names(r: RowDescription) -> str:
-    if any(f.code == "negligible" for f in r.flags) and not r.terms:
+    codes = {f.code for f in r.flags}
+    if "negligible" in codes and "joint" not in codes and not r.terms:
         return "negligible"
     kinds = [jt.term.kind for jt in r.terms]
     text = ", ".join(dict.fromkeys(kinds)) or "nothing"
-    others = sorted({f.code for f in r.flags} - {"negligible", "unmeasured"})
+    others = sorted(codes - {"negligible", "unmeasured"})
     return text + (f"  [{', '.join(others)}]" if others else "")
 
 
@@ -243,6 +249,37 @@ def held_out_rows(result: EdmResult, log: DataLog) -> tuple[int, int] | None:
     return start, stop
 
 
+def data_velocity_range(signals: Mapping[str, np.ndarray], roles: Mapping[str, str | None],
+                        ts: float, part: slice = slice(None)) -> float | None:
+    """The velocities a log reaches: the ``VELOCITY_PERCENTILE`` of |velocity| on ``part``.
+
+    From the inputs with the role ``velocity``, else from the differences of
+    an (unwrapped) ``angle`` input; None when neither is there or it stands still.
+
+    Parameters
+    ----------
+    signals : mapping of str to numpy.ndarray
+        The inputs by name (whole log).
+    roles : mapping of str to str or None
+        Each input's role.
+    ts : float
+        Sample time [s].
+    part : slice
+        The samples judged (the held-out rows).
+    """
+    found = [np.abs(np.asarray(signals[n], dtype=float)[part]) for n, r in roles.items()
+             if r == "velocity" and n in signals]
+    if not found:
+        found = [np.abs(np.diff(np.asarray(signals[n], dtype=float)[part])) / ts
+                 for n, r in roles.items() if r == "angle" and n in signals]
+    found = [f[np.isfinite(f)] for f in found if f.size > 1]
+    found = [f for f in found if f.size]
+    if not found:
+        return None
+    v = max(float(np.percentile(f, VELOCITY_PERCENTILE)) for f in found)
+    return v if v > 0 and math.isfinite(v) else None
+
+
 def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles | None,
           resample: bool) -> DataLog:
     """The log on the result's grid: its recorded time column and roles under the given ones,
@@ -332,7 +369,6 @@ def describe(
             msg = f"the data the result records cannot be used ({' '.join(str(exc).split())})"
             warnings.warn(msg, stacklevel=2)
             notes.append(msg)
-    model = decode(result, roles=roles, systems=False)
     comp = result.compensator
     outputs = target = inputs = None
     data_fit = None
@@ -358,7 +394,18 @@ def describe(
                     "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
         if held is not None:
             data_fit["rows"] = list(held)
-    judged = judge_rows(model, outputs, target, inputs, options=options)
+    # Shapes are judged over the velocities the data reaches, not a fixed range:
+    # a gentle saturation that looks viscous over +-10 rad/s acts as Coulomb at 60.
+    classify = ClassifyOptions.for_axis(result.axis)
+    role_map = input_roles(comp.matrix.inputs, {**getattr(result, "roles", {}), **(roles or {})})
+    if inputs is not None:
+        signals = dict(zip(comp.matrix.inputs, x, strict=True))
+        v_range = data_velocity_range(signals, role_map, result.sample_time,
+                                      slice(*held) if held is not None else slice(None))
+        if v_range is not None:
+            classify = replace(classify, velocity_range=v_range)
+    model = decode(result, roles=roles, systems=False, classify=classify)
+    judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)
                  for row, j in zip(model.rows, judged, strict=True))

@@ -143,7 +143,8 @@ class _Refused(Exception):
 
 
 def static_form(expr: sp.Expr, u: sp.Symbol, index: int,
-                gain: Callable[[Filter], float]) -> StaticForm | None:
+                gain: Callable[[Filter], float], *, keep_relays: bool = False
+                ) -> StaticForm | None:
     """``expr`` with ``LTI(x, G)`` -> ``gain(filter) x``, ``Delay(x, T)`` -> ``x``,
     ``Relay(x, a)`` -> ``sign(x)``.
 
@@ -157,6 +158,9 @@ def static_form(expr: sp.Expr, u: sp.Symbol, index: int,
         The input's role index (0 angle, 1 velocity, 2 acceleration).
     gain : callable
         Filter -> a finite real gain, or NaN to refuse the term.
+    keep_relays : bool, default False
+        Keep ``Relay(x, a)`` (of the static ``x``) instead of ``sign(x)``, for
+        a caller that sweeps the input and so sees the hysteresis.
 
     Returns
     -------
@@ -193,7 +197,7 @@ def static_form(expr: sp.Expr, u: sp.Symbol, index: int,
         if isinstance(e, Relay):
             relays[0] += 1
             x, i = walk(e.args[0])
-            return sp.sign(x), i
+            return (Relay(x, e.args[1]) if keep_relays else sp.sign(x)), i
         args, seen = [], set()
         for a in e.args:
             x, i = walk(a)

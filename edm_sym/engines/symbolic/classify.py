@@ -634,6 +634,13 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
     F = U.force
     if role in ("angle", "angle_wrapped"):
         p = measure_periodic(term, u, role == "angle_wrapped", opts.harmonic_tolerance)
+        if p is not None and p.jump and abs(p.jump) >= p.amplitude:
+            # Max(3.9, q_w) and the like: a sawtooth of the wrap, not a friction of the position.
+            return [_unclassified(term, f"a function of the wrapped angle whose jump at each wrap "
+                                  f"({p.jump:.4g} {F}) is at least its amplitude "
+                                  f"({p.amplitude:.4g} {F}): it follows the wrap, not a "
+                                  "position-dependent friction",
+                                  {"wrap_jump": (p.jump, F), "amplitude": (p.amplitude, F)})]
         if p is not None:
             params, note = describe_operators(p.form, "DC gains")
             period = 2 * math.pi / p.cycles

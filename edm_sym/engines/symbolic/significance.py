@@ -16,7 +16,13 @@ the target, and decides per row what may be said about it:
   (:mod:`edm_sym.core.bounds`) keeps its parameters, but its terms are
   ``unclassified``: the value is a limit of the search, not an estimate;
 * a row whose delays hold ``long_delay`` samples or more is flagged (firmware
-  memory, and a delay that long is rarely physics).
+  memory, and a delay that long is rarely physics);
+* the terms that act on velocity, when there are two or more of them, are
+  also judged together (:mod:`edm_sym.engines.symbolic.joint`): when the names
+  they get one by one do not add up to what their sum is (a term left
+  unclassified, other kinds, Coulomb or viscous values more than 5 % apart),
+  the sum's Coulomb, viscous and Stribeck parts replace them, listed on the row
+  that contributes most, and every row of the group is flagged ``joint``.
 
 Flags are ``(code, message)`` pairs; the codes are :data:`ROW_FLAGS` and
 :data:`TERM_FLAGS`. See ``docs/describe.md``.
@@ -34,7 +40,7 @@ import sympy as sp
 
 from edm_sym.core.bounds import BOUND_MARGIN, BoundFlag, bound_flags
 from edm_sym.core.units import axis_units
-from edm_sym.engines.symbolic.classify import PhysicalTerm
+from edm_sym.engines.symbolic.classify import ClassifyOptions, PhysicalTerm
 from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
 from edm_sym.engines.symbolic.model import RowModel, SymbolicModel
 from edm_sym.engines.symbolic.operators import LTI, Delay, Relay
@@ -47,6 +53,7 @@ ROW_FLAGS = {
     "long_delay": "the row's delays hold at least long_delay samples",
     "no_output": "the row's output is identically zero",
     "unmeasured": "no data: the contribution was not measured",
+    "joint": "its velocity terms are named together with other rows' (their summed characteristic)",
 }
 #: Flags of a term, and what they mean.
 TERM_FLAGS = {
@@ -203,6 +210,7 @@ def judge_rows(
     inputs: Sequence[np.ndarray] | None = None,
     *,
     options: SignificanceOptions | None = None,
+    classify: ClassifyOptions | None = None,
 ) -> tuple[JudgedRow, ...]:
     """Judge every row of a decoded model: contribution, flags, the terms it may name.
 
@@ -217,6 +225,10 @@ def judge_rows(
     inputs : sequence of numpy.ndarray, optional
         Each row's input signal (to measure static terms on their own).
     options : SignificanceOptions, optional
+    classify : ClassifyOptions, optional
+        The thresholds and velocity range of the joint judgement of the
+        velocity terms (default: ``ClassifyOptions.for_axis(model.axis)``;
+        :func:`edm_sym.engines.description.describe` passes the data's range).
 
     Returns
     -------
@@ -272,6 +284,60 @@ def judge_rows(
                 x = np.asarray(inputs[j], dtype=float)
             terms = _judge_terms(row, x, ref if measured else None, row_bounds, opts, flags)
         out.append(JudgedRow(j, share, tuple(terms), tuple(flags), rms[j], row_bounds))
+    return _joint(model, out, classify or ClassifyOptions.for_axis(model.axis))
+
+
+#: Coulomb or viscous values named one by one may differ this much from the sum's.
+_JOINT_AGREE = 0.05
+
+
+def _sums(terms: Sequence[PhysicalTerm]) -> tuple[set[str], float, float]:
+    kinds = {t.kind for t in terms}
+    total = [sum(float(t.parameters[key][0]) for t in terms if t.kind == kind)
+             for kind, key in (("coulomb", "level"), ("viscous", "coefficient"))]
+    return kinds, total[0], total[1]
+
+
+def _joint(model: SymbolicModel, judged: list[JudgedRow],
+           options: ClassifyOptions) -> tuple[JudgedRow, ...]:
+    """Replace the velocity terms of several rows by those of their sum, where they disagree."""
+    from edm_sym.engines.symbolic.joint import joint_velocity_terms, velocity_part
+
+    parts, named, where = {}, [], {}
+    for row, jr in zip(model.rows, judged, strict=True):
+        if jr.bounds:
+            continue
+        for q, jt in enumerate(jr.terms):
+            p = velocity_part(jt.term, row.input_symbol, row.role)
+            if p is not None:
+                # Two names of one term (Coulomb and viscous of a fit) sum it once.
+                parts.setdefault((row.index, jt.term.expr), p)
+                named.append(jt.term)
+                where.setdefault(row.index, []).append(q)
+    if len(named) < 2:
+        return tuple(judged)
+    idx = sorted(where)
+    names = "rows " + ", ".join(str(j + 1) for j in idx) if len(idx) > 1 else f"row {idx[0] + 1}"
+    joint = joint_velocity_terms(list(parts.values()), options, names)
+    if joint is None:
+        return tuple(judged)
+    kinds, c1, v1 = _sums(named)
+    jkinds, c2, v2 = _sums(joint)
+    if kinds == jkinds and all(abs(a - b) <= _JOINT_AGREE * max(abs(a), abs(b))
+                               for a, b in ((c1, c2), (v1, v2))):
+        return tuple(judged)
+    lead = max(idx, key=lambda j: (judged[j].rms or 0.0, -j))
+    out = list(judged)
+    for j in idx:
+        jr = judged[j]
+        keep = [jt for q, jt in enumerate(jr.terms) if q not in where[j]]
+        if j == lead:
+            keep += [JudgedTerm(t, tuple(_term_flags(t))) for t in joint]
+        msg = (f"its velocity terms are named with those of {names}, as their sum over "
+               f"+-{options.velocity_range:.4g} {axis_units(model.axis).velocity}: "
+               + ", ".join(term_summary(t) for t in joint)
+               + (" (here)" if j == lead else f" (listed in row {lead + 1})"))
+        out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
     return tuple(out)
 
 
