@@ -18,7 +18,7 @@ level, a viscous gain) much easier to find; it draws no random numbers.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -53,10 +53,9 @@ def scale_position(codes: Sequence[int], gain_allowed: bool) -> tuple[int, bool]
 
 def gain_fit(
     pop: Population,
-    rows: Sequence[tuple[Sequence[bytes], Sequence[np.ndarray]] | None],
+    grams: Sequence[tuple[np.ndarray, np.ndarray] | None],
     fitness: np.ndarray,
     n_samples: int,
-    gram: Callable[[Sequence[bytes], Sequence[np.ndarray]], tuple[np.ndarray, np.ndarray]],
     ranges: Mapping[str, ParamRange],
     *,
     gain_allowed: bool,
@@ -68,15 +67,14 @@ def gain_fit(
     ----------
     pop : Population
         The individuals.
-    rows : sequence
-        Per individual its m row keys and outputs (None: skip it).
+    grams : sequence
+        Per individual ``(G, gy)``, the weighted inner products of its rows
+        with each other and with the target (see :meth:`Evaluator.evaluate`'s
+        ``grams_out``); None: skip it.
     fitness : numpy.ndarray
         Their eq. 8 values.
     n_samples : int
         N, the number of samples (eq. 8 is a mean).
-    gram : callable
-        ``gram(keys, rows) -> (G, gy)``: weighted inner products of the rows
-        with each other and with the target (see :meth:`Evaluator.gram`).
     ranges : mapping
         Parameter ranges (new values are clipped into them).
     gain_allowed : bool
@@ -93,15 +91,15 @@ def gain_fit(
     """
     idx: list[int] = []
     out_in, out_codes, out_ps = [], [], []
-    for k, entry in enumerate(rows):
+    m = pop.codes.shape[1]
+    for k, entry in enumerate(grams):
         if entry is None or not np.isfinite(fitness[k]) or fitness[k] == 0.0:
             continue
-        keys, outs = entry
-        places = [scale_position(pop.codes[k, j], gain_allowed) for j in range(len(keys))]
+        places = [scale_position(pop.codes[k, j], gain_allowed) for j in range(m)]
         free = [j for j, pl in enumerate(places) if pl is not None]
         if not free:
             continue
-        g_all, gy = gram(keys, outs)
+        g_all, gy = entry
         if not (np.all(np.isfinite(g_all)) and np.all(np.isfinite(gy))):
             continue
         # Residual e = y - sum(r): r_i' W e = r_i' W y - sum_j r_i' W r_j.

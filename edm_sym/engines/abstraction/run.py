@@ -256,13 +256,12 @@ class _Runner:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
         if not ops.ga.gain_fit:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
-        rows: list = []
-        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        grams: list = []
+        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, grams_out=grams)
         if keep_first:
-            rows[0] = None
-        idx, cand = gain_fit(pop, rows, fit, len(self.y), self.evaluator.gram, self.ranges,
+            grams[0] = None
+        idx, cand = gain_fit(pop, grams, fit, len(self.y), self.ranges,
                              gain_allowed=GAIN in ops.allowed)
-        del rows
         if len(idx):
             cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
             better = cfit < fit[idx]

@@ -1,0 +1,482 @@
+"""The row kernel: a row compiled to a few instructions, run by numba.
+
+The reference simulator (:mod:`edm_sym.engines.simulate`) runs one numpy or
+scipy call per element over the whole signal. The genetic algorithm simulates
+hundreds of thousands of rows, and there the temporaries, the calls and the
+passes over memory cost several times what the generated C needs. This module
+compiles a row's realisations into one program of instructions and runs the
+whole row in one compiled call, each instruction one tight loop over the
+signal, in place:
+
+* a :class:`~edm_sym.core.elements.realisation.StaticMap` becomes the
+  instructions its element's ``f`` performs, found by calling ``f`` on a
+  tracer (:class:`TraceOps`, a third implementation of the math interface of
+  :mod:`edm_sym.core.elements.ops`), so elements are still defined once;
+* a :class:`LinearFilter`, :class:`DelayLine` or :class:`Relay` becomes one
+  instruction with its coefficients, length or threshold.
+
+Each consumer dispatches on the realisation's type (``_encode_<Type>``). The
+instructions compute what the realisations' numpy steps compute, in the same
+order (direct form II transposed as ``scipy.signal.lfilter`` runs it, numpy's
+NaN rules for limits and signs), so the kernel agrees with the reference
+simulator to rounding (tested to 1e-12; numpy's own ``tanh`` differs from the
+C library's by an ulp, the rest is bit for bit on the machines tried).
+
+numba is optional (``pip install edm_sym[fast]``). Without it :data:`NUMBA` is
+False and the genetic algorithm runs the reference realisations instead; the
+kernel functions then are plain Python (slow, but the same code, which the
+tests run on short signals). The compiled code is cached on disk
+(``cache=True``): the first import on a machine compiles it once (about
+:data:`COMPILE_SECONDS_HINT` s), later processes load it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from edm_sym.core.elements.ops import NUMPY
+from edm_sym.core.elements.realisation import (
+    DelayLine,
+    LinearFilter,
+    Realisation,
+    Relay,
+    StaticMap,
+    dispatch,
+)
+
+try:  # pragma: no cover (depends on the installation)
+    import numba
+
+    NUMBA = True
+except ImportError:  # pragma: no cover
+    numba = None
+    NUMBA = False
+
+__all__ = ["NUMBA", "Program", "Segment", "TraceOps", "compile_row", "dot", "run_program", "score"]
+
+#: Seconds the first compilation took on the development machine (docs only).
+COMPILE_SECONDS_HINT = 10
+
+
+def _jit(fn: Any) -> Any:
+    if NUMBA:
+        return numba.njit(cache=True, nogil=True)(fn)
+    return fn
+
+
+# Opcodes of the compiled instructions.
+NEG, ADD, MUL, CONST, SIGN, SAT, LOWER, DEAD_ZONE = 0, 1, 2, 3, 4, 5, 6, 7
+LFILTER, FIR, DELAY, RELAY, STORE = 8, 9, 10, 11, 12
+
+#: Methods of the math interface the kernel compiles (exact arithmetic, limits,
+#: signs). The others (sin, tan, log ...) run as numpy's own implementation
+#: (:data:`edm_sym.core.elements.ops.NUMPY`) on the whole signal, so their
+#: bits are numpy's, as in the reference simulator.
+COMPILED = {"neg": NEG, "add": ADD, "mul": MUL, "const": CONST, "sign": SIGN, "sat": SAT,
+            "lower_limit": LOWER, "dead_zone": DEAD_ZONE}
+
+
+class _Signal:
+    """A traced signal: the steps (math-interface method, numbers) applied so far."""
+
+    __slots__ = ("steps",)
+
+    def __init__(self, steps: tuple = ()):
+        self.steps = steps
+
+    def then(self, name: str, *args: Any) -> _Signal:
+        return _Signal((*self.steps, (name, tuple(_number(c) for c in args))))
+
+    def __neg__(self) -> _Signal:
+        return self.then("neg")
+
+    def __add__(self, c: float) -> _Signal:
+        return self.then("add", c)
+
+    __radd__ = __add__
+
+    def __sub__(self, c: float) -> _Signal:
+        return self.then("add", -_number(c))  # x - c is x + (-c) to the bit
+
+    def __mul__(self, c: float) -> _Signal:
+        return self.then("mul", c)
+
+    __rmul__ = __mul__
+
+
+def _number(c: Any) -> float:
+    if isinstance(c, _Signal) or not isinstance(c, int | float | np.floating | np.integer):
+        raise TypeError(f"the kernel traces functions of one signal and numbers, found {c!r}")
+    return float(c)
+
+
+def _traced(name: str) -> Any:
+    def method(x: _Signal, *args: float) -> _Signal:
+        if not isinstance(x, _Signal):
+            raise TypeError(f"the kernel traces functions of one signal, found {name}({x!r})")
+        return x.then(name, *args)
+
+    method.__name__ = name
+    return staticmethod(method)
+
+
+class TraceOps:
+    """The math interface (:mod:`edm_sym.core.elements.ops`) recording the steps.
+
+    A static element's ``f(TRACE, x, a)`` with ``x`` a traced signal returns
+    the signal with the steps ``f`` applies, each a method of the interface
+    and its numbers.
+    """
+
+    pi = math.pi
+
+
+for _name in ("sin", "atan", "tanh", "sign", "sat", "lower_limit", "dead_zone", "sym_log",
+              "sym_pow", "tan", "asin", "acos"):
+    setattr(TraceOps, _name, _traced(_name))
+
+TRACE = TraceOps()
+
+
+@dataclass(frozen=True)
+class Segment:
+    """Compiled instructions: opcode, two integer and two real arguments each."""
+
+    ops: np.ndarray
+    ints: np.ndarray
+    reals: np.ndarray
+
+
+@dataclass(frozen=True)
+class Program:
+    """A row's program: compiled segments and numpy steps, in order, and coefficients.
+
+    ``parts`` holds :class:`Segment` objects and ``(method, numbers)`` pairs
+    of the math interface run by numpy; ``stores`` is the number of STORE
+    instructions (rows of the ``inter`` array that :func:`run_program` fills).
+    """
+
+    parts: tuple
+    coef: np.ndarray
+    stores: int
+
+
+class _Encoder:
+    """Instructions of realisations, by their type."""
+
+    def __init__(self) -> None:
+        self.parts: list = []
+        self.ops: list[int] = []
+        self.ints: list[tuple[int, int]] = []
+        self.reals: list[tuple[float, float]] = []
+        self.coef: list[float] = []
+        self.stores = 0
+        self.emitted = 0
+
+    def emit(self, op: int, i1: int = 0, i2: int = 0, r1: float = 0.0, r2: float = 0.0) -> None:
+        self.ops.append(op)
+        self.ints.append((i1, i2))
+        self.reals.append((r1, r2))
+        self.emitted += 1
+
+    def flush(self) -> None:
+        if self.ops:
+            n = len(self.ops)
+            self.parts.append(Segment(np.array(self.ops, dtype=np.int64),
+                                      np.array(self.ints, dtype=np.int64).reshape(n, 2),
+                                      np.array(self.reals, dtype=np.float64).reshape(n, 2)))
+            self.ops, self.ints, self.reals = [], [], []
+
+    def stage(self, r: Realisation) -> bool:
+        """Append ``r``; False when it changes nothing (its output is its input)."""
+        before = self.emitted
+        dispatch(self, "_encode_", r)(r)
+        return self.emitted > before
+
+    def _encode_StaticMap(self, r: StaticMap) -> None:  # noqa: N802
+        y = r.element.f(TRACE, _Signal(), r.a)
+        if not isinstance(y, _Signal):  # a constant output
+            self.emit(CONST, r1=_number(y))
+            return
+        for name, args in y.steps:
+            op = COMPILED.get(name)
+            if op is None:
+                self.flush()
+                self.parts.append((name, args))
+                self.emitted += 1
+            else:
+                self.emit(op, r1=args[0] if args else 0.0, r2=args[1] if len(args) > 1 else 0.0)
+
+    def _encode_LinearFilter(self, r: LinearFilter) -> None:  # noqa: N802
+        order = len(r.a) - 1
+        # A pure FIR (a derivative) as the reference runs it: without the a terms.
+        fir = not any(r.a[1:])
+        self.emit(FIR if fir else LFILTER, order, len(self.coef))
+        self.coef.extend(r.b)
+        self.coef.extend(r.a[1:])
+
+    def _encode_DelayLine(self, r: DelayLine) -> None:  # noqa: N802
+        self.emit(DELAY, r.samples)
+
+    def _encode_Relay(self, r: Relay) -> None:  # noqa: N802
+        self.emit(RELAY, r1=r.threshold)
+
+    def store(self) -> None:
+        self.emit(STORE, self.stores)
+        self.stores += 1
+
+    def program(self) -> Program:
+        self.flush()
+        return Program(tuple(self.parts), np.array(self.coef or [0.0], dtype=np.float64),
+                       self.stores)
+
+
+def compile_row(stages: Sequence[Realisation], *, store: bool = False
+                ) -> tuple[Program, list[int]]:
+    """A row's program.
+
+    Parameters
+    ----------
+    stages : sequence of Realisation
+        The row's stages, left to right.
+    store : bool
+        Also store the output of every stage but the last that changes its
+        input (the row's prefixes, for a prefix cache).
+
+    Returns
+    -------
+    program : Program
+    stored : list of int
+        For each STORE, the number of stages whose output it holds.
+
+    Raises
+    ------
+    TypeError
+        When a static element's function is not one of a signal and numbers.
+    """
+    enc = _Encoder()
+    stored = []
+    for i, r in enumerate(stages):
+        if enc.stage(r) and store and i < len(stages) - 1:
+            enc.store()
+            stored.append(i + 1)
+    return enc.program(), stored
+
+
+@_jit
+def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
+    # One instruction at a time over the whole signal, in place: each inner loop
+    # is tight, and a signal of 20 000 samples stays in the L2 cache.
+    n_ops = ops.shape[0]
+    N = v.shape[0]  # noqa: N806
+    for s in range(n_ops):
+        op = ops[s]
+        if op == MUL:
+            c = reals[s, 0]
+            for k in range(N):
+                v[k] = c * v[k]
+        elif op == ADD:
+            c = reals[s, 0]
+            for k in range(N):
+                v[k] = v[k] + c
+        elif op == NEG:
+            for k in range(N):
+                v[k] = -v[k]
+        elif op == CONST:
+            c = reals[s, 0]
+            for k in range(N):
+                v[k] = c
+        elif op == LFILTER:
+            # Direct form II transposed, operation for operation as lfilter runs it.
+            n, c = ints[s, 0], ints[s, 1]
+            if n == 1:
+                b0, b1, a1 = coef[c], coef[c + 1], coef[c + 2]
+                z = 0.0
+                for k in range(N):
+                    u = v[k]
+                    y = z + b0 * u
+                    z = u * b1 - y * a1
+                    v[k] = y
+            else:
+                z = np.zeros(n)
+                for k in range(N):
+                    u = v[k]
+                    y = z[0] + coef[c] * u
+                    for i in range(n - 1):
+                        z[i] = z[i + 1] + u * coef[c + 1 + i] - y * coef[c + n + 1 + i]
+                    z[n - 1] = u * coef[c + n] - y * coef[c + 2 * n]
+                    v[k] = y
+        elif op == FIR:
+            # A pure FIR (the derivative) as the reference computes it: no a terms.
+            n, c = ints[s, 0], ints[s, 1]
+            if n == 1:
+                b0, b1 = coef[c], coef[c + 1]
+                z = 0.0
+                for k in range(N):
+                    u = v[k]
+                    v[k] = z + b0 * u
+                    z = u * b1
+                continue
+            z = np.zeros(n)
+            for k in range(N):
+                u = v[k]
+                y = z[0] + coef[c] * u
+                for i in range(n - 1):
+                    z[i] = z[i + 1] + u * coef[c + 1 + i]
+                z[n - 1] = u * coef[c + n]
+                v[k] = y
+        elif op == DELAY:
+            n = ints[s, 0]
+            if n < N:
+                for k in range(N - 1, n - 1, -1):
+                    v[k] = v[k - n]
+            for k in range(min(n, N)):
+                v[k] = 0.0
+        elif op == RELAY:
+            a = reals[s, 0]
+            h = 0.0
+            for k in range(N):
+                u = v[k]
+                if u >= a:
+                    h = 1.0
+                elif u <= -a:
+                    h = -1.0
+                v[k] = h
+        elif op == STORE:
+            j = ints[s, 0]
+            for k in range(N):
+                inter[j, k] = v[k]
+        elif op == SIGN:
+            # numpy's sign: 0 stays 0, NaN stays NaN.
+            for k in range(N):
+                u = v[k]
+                if u > 0.0:
+                    v[k] = 1.0
+                elif u < 0.0:
+                    v[k] = -1.0
+        elif op == SAT:
+            # np.clip and np.maximum: NaN stays NaN (no comparison holds).
+            lo, hi = reals[s, 0], reals[s, 1]
+            for k in range(N):
+                u = v[k]
+                if u < lo:
+                    v[k] = lo
+                elif u > hi:
+                    v[k] = hi
+        elif op == LOWER:
+            lo = reals[s, 0]
+            for k in range(N):
+                if v[k] < lo:
+                    v[k] = lo
+        elif op == DEAD_ZONE:
+            a = reals[s, 0]
+            for k in range(N):
+                u = v[k]
+                if u > a:
+                    v[k] = u - a
+                elif u < -a:
+                    v[k] = u + a
+                else:
+                    v[k] = 0.0  # NaN too, as np.where gives
+
+
+def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
+                inter: np.ndarray | None = None) -> np.ndarray:
+    """Run a row's program over the signal ``x`` (shape (N,)), from rest.
+
+    Parameters
+    ----------
+    program : Program
+        From :func:`compile_row`.
+    x : numpy.ndarray
+        The row's input (float64, contiguous).
+    out : numpy.ndarray, optional
+        Where the row's output goes (shape (N,)); a new array when None.
+    inter : numpy.ndarray, optional
+        Shape (program.stores, N): the stored prefixes.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``out``.
+    """
+    if out is None:
+        out = np.empty(x.shape[0])
+    if inter is None:
+        inter = np.empty((program.stores, x.shape[0]))
+    np.copyto(out, x)
+    for part in program.parts:
+        if isinstance(part, Segment):
+            _run(part.ops, part.ints, part.reals, program.coef, out, inter)
+        else:
+            name, args = part
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                np.copyto(out, getattr(NUMPY, name)(out, *args))
+    return out
+
+
+@_jit
+def _score(store, slots, y, w):  # noqa: ANN001, ANN202
+    # The weighted sum of squares of y - sum(rows), in one pass.
+    m = slots.shape[0]
+    uniform = w.shape[0] == 1
+    acc = 0.0
+    for k in range(y.shape[0]):
+        e = y[k]
+        for i in range(m):
+            e -= store[slots[i], k]
+        acc += (w[0] if uniform else w[k]) * e * e
+    return acc
+
+
+@_jit
+def _dot(a, b, w):  # noqa: ANN001, ANN202
+    uniform = w.shape[0] == 1
+    acc = 0.0
+    for k in range(a.shape[0]):
+        acc += (w[0] if uniform else w[k]) * a[k] * b[k]
+    return acc
+
+
+def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.ndarray) -> float:
+    """Eq. 8 of the individual whose rows are ``store[slots]``.
+
+    Parameters
+    ----------
+    store : numpy.ndarray
+        Shape (S, N) row outputs.
+    slots : numpy.ndarray
+        int64, the individual's m rows in ``store``.
+    target : numpy.ndarray
+        Shape (N,).
+    weights : numpy.ndarray
+        Shape (N,) Lambda, or (1,) for a constant one.
+
+    Returns
+    -------
+    float
+        ``sqrt(sum(Lambda e^2) / N)`` with ``e = target - sum(rows)``, inf when not finite.
+    """
+    if NUMBA:
+        acc = _score(store, slots, target, weights)
+    else:  # numpy: einsum's own loops, not BLAS (the same bits whatever the threads)
+        e = target - store[slots].sum(axis=0)
+        with np.errstate(over="ignore", invalid="ignore"):
+            acc = float(np.einsum("i,i", e, e) * weights[0] if weights.shape[0] == 1
+                        else np.einsum("i,i,i", weights, e, e))
+    f = math.sqrt(acc / target.shape[0]) if acc >= 0.0 else math.nan
+    return f if math.isfinite(f) else math.inf
+
+
+def dot(a: np.ndarray, b: np.ndarray, weights: np.ndarray) -> float:
+    """``sum(Lambda a b)`` (weights of shape (N,) or (1,))."""
+    if NUMBA:
+        return float(_dot(a, b, weights))
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.einsum("i,i", a, b) * weights[0] if weights.shape[0] == 1
+                     else np.einsum("i,i,i", weights, a, b))
