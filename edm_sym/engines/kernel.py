@@ -57,7 +57,8 @@ except ImportError:  # pragma: no cover
     numba = None
     NUMBA = False
 
-__all__ = ["NUMBA", "Program", "Segment", "TraceOps", "compile_row", "dot", "run_program", "score"]
+__all__ = ["NUMBA", "Program", "TraceOps", "compile_row", "compile_steps", "dot", "encode", "run_program",
+           "score"]
 
 #: Seconds the first compilation took on the development machine (docs only).
 COMPILE_SECONDS_HINT = 10
@@ -109,7 +110,31 @@ class _Signal:
     __rmul__ = __mul__
 
 
-def _number(c: Any) -> float:
+class _Param:
+    """The parameter ``a`` times a number, while a static element's template is traced."""
+
+    __slots__ = ("k",)
+
+    def __init__(self, k: float = 1.0):
+        self.k = k
+
+    def __neg__(self) -> _Param:
+        return _Param(-self.k)
+
+    def __mul__(self, c: Any) -> Any:
+        if isinstance(c, int | float) and not isinstance(c, bool):
+            return _Param(self.k * c)
+        return NotImplemented
+
+    __rmul__ = __mul__
+
+    def __float__(self) -> float:
+        raise TypeError("the template needs a's value")
+
+
+def _number(c: Any) -> float | _Param:
+    if isinstance(c, _Param):
+        return c
     if isinstance(c, _Signal) or not isinstance(c, int | float | np.floating | np.integer):
         raise TypeError(f"the kernel traces functions of one signal and numbers, found {c!r}")
     return float(c)
@@ -144,21 +169,14 @@ TRACE = TraceOps()
 
 
 @dataclass(frozen=True)
-class Segment:
-    """Compiled instructions: opcode, two integer and two real arguments each."""
-
-    ops: np.ndarray
-    ints: np.ndarray
-    reals: np.ndarray
-
-
-@dataclass(frozen=True)
 class Program:
     """A row's program: compiled segments and numpy steps, in order, and coefficients.
 
-    ``parts`` holds :class:`Segment` objects and ``(method, numbers)`` pairs
-    of the math interface run by numpy; ``stores`` is the number of STORE
-    instructions (rows of the ``inter`` array that :func:`run_program` fills).
+    ``parts`` holds compiled segments (float64 arrays of shape (S, 5), one
+    instruction ``[opcode, i1, i2, r1, r2]`` a line) and ``(method, numbers)``
+    pairs of the math interface run by numpy; ``stores`` is the number of
+    STORE instructions (rows of the ``inter`` array that :func:`run_program`
+    fills).
     """
 
     parts: tuple
@@ -167,83 +185,99 @@ class Program:
 
 
 class _Encoder:
-    """Instructions of realisations, by their type."""
+    """The steps of one realisation, by its type: compiled ``(op, i1, r1, r2, coef)``
+    tuples and numpy ``(name, args)`` pairs."""
 
     def __init__(self) -> None:
-        self.parts: list = []
-        self.ops: list[int] = []
-        self.ints: list[tuple[int, int]] = []
-        self.reals: list[tuple[float, float]] = []
-        self.coef: list[float] = []
-        self.stores = 0
-        self.emitted = 0
-
-    def emit(self, op: int, i1: int = 0, i2: int = 0, r1: float = 0.0, r2: float = 0.0) -> None:
-        self.ops.append(op)
-        self.ints.append((i1, i2))
-        self.reals.append((r1, r2))
-        self.emitted += 1
-
-    def flush(self) -> None:
-        if self.ops:
-            n = len(self.ops)
-            self.parts.append(Segment(np.array(self.ops, dtype=np.int64),
-                                      np.array(self.ints, dtype=np.int64).reshape(n, 2),
-                                      np.array(self.reals, dtype=np.float64).reshape(n, 2)))
-            self.ops, self.ints, self.reals = [], [], []
-
-    def stage(self, r: Realisation) -> bool:
-        """Append ``r``; False when it changes nothing (its output is its input)."""
-        before = self.emitted
-        dispatch(self, "_encode_", r)(r)
-        return self.emitted > before
+        self.items: list[tuple] = []
 
     def _encode_StaticMap(self, r: StaticMap) -> None:  # noqa: N802
-        y = r.element.f(TRACE, _Signal(), r.a)
-        if not isinstance(y, _Signal):  # a constant output
-            self.emit(CONST, r1=_number(y))
+        template = _template(r.element)
+        if template is not None and r.a is not None:
+            a = float(r.a)
+            self.items.extend(_instance(template, a))
             return
-        for name, args in y.steps:
-            op = COMPILED.get(name)
-            if op is None:
-                self.flush()
-                self.parts.append((name, args))
-                self.emitted += 1
-            else:
-                self.emit(op, r1=args[0] if args else 0.0, r2=args[1] if len(args) > 1 else 0.0)
+        y = r.element.f(TRACE, _Signal(), r.a)
+        self.items.extend(_items(y))
 
     def _encode_LinearFilter(self, r: LinearFilter) -> None:  # noqa: N802
-        order = len(r.a) - 1
         # A pure FIR (a derivative) as the reference runs it: without the a terms.
-        fir = not any(r.a[1:])
-        self.emit(FIR if fir else LFILTER, order, len(self.coef))
-        self.coef.extend(r.b)
-        self.coef.extend(r.a[1:])
+        op = LFILTER if any(r.a[1:]) else FIR
+        self.items.append((op, len(r.a) - 1, 0.0, 0.0, (*r.b, *r.a[1:])))
 
     def _encode_DelayLine(self, r: DelayLine) -> None:  # noqa: N802
-        self.emit(DELAY, r.samples)
+        self.items.append((DELAY, r.samples, 0.0, 0.0, ()))
 
     def _encode_Relay(self, r: Relay) -> None:  # noqa: N802
-        self.emit(RELAY, r1=r.threshold)
-
-    def store(self) -> None:
-        self.emit(STORE, self.stores)
-        self.stores += 1
-
-    def program(self) -> Program:
-        self.flush()
-        return Program(tuple(self.parts), np.array(self.coef or [0.0], dtype=np.float64),
-                       self.stores)
+        self.items.append((RELAY, 0, r.threshold, 0.0, ()))
 
 
-def compile_row(stages: Sequence[Realisation], *, store: bool = False
-                ) -> tuple[Program, list[int]]:
-    """A row's program.
+def _items(y: Any) -> list[tuple]:
+    """The steps of a traced output as encoder items."""
+    if not isinstance(y, _Signal):  # a constant output
+        return [(CONST, 0, _number(y), 0.0, ())]
+    out = []
+    for name, args in y.steps:
+        op = COMPILED.get(name)
+        if op is None:
+            out.append((name, args))
+        else:
+            out.append((op, 0, args[0] if args else 0.0, args[1] if len(args) > 1 else 0.0, ()))
+    return out
+
+
+_TEMPLATES: dict[type, list | None] = {}
+
+
+def _template(element: type) -> list | None:
+    """A static element traced once with a symbolic ``a`` (None: trace each value instead)."""
+    if element not in _TEMPLATES:
+        try:
+            items = _items(element.f(TRACE, _Signal(), _Param()))
+        except TypeError:
+            items = None
+        _TEMPLATES[element] = items
+    return _TEMPLATES[element]
+
+
+def _value(v: Any, a: float) -> Any:
+    if isinstance(v, _Param):
+        return a if v.k == 1.0 else (-a if v.k == -1.0 else v.k * a)
+    return v
+
+
+def _instance(template: list, a: float) -> list[tuple]:
+    out = []
+    for item in template:
+        if len(item) == 2:
+            out.append((item[0], tuple(_value(v, a) for v in item[1])))
+        else:
+            op, i1, r1, r2, c = item
+            out.append((op, i1, _value(r1, a), _value(r2, a), c))
+    return out
+
+
+def encode(stage: Realisation) -> tuple:
+    """The steps of one stage (a realisation), for :func:`compile_steps`; () changes nothing.
+
+    Raises
+    ------
+    TypeError
+        When a static element's function is not one of a signal and numbers.
+    """
+    enc = _Encoder()
+    dispatch(enc, "_encode_", stage)(stage)
+    return tuple(enc.items)
+
+
+def compile_steps(stages: Sequence[tuple], *, store: bool = False
+                  ) -> tuple[Program, list[int]]:
+    """A row's program from its stages' steps (:func:`encode`).
 
     Parameters
     ----------
-    stages : sequence of Realisation
-        The row's stages, left to right.
+    stages : sequence of tuple
+        Each stage's steps, left to right.
     store : bool
         Also store the output of every stage but the last that changes its
         input (the row's prefixes, for a prefix cache).
@@ -253,47 +287,63 @@ def compile_row(stages: Sequence[Realisation], *, store: bool = False
     program : Program
     stored : list of int
         For each STORE, the number of stages whose output it holds.
-
-    Raises
-    ------
-    TypeError
-        When a static element's function is not one of a signal and numbers.
     """
-    enc = _Encoder()
-    stored = []
-    for i, r in enumerate(stages):
-        if enc.stage(r) and store and i < len(stages) - 1:
-            enc.store()
+    parts: list = []
+    lines: list[tuple] = []
+    coef: list[float] = []
+    stored: list[int] = []
+    last = len(stages) - 1
+    for i, steps in enumerate(stages):
+        for step in steps:
+            if len(step) == 2:  # a numpy step
+                if lines:
+                    parts.append(np.array(lines, dtype=np.float64))
+                    lines = []
+                parts.append(step)
+                continue
+            op, i1, r1, r2, c = step
+            lines.append((op, i1, len(coef), r1, r2))
+            coef.extend(c)
+        if steps and store and i < last:
+            lines.append((STORE, len(stored), 0, 0.0, 0.0))
             stored.append(i + 1)
-    return enc.program(), stored
+    if lines:
+        parts.append(np.array(lines, dtype=np.float64))
+    return Program(tuple(parts), np.array(coef or [0.0], dtype=np.float64), len(stored)), stored
+
+
+def compile_row(stages: Sequence[Realisation], *, store: bool = False
+                ) -> tuple[Program, list[int]]:
+    """A row's program from its realisations (see :func:`compile_steps`)."""
+    return compile_steps([encode(r) for r in stages], store=store)
 
 
 @_jit
-def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
+def _run(code, coef, v, inter):  # noqa: ANN001, ANN202, C901
     # One instruction at a time over the whole signal, in place: each inner loop
     # is tight, and a signal of 20 000 samples stays in the L2 cache.
-    n_ops = ops.shape[0]
     N = v.shape[0]  # noqa: N806
-    for s in range(n_ops):
-        op = ops[s]
+    for s in range(code.shape[0]):
+        op = int(code[s, 0])
+        i1, i2, r1, r2 = int(code[s, 1]), int(code[s, 2]), code[s, 3], code[s, 4]
         if op == MUL:
-            c = reals[s, 0]
+            c = r1
             for k in range(N):
                 v[k] = c * v[k]
         elif op == ADD:
-            c = reals[s, 0]
+            c = r1
             for k in range(N):
                 v[k] = v[k] + c
         elif op == NEG:
             for k in range(N):
                 v[k] = -v[k]
         elif op == CONST:
-            c = reals[s, 0]
+            c = r1
             for k in range(N):
                 v[k] = c
         elif op == LFILTER:
             # Direct form II transposed, operation for operation as lfilter runs it.
-            n, c = ints[s, 0], ints[s, 1]
+            n, c = i1, i2
             if n == 1:
                 b0, b1, a1 = coef[c], coef[c + 1], coef[c + 2]
                 z = 0.0
@@ -313,7 +363,7 @@ def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
                     v[k] = y
         elif op == FIR:
             # A pure FIR (the derivative) as the reference computes it: no a terms.
-            n, c = ints[s, 0], ints[s, 1]
+            n, c = i1, i2
             if n == 1:
                 b0, b1 = coef[c], coef[c + 1]
                 z = 0.0
@@ -331,14 +381,14 @@ def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
                 z[n - 1] = u * coef[c + n]
                 v[k] = y
         elif op == DELAY:
-            n = ints[s, 0]
+            n = i1
             if n < N:
                 for k in range(N - 1, n - 1, -1):
                     v[k] = v[k - n]
             for k in range(min(n, N)):
                 v[k] = 0.0
         elif op == RELAY:
-            a = reals[s, 0]
+            a = r1
             h = 0.0
             for k in range(N):
                 u = v[k]
@@ -348,7 +398,7 @@ def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
                     h = -1.0
                 v[k] = h
         elif op == STORE:
-            j = ints[s, 0]
+            j = i1
             for k in range(N):
                 inter[j, k] = v[k]
         elif op == SIGN:
@@ -361,7 +411,7 @@ def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
                     v[k] = -1.0
         elif op == SAT:
             # np.clip and np.maximum: NaN stays NaN (no comparison holds).
-            lo, hi = reals[s, 0], reals[s, 1]
+            lo, hi = r1, r2
             for k in range(N):
                 u = v[k]
                 if u < lo:
@@ -369,12 +419,12 @@ def _run(ops, ints, reals, coef, v, inter):  # noqa: ANN001, ANN202, C901
                 elif u > hi:
                     v[k] = hi
         elif op == LOWER:
-            lo = reals[s, 0]
+            lo = r1
             for k in range(N):
                 if v[k] < lo:
                     v[k] = lo
         elif op == DEAD_ZONE:
-            a = reals[s, 0]
+            a = r1
             for k in range(N):
                 u = v[k]
                 if u > a:
@@ -410,37 +460,79 @@ def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
     if inter is None:
         inter = np.empty((program.stores, x.shape[0]))
     np.copyto(out, x)
-    for part in program.parts:
-        if isinstance(part, Segment):
-            _run(part.ops, part.ints, part.reals, program.coef, out, inter)
-        else:
-            name, args = part
-            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+    if len(program.parts) == 1 and isinstance(program.parts[0], np.ndarray):
+        _run(program.parts[0], program.coef, out, inter)
+        return out
+    with np.errstate(all="ignore"):
+        for part in program.parts:
+            if isinstance(part, np.ndarray):
+                _run(part, program.coef, out, inter)
+            else:
+                name, args = part
                 np.copyto(out, getattr(NUMPY, name)(out, *args))
     return out
 
 
 @_jit
-def _score(store, slots, y, w):  # noqa: ANN001, ANN202
-    # The weighted sum of squares of y - sum(rows), in one pass.
-    m = slots.shape[0]
+def _sum_sq(e, w):  # noqa: ANN001, ANN202
+    # sum(w e^2) with four running sums (a fixed order: the same bits every time).
+    n = e.shape[0]
     uniform = w.shape[0] == 1
-    acc = 0.0
-    for k in range(y.shape[0]):
-        e = y[k]
-        for i in range(m):
-            e -= store[slots[i], k]
-        acc += (w[0] if uniform else w[k]) * e * e
-    return acc
+    a0 = a1 = a2 = a3 = 0.0
+    k = 0
+    while k + 4 <= n:
+        if uniform:
+            a0 += e[k] * e[k]
+            a1 += e[k + 1] * e[k + 1]
+            a2 += e[k + 2] * e[k + 2]
+            a3 += e[k + 3] * e[k + 3]
+        else:
+            a0 += w[k] * e[k] * e[k]
+            a1 += w[k + 1] * e[k + 1] * e[k + 1]
+            a2 += w[k + 2] * e[k + 2] * e[k + 2]
+            a3 += w[k + 3] * e[k + 3] * e[k + 3]
+        k += 4
+    while k < n:
+        a0 += (1.0 if uniform else w[k]) * e[k] * e[k]
+        k += 1
+    acc = (a0 + a1) + (a2 + a3)
+    return acc * w[0] if uniform else acc
+
+
+@_jit
+def _score(store, slots, y, w):  # noqa: ANN001, ANN202
+    # The weighted sum of squares of e = y - sum(rows): one pass per row.
+    e = y.copy()
+    for i in range(slots.shape[0]):
+        r = store[slots[i]]
+        for k in range(e.shape[0]):
+            e[k] -= r[k]
+    return _sum_sq(e, w)
 
 
 @_jit
 def _dot(a, b, w):  # noqa: ANN001, ANN202
+    n = a.shape[0]
     uniform = w.shape[0] == 1
-    acc = 0.0
-    for k in range(a.shape[0]):
-        acc += (w[0] if uniform else w[k]) * a[k] * b[k]
-    return acc
+    a0 = a1 = a2 = a3 = 0.0
+    k = 0
+    while k + 4 <= n:
+        if uniform:
+            a0 += a[k] * b[k]
+            a1 += a[k + 1] * b[k + 1]
+            a2 += a[k + 2] * b[k + 2]
+            a3 += a[k + 3] * b[k + 3]
+        else:
+            a0 += w[k] * a[k] * b[k]
+            a1 += w[k + 1] * a[k + 1] * b[k + 1]
+            a2 += w[k + 2] * a[k + 2] * b[k + 2]
+            a3 += w[k + 3] * a[k + 3] * b[k + 3]
+        k += 4
+    while k < n:
+        a0 += (1.0 if uniform else w[k]) * a[k] * b[k]
+        k += 1
+    acc = (a0 + a1) + (a2 + a3)
+    return acc * w[0] if uniform else acc
 
 
 def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.ndarray) -> float:

@@ -10,7 +10,7 @@ changes.
 A batch of individuals is cut into one chunk per lane
 (:mod:`edm_sym.engines.abstraction.lanes`); a worker simulates the rows it
 lacks and sends back a few numbers per individual (eq. 8 and, for the gain
-fit, the weighted inner products of its rows), never a row. The run's data
+fit, the least-squares scales of its rows), never a row. The run's data
 goes to each worker once, the weighting once per step.
 
 Where the rows are simulated and kept:
@@ -172,7 +172,7 @@ class Evaluator:
         self._weights: np.ndarray | float = 1.0
         self._wtoken = ""
         self._wblob = b""
-        self._memo: dict[bytes, tuple[float, Any]] = {}
+        self._memo: dict[bytes, tuple[float, Any, bool]] = {}
         self._dots: dict[bytes, float] = {}
         self.set_weights(1.0)
 
@@ -270,7 +270,8 @@ class Evaluator:
         return [table[k * m:(k + 1) * m].tobytes() for k in range(p)]
 
     def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
-                 rows_out: list | None = None, grams_out: list | None = None) -> np.ndarray:
+                 rows_out: list | None = None, free: np.ndarray | None = None,
+                 scales_out: list | None = None) -> np.ndarray:
         """Fitness of each individual.
 
         Parameters
@@ -285,10 +286,12 @@ class Evaluator:
             When given, the batch runs in this process and the list is filled
             with one entry per individual: its m row keys and m row outputs
             (valid until the next call).
-        grams_out : list, optional
-            When given, filled with one entry per individual: ``(G, gy)``,
-            the weighted inner products of its rows with each other and with
-            the target (see :meth:`gram`).
+        free : numpy.ndarray, optional
+            Shape (P, m) bool: the rows whose scale the gain fit may change
+            (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
+        scales_out : list, optional
+            With ``free``: filled with one entry per individual, its
+            :func:`~edm_sym.engines.abstraction.polish.row_scales` (or None).
 
         Returns
         -------
@@ -303,15 +306,15 @@ class Evaluator:
         keys = [line.tobytes() for line in table]
         self.stats.individuals += p
         self.stats.row_requests += p * m
-        want_gram = grams_out is not None
+        want_scales = scales_out is not None and free is not None
         out = np.empty(p)
-        grams: list = [None] * p
+        scales: list = [None] * p
         ikeys = [b"".join(keys[k * m:(k + 1) * m]) for k in range(p)]
         need = []
         for k in range(p):
             hit = self._memo.get(ikeys[k])
-            if hit is not None and (not want_gram or hit[1] is not None):
-                out[k], grams[k] = hit
+            if hit is not None and (not want_scales or hit[2]):
+                out[k], scales[k] = hit[0], hit[1]
             else:
                 need.append(k)
         local = rows_out is not None
@@ -332,27 +335,28 @@ class Evaluator:
             score = np.array([k in needed for k in send], dtype=bool)
             utab = table[first]
             ukeys = [keys[i] for i in first]
-            fit, gr, rows = self._dispatch(utab, ukeys, members, score, want_gram, local)
+            sub_free = free[send] if want_scales else None
+            fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
             if len(self._memo) > 50_000:
                 self._memo.clear()
             for a, k in enumerate(send):
                 if score[a]:
                     out[k] = fit[a]
-                    grams[k] = gr[a] if want_gram else None
-                    self._memo[ikeys[k]] = (out[k], grams[k])
+                    scales[k] = sc[a] if want_scales else None
+                    self._memo[ikeys[k]] = (out[k], scales[k], want_scales)
             if local:
                 rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[members[a, j]] for j in range(m)])
                                for a, k in enumerate(send)]
-        if grams_out is not None:
-            grams_out[:] = grams
+        if scales_out is not None:
+            scales_out[:] = scales
         self.stats.eval_seconds += time.perf_counter() - t0
         return out
 
     # -- dispatch -------------------------------------------------------------------
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
-                  score: np.ndarray, gram: bool, local: bool
+                  score: np.ndarray, free: np.ndarray | None, local: bool
                   ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
-        """Evaluate individuals given as rows of ``table``; their fitness, grams, rows (local)."""
+        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local)."""
         count = len(members)
         lanes = [0] if (local or len(self.lanes) == 1 or int(score.sum()) < self.MIN_PARALLEL
                         ) else list(range(len(self.lanes)))
@@ -375,13 +379,13 @@ class Evaluator:
                 missing[miss] = True
         parts = self._partition(keys, members, missing, lanes)
         fitness = np.full(count, np.nan)
-        grams: list = [None] * count
+        scales: list = [None] * count
         results: list[tuple[list[int], ChunkResult]] = []
         pending = []
         for lane, idx in parts:
             if not idx:
                 continue
-            chunk, lines = self._chunk(table, members, score, gram, slots, missing, idx)
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, idx)
             pending.append((lane, idx, lines, chunk))
         if not lanes:
             for _, idx, lines, chunk in pending:
@@ -392,8 +396,8 @@ class Evaluator:
         for idx, _lines, res in results:
             for a, i in enumerate(idx):
                 fitness[i] = res.fitness[a]
-                if gram and res.grams is not None:
-                    grams[i] = res.grams[a]
+                if res.scales is not None:
+                    scales[i] = res.scales[a]
             self._account(res, table.shape[1])
         if self.shared and missing is not None:
             for r in np.flatnonzero(missing):
@@ -404,15 +408,16 @@ class Evaluator:
             rows = [None] * len(keys)
             for line, s in zip(lines, res.slots, strict=True):
                 rows[line] = store[s]
-        return fitness, grams, rows
+        return fitness, scales, rows
 
-    def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray, gram: bool,
-               slots: np.ndarray | None, missing: np.ndarray | None, idx: list[int]
+    def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
+               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None, idx: list[int]
                ) -> tuple[Chunk, list[int]]:
         """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
         sub = members[idx]
         lines, inverse = np.unique(sub.reshape(-1), return_inverse=True)
-        chunk = Chunk(table[lines], inverse.reshape(sub.shape).astype(np.int64), score[idx], gram,
+        chunk = Chunk(table[lines], inverse.reshape(sub.shape).astype(np.int64), score[idx],
+                      None if free is None else free[idx],
                       None if slots is None else slots[lines],
                       None if missing is None else missing[lines])
         return chunk, lines.tolist()

@@ -12,7 +12,7 @@ A task (:func:`evaluate_chunk`) gets a :class:`Chunk`: a batch of individuals
 as indices into a table of their distinct rows. The worker simulates the rows
 its store lacks (with the numba row kernel, :mod:`edm_sym.engines.kernel`,
 when it is installed, else the reference realisations) and returns each
-individual's eq. 8 and, on request, the weighted inner products of its rows
+individual's eq. 8 and, on request, the gain fit's least-squares row scales
 (:class:`ChunkResult`): a few numbers per individual, never a row.
 
 Every number returned is a pure function of the genes, the data and the
@@ -29,12 +29,14 @@ import time
 from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import RowCache, SlotStore
+from edm_sym.engines.abstraction.polish import row_scales
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
@@ -105,8 +107,10 @@ class Chunk:
         Shape (P, m) int64: each individual's rows, as lines of ``table``.
     score : numpy.ndarray
         Shape (P,) bool: whose eq. 8 is wanted (the others only need their rows).
-    gram : bool
-        Also compute the weighted inner products of each scored individual's rows.
+    free : numpy.ndarray or None
+        Shape (P, m) bool: the rows whose scale the gain fit may change; when
+        given, each scored individual also gets its least-squares scales
+        (:func:`~edm_sym.engines.abstraction.polish.row_scales`).
     slots : numpy.ndarray or None
         Shape (R,): where each row is in the shared store (the main process
         manages it); None: the worker finds them in its own store.
@@ -118,7 +122,7 @@ class Chunk:
     table: np.ndarray
     members: np.ndarray
     score: np.ndarray
-    gram: bool = False
+    free: np.ndarray | None = None
     slots: np.ndarray | None = None
     simulate: np.ndarray | None = None
 
@@ -131,9 +135,9 @@ class ChunkResult:
     ----------
     fitness : numpy.ndarray
         Shape (P,) eq. 8 (NaN where not scored, inf for non-finite outputs).
-    grams : list or None
-        Per individual ``(G, gy)``: ``G[i, j] = sum(Lambda r_i r_j)``,
-        ``gy[i] = sum(Lambda r_i target)`` (None where not scored).
+    scales : list or None
+        With ``Chunk.free``: per individual its :func:`row_scales` (None where
+        not scored or nothing to fit).
     slots : numpy.ndarray
         Where the table's rows are in the store the task used.
     simulated : int
@@ -149,7 +153,7 @@ class ChunkResult:
     """
 
     fitness: np.ndarray
-    grams: list | None
+    scales: list | None
     slots: np.ndarray
     simulated: int
     sim_seconds: float
@@ -181,6 +185,7 @@ class Worker:
     wtoken: str | None = field(default=None)
     dots: dict = field(default_factory=dict)
     use_kernel: bool = field(default=kernel.NUMBA)
+    stages: dict = field(default_factory=dict)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -188,6 +193,20 @@ class Worker:
         if hit is None:
             x = self.ctx.inputs[k]
             hit = self.trig[k] = (np.sin(x), np.cos(x))
+        return hit
+
+    def stage(self, code: int, p: float) -> Any:
+        """Gene ``(code, p)`` as the kernel's steps, or as its realisation (remembered)."""
+        key = (code, p)
+        hit = self.stages.get(key)
+        if hit is None:
+            cls, rng = self.decoder[code]
+            hit = cls.realise(rng.decode(p) if rng is not None else None, self.ctx.ts)
+            if self.use_kernel:
+                hit = kernel.encode(hit)
+            if len(self.stages) > 100_000:
+                self.stages.clear()
+            self.stages[key] = hit
         return hit
 
     def store_for(self, count: int) -> SlotStore:
@@ -280,18 +299,19 @@ def simulate_table(worker: Worker, table: np.ndarray,
             y = ctx.inputs[int(line[0])]
         stages = []
         for i in range(start, n):
-            cls, rng = decoder[int(line[1 + i])]
-            a = rng.decode(float(line[1 + n + i])) if rng is not None else None
+            code, p = int(line[1 + i]), float(line[1 + n + i])
+            cls, rng = decoder[code]
             if i == 0 and cls.from_sin_cos is not None:
+                a = rng.decode(p) if rng is not None else None
                 y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
                 start = 1
                 if n > 1:
                     cache.put(prefix_key(line, n, 1), y)
                 continue
-            stages.append(cls.realise(a, ctx.ts))
+            stages.append(worker.stage(code, p))
         out = outs[r] if outs is not None else np.empty(length)
         if worker.use_kernel:
-            program, stored = kernel.compile_row(stages, store=True)
+            program, stored = kernel.compile_steps(stages, store=True)
             inter = np.empty((program.stores, length))
             kernel.run_program(program, y, out, inter)
             for j, count in enumerate(stored):
@@ -365,14 +385,15 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
     target = worker.ctx.target
     p = chunk.members.shape[0]
     fitness = np.full(p, np.nan)
-    grams: list | None = [None] * p if chunk.gram else None
+    scales: list | None = [None] * p if chunk.free is not None else None
     for k in np.flatnonzero(chunk.score):
         mine = slots[chunk.members[k]]
-        fitness[k] = kernel.score(store_rows, mine, target, worker.weights)
-        if grams is not None:
-            grams[k] = _gram(worker, store_rows[mine], [keys[r] for r in chunk.members[k]],
+        f = fitness[k] = kernel.score(store_rows, mine, target, worker.weights)
+        if scales is not None and chunk.free[k].any() and np.isfinite(f) and f != 0.0:
+            gram, gy = _gram(worker, store_rows[mine], [keys[r] for r in chunk.members[k]],
                              target)
-    return ChunkResult(fitness, grams, slots, simulated, sim_seconds,
+            scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
+    return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
                        time.perf_counter() - t0, os.getpid(), peak_rss())
 
 

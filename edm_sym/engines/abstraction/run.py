@@ -42,7 +42,7 @@ from edm_sym.engines.abstraction.checkpoint import (
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.engines.abstraction.local_search import tune_parameters
-from edm_sym.engines.abstraction.polish import GAIN, gain_fit
+from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, StepConfig, default_config
 from edm_sym.engines.abstraction.validation import Scorer, plan_holdout
@@ -256,12 +256,13 @@ class _Runner:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
         if not ops.ga.gain_fit:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
-        grams: list = []
-        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, grams_out=grams)
+        places = scale_places(pop.codes, GAIN in ops.allowed)
+        scales: list = []
+        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                                      scales_out=scales)
         if keep_first:
-            grams[0] = None
-        idx, cand = gain_fit(pop, grams, fit, len(self.y), self.ranges,
-                             gain_allowed=GAIN in ops.allowed)
+            scales[0] = None
+        idx, cand = gain_fit(pop, scales, places, self.ranges)
         if len(idx):
             cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
             better = cfit < fit[idx]
