@@ -190,7 +190,7 @@ def test_ga_rows_equal_the_simulators_rows_bit_for_bit(seed: int) -> None:
     comp = Compensator(pop.matrix(0, NAMES), TS, {}, 20.0)
     x = np.vstack([3 * smooth_signal(1500, seed=seed + k) for k in range(3)])
     worker = Worker(SimContext(x, TS, comp.ranges), SimContext(x, TS, comp.ranges).decoder(),
-                    RowCache(2**20), use_kernel=False)
+                    use_kernel=False)
     table = row_table(pop.inputs[0], pop.codes[0], pop.ps[0])
     got = simulate_table(worker, table)
     for j, row in enumerate(comp.matrix.rows):

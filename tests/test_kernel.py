@@ -16,7 +16,6 @@ from edm_sym.core.elements.realisation import REALISATIONS, StaticMap
 from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator
 from edm_sym.engines import kernel
-from edm_sym.engines.abstraction.cache import RowCache
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
 from edm_sym.engines.abstraction.schedule import GaSettings
@@ -80,7 +79,7 @@ def test_random_rows_of_all_elements_equal_the_reference_simulator(seed: int) ->
     assert set(np.unique(codes)) <= set(REGISTRY)
     x = np.vstack([_signal(10 * seed + k) for k in range(3)])
     ctx = SimContext(x, TS, RANGES)
-    kernel_worker = Worker(ctx, ctx.decoder(), RowCache(2**24), use_kernel=True)
+    kernel_worker = Worker(ctx, ctx.decoder(), use_kernel=True)
     table = row_table(inputs, codes, ps)
     # Twice: the second time rows start from the prefixes the first one stored.
     for _ in range(2):
@@ -98,7 +97,7 @@ def test_random_rows_of_all_elements_equal_the_reference_simulator(seed: int) ->
                         continue
                     y = el.realise(a, TS).run(y)
             _close(got[r], y)
-    assert len(kernel_worker.prefixes) > 0
+    assert len(kernel_worker.prefix_store()) > 0
 
 
 def test_the_kernel_worker_equals_simulate_row_on_a_compensator() -> None:
@@ -109,7 +108,7 @@ def test_the_kernel_worker_equals_simulate_row_on_a_compensator() -> None:
     comp = Compensator(pop.matrix(0, ["u0", "u1", "u2"]), TS, RANGES, N * TS)
     x = np.vstack([_signal(k + 7) for k in range(3)])
     ctx = SimContext(x, TS, RANGES)
-    got = simulate_table(Worker(ctx, ctx.decoder(), RowCache(2**24), use_kernel=True),
+    got = simulate_table(Worker(ctx, ctx.decoder(), use_kernel=True),
                          row_table(inputs, codes, ps))
     for j, row in enumerate(comp.matrix.rows):
         with np.errstate(all="ignore"):
@@ -166,3 +165,28 @@ def test_a_static_element_the_tracer_cannot_follow_is_refused() -> None:
 
     with pytest.raises(TypeError, match="one signal"):
         kernel.compile_row([StaticMap(Square, None)])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_simulate_rows_equals_the_reference_simulator(seed: int) -> None:
+    from edm_sym.engines.abstraction.ga import Population
+    from edm_sym.engines.simulate import simulate_rows
+
+    inputs, codes, ps = _random_rows(100 + seed, 20, 4)
+    pop = Population(inputs.reshape(1, 20), codes.reshape(1, 20, 4), ps.reshape(1, 20, 4))
+    comp = Compensator(pop.matrix(0, ["u0", "u1", "u2"]), TS, RANGES, N * TS)
+    x = np.vstack([_signal(k + 20 * seed) for k in range(3)])
+    with np.errstate(all="ignore"):
+        want = simulate_rows(comp, comp.matrix.rows, x)
+    got = kernel.simulate_rows(comp, comp.matrix.rows, x)
+    for j in range(len(want)):
+        _close(got[j], want[j])
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_the_gene_encoder_gives_the_steps_of_the_realisation(el) -> None:  # noqa: ANN001
+    rng = RANGES[el.name] if el.param is not None else None
+    make = kernel.gene_encoder(el, TS, rng.decode(0.5) if rng else None)
+    for p in (0.0, 0.31, 1.0):
+        a = rng.decode(p) if rng else None
+        assert make(a) == kernel.encode(el.realise(a, TS))

@@ -52,7 +52,7 @@ def run_cli(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
-        ``workers``, ``validation_share``, ``validate``, ``select``,
+        ``workers``, ``scheduler``, ``validation_share``, ``validate``, ``select``,
         ``prune_tolerance``, ``no_prune``.
 
     Returns
@@ -104,7 +104,12 @@ def run_cli(args: argparse.Namespace) -> int:
         result = abstract(data, target=args.target, inputs=inputs, config=config,
                           seed=args.seed, time_limit=args.time_limit, progress=progress,
                           checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                          validate=validate, select=getattr(args, "select", None))
+                          validate=validate, select=getattr(args, "select", None),
+                          scheduler=getattr(args, "scheduler", None))
+    except ConfigError as exc:
+        if exc.where == "scheduler":
+            raise ConfigError("--scheduler", exc.problem) from None
+        raise
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)

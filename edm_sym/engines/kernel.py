@@ -57,8 +57,8 @@ except ImportError:  # pragma: no cover
     numba = None
     NUMBA = False
 
-__all__ = ["NUMBA", "Program", "TraceOps", "compile_row", "compile_steps", "dot", "encode", "run_program",
-           "score"]
+__all__ = ["NUMBA", "Program", "TraceOps", "compile_row", "compile_steps", "dot", "encode",
+           "gene_encoder", "run_program", "score", "simulate_rows"]
 
 #: Seconds the first compilation took on the development machine (docs only).
 COMPILE_SECONDS_HINT = 10
@@ -201,9 +201,7 @@ class _Encoder:
         self.items.extend(_items(y))
 
     def _encode_LinearFilter(self, r: LinearFilter) -> None:  # noqa: N802
-        # A pure FIR (a derivative) as the reference runs it: without the a terms.
-        op = LFILTER if any(r.a[1:]) else FIR
-        self.items.append((op, len(r.a) - 1, 0.0, 0.0, (*r.b, *r.a[1:])))
+        self.items.extend(_linear_items(r.b, r.a))
 
     def _encode_DelayLine(self, r: DelayLine) -> None:  # noqa: N802
         self.items.append((DELAY, r.samples, 0.0, 0.0, ()))
@@ -255,6 +253,34 @@ def _instance(template: list, a: float) -> list[tuple]:
             op, i1, r1, r2, c = item
             out.append((op, i1, _value(r1, a), _value(r2, a), c))
     return out
+
+
+def _linear_items(r_b: Sequence[float], r_a: Sequence[float]) -> tuple:
+    # A pure FIR (a derivative) as the reference runs it: without the a terms.
+    op = LFILTER if any(r_a[1:]) else FIR
+    return ((op, len(r_a) - 1, 0.0, 0.0, (*r_b, *r_a[1:])),)
+
+
+def gene_encoder(element: type, ts: float, probe: float | None) -> Any:
+    """A function ``a -> steps`` of one element class (what :func:`encode` gives, faster).
+
+    The class's realisation type, found once with the parameter ``probe``,
+    picks the way: a static map instantiates its traced template, a linear
+    filter discretises the transfer function straight into its coefficients
+    (skipping the realisation object), anything else encodes the realisation.
+    """
+    kind = type(element.realise(probe, ts))
+    if kind is StaticMap:
+        template = _template(element)
+        if template is not None and probe is not None:
+            return lambda a: tuple(_instance(template, float(a)))
+    if kind is LinearFilter:
+        def linear(a: float) -> tuple:
+            b, den = element.coefficients(a, ts)
+            return _linear_items(b.tolist(), den.tolist())
+
+        return linear
+    return lambda a: encode(element.realise(a, ts))
 
 
 def encode(stage: Realisation) -> tuple:
@@ -319,7 +345,7 @@ def compile_row(stages: Sequence[Realisation], *, store: bool = False
 
 
 @_jit
-def _run(code, coef, v, inter):  # noqa: ANN001, ANN202, C901
+def _run(code, coef, v, inter, slots):  # noqa: ANN001, ANN202, C901
     # One instruction at a time over the whole signal, in place: each inner loop
     # is tight, and a signal of 20 000 samples stays in the L2 cache.
     N = v.shape[0]  # noqa: N806
@@ -398,9 +424,9 @@ def _run(code, coef, v, inter):  # noqa: ANN001, ANN202, C901
                     h = -1.0
                 v[k] = h
         elif op == STORE:
-            j = i1
+            row = slots[i1]
             for k in range(N):
-                inter[j, k] = v[k]
+                inter[row, k] = v[k]
         elif op == SIGN:
             # numpy's sign: 0 stays 0, NaN stays NaN.
             for k in range(N):
@@ -436,7 +462,7 @@ def _run(code, coef, v, inter):  # noqa: ANN001, ANN202, C901
 
 
 def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
-                inter: np.ndarray | None = None) -> np.ndarray:
+                inter: np.ndarray | None = None, slots: np.ndarray | None = None) -> np.ndarray:
     """Run a row's program over the signal ``x`` (shape (N,)), from rest.
 
     Parameters
@@ -448,7 +474,10 @@ def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
     out : numpy.ndarray, optional
         Where the row's output goes (shape (N,)); a new array when None.
     inter : numpy.ndarray, optional
-        Shape (program.stores, N): the stored prefixes.
+        Where the stored prefixes go: row ``slots[j]`` gets the j-th (a new
+        array of ``program.stores`` rows when None).
+    slots : numpy.ndarray, optional
+        int64; default ``0 .. stores - 1``.
 
     Returns
     -------
@@ -459,18 +488,51 @@ def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
         out = np.empty(x.shape[0])
     if inter is None:
         inter = np.empty((program.stores, x.shape[0]))
+    if slots is None:
+        slots = np.arange(program.stores, dtype=np.int64)
     np.copyto(out, x)
     if len(program.parts) == 1 and isinstance(program.parts[0], np.ndarray):
-        _run(program.parts[0], program.coef, out, inter)
+        _run(program.parts[0], program.coef, out, inter, slots)
         return out
     with np.errstate(all="ignore"):
         for part in program.parts:
             if isinstance(part, np.ndarray):
-                _run(part, program.coef, out, inter)
+                _run(part, program.coef, out, inter, slots)
             else:
                 name, args = part
                 np.copyto(out, getattr(NUMPY, name)(out, *args))
     return out
+
+
+def simulate_rows(comp: Any, rows: Sequence[Any], inputs: np.ndarray) -> np.ndarray:
+    """:func:`edm_sym.engines.simulate.simulate_rows` with the row kernel (no caching).
+
+    Parameters
+    ----------
+    comp : Compensator
+        Gives the sample time and parameter ranges.
+    rows : sequence of Row
+        Rows to simulate; ``row.input`` indexes the first axis of ``inputs``.
+    inputs : numpy.ndarray
+        Shape (n_inputs, N).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (len(rows), N), equal to the reference simulator's to rounding.
+    """
+    x = np.ascontiguousarray(inputs, dtype=float)
+    out = np.empty((len(rows), x.shape[-1]))
+    no_store = np.empty((0, x.shape[-1]))
+    ts = comp.sample_time
+    for k, row in enumerate(rows):
+        steps = [encode(g.element.realise(comp.value(g), ts)) for g in row.genes]
+        program, _ = compile_steps(steps)
+        run_program(program, x[row.input], out[k], no_store, _NO_SLOTS)
+    return out
+
+
+_NO_SLOTS = np.zeros(0, dtype=np.int64)
 
 
 @_jit

@@ -108,8 +108,16 @@ class SlotStore:
 
     def __init__(self, slots: int, n: int):
         self.slots = int(slots)
-        # Anonymous and shared (mmap's default for fileno -1); pages are made on first use.
-        self._map = mmap.mmap(-1, max(1, self.slots * n * 8))
+        # Anonymous and shared (mmap's default for fileno -1). The pages are made now
+        # (MAP_POPULATE, where there is one): a page fault per 4 kB on first use
+        # would cost more than simulating the row that fills it.
+        size = max(1, self.slots * n * 8)
+        populate = getattr(mmap, "MAP_POPULATE", 0)
+        if populate:
+            flags = mmap.MAP_SHARED | getattr(mmap, "MAP_ANONYMOUS", 0x20) | populate
+            self._map = mmap.mmap(-1, size, flags=flags)
+        else:  # pragma: no cover (not Linux)
+            self._map = mmap.mmap(-1, size)
         self.rows = np.frombuffer(self._map, dtype=np.float64,
                                   count=self.slots * n).reshape(self.slots, n)
         self._lru: OrderedDict[bytes, int] = OrderedDict()
@@ -161,6 +169,11 @@ class SlotStore:
     def nbytes(self) -> int:
         """Bytes of the store (all slots, used or not)."""
         return self.rows.nbytes
+
+    def clear(self) -> None:
+        """Forget every row (the memory stays)."""
+        self._lru.clear()
+        self._free = list(range(self.slots - 1, -1, -1))
 
     def release(self, slots: list[int]) -> None:
         """Give back allocated slots that were not committed."""

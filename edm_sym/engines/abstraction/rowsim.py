@@ -4,9 +4,10 @@ Rows travel as a canonical gene table (:func:`row_table`), one float64 line
 ``[input, c_1..c_n, p_1..p_n]`` per row. A worker keeps, per run, a
 :class:`Worker`: the input signals and the target (sent once per worker), a
 decoder from codes to element classes and ranges, the current weighting (sent
-once per step), a store of whole rows, and a cache of row prefixes (the
+once per step), a store of whole rows, and a store of row prefixes (the
 signal after the first k elements), so a row that differs from an earlier one
-only in its later elements starts where they part.
+only in its later elements starts where they part. Both stores are fixed
+blocks of slots, bounded by the config's ``cache_mb``.
 
 A task (:func:`evaluate_chunk`) gets a :class:`Chunk`: a batch of individuals
 as indices into a table of their distinct rows. The worker simulates the rows
@@ -35,7 +36,7 @@ import numpy as np
 
 from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
-from edm_sym.engines.abstraction.cache import RowCache, SlotStore
+from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.polish import row_scales
 
 #: Codes of the elements that use their parameter (others ignore p).
@@ -164,10 +165,12 @@ class ChunkResult:
 
 @dataclass
 class Worker:
-    """A process's state for one run: context, decoder, caches, weighting.
+    """A process's state for one run: context, decoder, stores, weighting.
 
     ``rows`` is the shared store's rows when the main process manages the
     slots; otherwise the worker keeps its own :class:`SlotStore` (``own``).
+    Row prefixes go into a store of this process (:meth:`prefix_store`),
+    slots reused in place, so simulating a row allocates no memory.
     ``trig`` holds sin and cos of each input signal: a sine element reading an
     input directly (the paper's position-dependent friction; its class
     declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
@@ -177,7 +180,6 @@ class Worker:
 
     ctx: SimContext
     decoder: dict
-    prefixes: RowCache
     rows: np.ndarray | None = field(default=None)
     own: SlotStore | None = field(default=None)
     trig: dict = field(default_factory=dict)
@@ -186,6 +188,10 @@ class Worker:
     dots: dict = field(default_factory=dict)
     use_kernel: bool = field(default=kernel.NUMBA)
     stages: dict = field(default_factory=dict)
+    encoders: dict = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    pool: SlotStore | None = field(default=None)
+    pool_pid: int = field(default=0)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -201,13 +207,28 @@ class Worker:
         hit = self.stages.get(key)
         if hit is None:
             cls, rng = self.decoder[code]
-            hit = cls.realise(rng.decode(p) if rng is not None else None, self.ctx.ts)
+            a = rng.decode(p) if rng is not None else None
             if self.use_kernel:
-                hit = kernel.encode(hit)
+                make = self.encoders.get(code)
+                if make is None:
+                    probe = rng.decode(0.5) if rng is not None else None
+                    make = self.encoders[code] = kernel.gene_encoder(cls, self.ctx.ts, probe)
+                hit = make(a)
+            else:
+                hit = cls.realise(a, self.ctx.ts)
             if len(self.stages) > 100_000:
                 self.stages.clear()
             self.stages[key] = hit
         return hit
+
+    def prefix_store(self) -> SlotStore:
+        """This process's store of row prefixes (made on first use, in this process)."""
+        if self.pool is None or self.pool_pid != os.getpid():
+            n = self.ctx.inputs.shape[1]
+            # At least a row's worth of prefixes; the rest as the bound allows.
+            self.pool = SlotStore(max(self.ctx.prefix_bytes // (8 * n), 8), n)
+            self.pool_pid = os.getpid()
+        return self.pool
 
     def store_for(self, count: int) -> SlotStore:
         """This worker's own row store, with room for ``count`` rows at once."""
@@ -243,7 +264,7 @@ def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = N
             if blob is None:
                 return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        hit = Worker(ctx, ctx.decoder(), RowCache(ctx.prefix_bytes), rows)
+        hit = Worker(ctx, ctx.decoder(), rows)
         _WORKERS[token] = hit
         while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)
@@ -266,14 +287,15 @@ def simulate_table(worker: Worker, table: np.ndarray,
     """Simulate the rows of a canonical gene table.
 
     Each row starts from the longest prefix found in the worker's prefix
-    cache; each prefix it computes goes into that cache. With numba the row
-    kernel runs the rest of the row in one call, else the realisations do,
-    one numpy call per element.
+    store; each prefix it computes goes into that store. With numba the row
+    kernel runs the rest of the row in one call (writing the prefixes
+    straight into their slots), else the realisations do, one numpy call per
+    element.
 
     Parameters
     ----------
     worker : Worker
-        Context, decoder and prefix cache of this process.
+        Context, decoder and prefix store of this process.
     table : numpy.ndarray
         Shape (R, 1 + 2 n).
     outs : sequence of numpy.ndarray, optional
@@ -284,14 +306,15 @@ def simulate_table(worker: Worker, table: np.ndarray,
     list of numpy.ndarray
         The R row outputs (``outs`` when given).
     """
-    ctx, decoder, cache = worker.ctx, worker.decoder, worker.prefixes
+    ctx, decoder = worker.ctx, worker.decoder
+    pool = worker.prefix_store()
     n = (table.shape[1] - 1) // 2
     length = ctx.inputs.shape[1]
     result = []
     for r, line in enumerate(table):
         y, start = None, 0
         for k in range(n - 1, 0, -1):
-            y = cache.get(prefix_key(line, n, k))
+            y = pool.get(prefix_key(line, n, k))
             if y is not None:
                 start = k
                 break
@@ -306,24 +329,32 @@ def simulate_table(worker: Worker, table: np.ndarray,
                 y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
                 start = 1
                 if n > 1:
-                    cache.put(prefix_key(line, n, 1), y)
+                    _keep(pool, prefix_key(line, n, 1), y)
                 continue
             stages.append(worker.stage(code, p))
         out = outs[r] if outs is not None else np.empty(length)
         if worker.use_kernel:
             program, stored = kernel.compile_steps(stages, store=True)
-            inter = np.empty((program.stores, length))
-            kernel.run_program(program, y, out, inter)
-            for j, count in enumerate(stored):
-                cache.put(prefix_key(line, n, start + count), inter[j])
+            slots = pool.allocate(len(stored), ())
+            kernel.run_program(program, y, out, pool.rows, np.array(slots, dtype=np.int64))
+            for slot, count in zip(slots, stored, strict=True):
+                pool.commit(prefix_key(line, n, start + count), slot)
         else:
             for i, stage in enumerate(stages):
                 prev, y = y, stage.run(y)
                 if start + i + 1 < n and y is not prev:
-                    cache.put(prefix_key(line, n, start + i + 1), y)
+                    _keep(pool, prefix_key(line, n, start + i + 1), y)
             out[:] = y
         result.append(out)
     return result
+
+
+def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
+    """Copy a prefix into the pool (unless it is there)."""
+    if pool.lookup(key) is None:
+        slot = pool.allocate(1, ())[0]
+        pool.rows[slot] = y
+        pool.commit(key, slot)
 
 
 def _gram(worker: Worker, rows: np.ndarray, keys: list[bytes], target: np.ndarray
@@ -427,7 +458,8 @@ def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | N
         if wblob is None:
             return NEED_WEIGHTS
         worker.set_weights(wtoken, pickle.loads(wblob))  # noqa: S301 (from the evaluator)
-    return run_chunk(worker, chunk)
+    with worker.lock:  # an executor may run two tasks of one process in threads
+        return run_chunk(worker, chunk)
 
 
 def peak_rss() -> int:

@@ -24,6 +24,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -372,6 +373,7 @@ def abstract(
     validate: DataLog | None = None,
     validation_share: float | None = None,
     select: str | None = None,
+    scheduler: Any = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -411,6 +413,11 @@ def abstract(
         Share of ``data`` held out at its end, in [0, 0.9]; None: the
         config's ``[validation] share`` (default 0.2). See
         :mod:`edm_sym.engines.abstraction.validation`.
+    scheduler : str or distributed.Client, optional
+        A dask.distributed scheduler's address (``tcp://host:8786``) or a
+        connected client: chunks of individuals go to its workers, one lane
+        each (``workers`` and ``executor`` are then ignored). Needs the extra
+        ``edm_sym[dask]``.
     select : str, optional
         Which member of the complexity-vs-fitness front is exported:
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
@@ -471,9 +478,16 @@ def abstract(
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
     batch = max(s.ga.population * s.n_rows for s in cfg.steps)
+    client, own_client = _dask_client(scheduler)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
-                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
-    evaluator.start()
+                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
+                          client=client)
+    try:
+        evaluator.start()
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
     runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
                      time_limit=time_limit, progress=progress, callback=callback)
@@ -490,6 +504,8 @@ def abstract(
     finally:
         runner.close()
         evaluator.close()
+        if own_client:
+            client.close()
     steps = []
     for r in runner.records():
         matrix = r.best.matrix(0, inputs)
@@ -510,6 +526,38 @@ def abstract(
         checkpoint.unlink()
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony)
+
+
+def _dask_client(scheduler: Any) -> tuple[Any, bool]:
+    """A dask client for ``scheduler`` (an address or a client) and whether it is ours to close.
+
+    Raises
+    ------
+    ConfigError
+        When dask.distributed is not installed, or no scheduler answers at
+        the address, or it has no worker within a minute.
+    """
+    if scheduler is None:
+        return None, False
+    try:
+        import distributed
+    except ImportError:
+        raise ConfigError("scheduler", "expected dask.distributed (pip install 'edm_sym[dask]'), "
+                                       "found it not installed") from None
+    if not isinstance(scheduler, str):
+        return scheduler, False
+    try:
+        client = distributed.Client(scheduler, timeout=30)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigError("scheduler", f"expected a dask scheduler at {scheduler}, found none "
+                                       f"({type(exc).__name__}: {exc})") from None
+    try:
+        client.wait_for_workers(1, timeout=60)
+    except (OSError, TimeoutError) as exc:
+        client.close()
+        raise ConfigError("scheduler", f"expected a worker on the dask scheduler at {scheduler}, "
+                                       f"found none within 60 s ({type(exc).__name__})") from None
+    return client, True
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
