@@ -60,8 +60,8 @@ except ImportError:  # pragma: no cover
 __all__ = ["NUMBA", "Program", "TraceOps", "compile_row", "compile_steps", "dot", "encode",
            "gene_encoder", "run_program", "score", "simulate_rows"]
 
-#: Seconds the first compilation took on the development machine (docs only).
-COMPILE_SECONDS_HINT = 10
+#: CPU seconds the first compilation took on the development machine (docs only).
+COMPILE_SECONDS_HINT = 6
 
 
 def _jit(fn: Any) -> Any:

@@ -52,7 +52,13 @@ import numpy as np
 from edm_sym.core.elements import ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import RowCache, SlotStore
-from edm_sym.engines.abstraction.lanes import ExecutorLane, LocalLane, PoolLane, dask_lanes
+from edm_sym.engines.abstraction.lanes import (
+    DaskLane,
+    ExecutorLane,
+    LocalLane,
+    PoolLane,
+    dask_lanes,
+)
 from edm_sym.engines.abstraction.rowsim import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
@@ -205,7 +211,14 @@ class Evaluator:
         self._mirror = [OrderedDict() for _ in range(count)]
 
     def close(self) -> None:
-        """Shut down the processes this evaluator started (not a caller's executor)."""
+        """Free the run's state in every worker; shut down the processes this evaluator started."""
+        for lane in self.lanes:
+            if isinstance(lane, DaskLane):
+                # A cluster's workers outlive the run: drop its data and stores there.
+                try:
+                    lane.submit(forget, self._token).result()
+                except Exception:  # noqa: BLE001 (a worker gone is as good as one cleared)
+                    pass
         self._shutdown(wait=True)
         forget(self._token)
 

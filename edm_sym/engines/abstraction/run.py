@@ -547,7 +547,7 @@ def _dask_client(scheduler: Any) -> tuple[Any, bool]:
     if not isinstance(scheduler, str):
         return scheduler, False
     try:
-        client = distributed.Client(scheduler, timeout=30)
+        client = distributed.Client(scheduler, timeout=10)
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigError("scheduler", f"expected a dask scheduler at {scheduler}, found none "
                                        f"({type(exc).__name__}: {exc})") from None
