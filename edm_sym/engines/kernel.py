@@ -562,9 +562,10 @@ def _sum_sq(e, w):  # noqa: ANN001, ANN202
 
 
 @_jit
-def _score(store, slots, y, w):  # noqa: ANN001, ANN202
-    # The weighted sum of squares of e = y - sum(rows): one pass per row.
-    e = y.copy()
+def _score(store, slots, y, w, e):  # noqa: ANN001, ANN202
+    # The weighted sum of squares of e = y - sum(rows): one pass per row (e: scratch).
+    for k in range(e.shape[0]):
+        e[k] = y[k]
     for i in range(slots.shape[0]):
         r = store[slots[i]]
         for k in range(e.shape[0]):
@@ -597,7 +598,8 @@ def _dot(a, b, w):  # noqa: ANN001, ANN202
     return acc * w[0] if uniform else acc
 
 
-def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.ndarray) -> float:
+def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.ndarray,
+          scratch: np.ndarray | None = None) -> float:
     """Eq. 8 of the individual whose rows are ``store[slots]``.
 
     Parameters
@@ -610,6 +612,8 @@ def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.
         Shape (N,).
     weights : numpy.ndarray
         Shape (N,) Lambda, or (1,) for a constant one.
+    scratch : numpy.ndarray, optional
+        Shape (N,): room for the residual (reused: no allocation per call).
 
     Returns
     -------
@@ -617,7 +621,8 @@ def score(store: np.ndarray, slots: np.ndarray, target: np.ndarray, weights: np.
         ``sqrt(sum(Lambda e^2) / N)`` with ``e = target - sum(rows)``, inf when not finite.
     """
     if NUMBA:
-        acc = _score(store, slots, target, weights)
+        e = scratch if scratch is not None else np.empty(target.shape[0])
+        acc = _score(store, slots, target, weights, e)
     else:  # numpy: einsum's own loops, not BLAS (the same bits whatever the threads)
         e = target - store[slots].sum(axis=0)
         with np.errstate(over="ignore", invalid="ignore"):

@@ -272,7 +272,7 @@ class Evaluator:
         """
         from edm_sym.engines.abstraction.rowsim import _gram
 
-        return _gram(self._local, np.asarray(rows), list(keys), self.target)
+        return _gram(self._local, [np.asarray(r) for r in rows], list(keys), self.target)
 
     # -- evaluation -----------------------------------------------------------------
     def individual_keys(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray

@@ -191,6 +191,7 @@ class Worker:
     encoders: dict = field(default_factory=dict)
     lock: threading.Lock = field(default_factory=threading.Lock)
     pool: SlotStore | None = field(default=None)
+    work: np.ndarray | None = field(default=None)
     pool_pid: int = field(default=0)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -220,6 +221,12 @@ class Worker:
                 self.stages.clear()
             self.stages[key] = hit
         return hit
+
+    def scratch(self) -> np.ndarray:
+        """A signal-sized array to compute in (this process's, reused)."""
+        if self.work is None or self.work.shape[0] != self.ctx.inputs.shape[1]:
+            self.work = np.empty(self.ctx.inputs.shape[1])
+        return self.work
 
     def prefix_store(self) -> SlotStore:
         """This process's store of row prefixes (made on first use, in this process)."""
@@ -357,7 +364,7 @@ def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
         pool.commit(key, slot)
 
 
-def _gram(worker: Worker, rows: np.ndarray, keys: list[bytes], target: np.ndarray
+def _gram(worker: Worker, rows: list[np.ndarray], keys: list[bytes], target: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted inner products of rows (remembered by their keys) and with the target."""
     m = len(keys)
@@ -419,10 +426,10 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
     scales: list | None = [None] * p if chunk.free is not None else None
     for k in np.flatnonzero(chunk.score):
         mine = slots[chunk.members[k]]
-        f = fitness[k] = kernel.score(store_rows, mine, target, worker.weights)
+        f = fitness[k] = kernel.score(store_rows, mine, target, worker.weights, worker.scratch())
         if scales is not None and chunk.free[k].any() and np.isfinite(f) and f != 0.0:
-            gram, gy = _gram(worker, store_rows[mine], [keys[r] for r in chunk.members[k]],
-                             target)
+            gram, gy = _gram(worker, [store_rows[s] for s in mine],
+                             [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
                        time.perf_counter() - t0, os.getpid(), peak_rss())
