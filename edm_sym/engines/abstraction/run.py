@@ -393,8 +393,9 @@ def abstract(
         Wall-clock seconds; the run ends at the first generation boundary
         after it and returns the best so far.
     executor : concurrent.futures.Executor, optional
-        Where rows are simulated (e.g. ``dask.distributed.Client(...).get_executor()``);
-        it is not shut down. None: a process pool over ``workers`` cores.
+        Where chunks of individuals are evaluated (``workers`` unpinned lanes;
+        for a dask cluster ``scheduler`` is better); it is not shut down.
+        None: this process and ``workers - 1`` forked processes.
     progress : bool
         Show a tqdm progress bar on stderr.
     checkpoint : pathlib.Path, optional
@@ -403,7 +404,8 @@ def abstract(
     resume : bool
         Continue from ``checkpoint`` when that file exists.
     workers : int, optional
-        Processes of the default pool (default: every usable core; 1: no pool).
+        Processes evaluating, this one included (default: every usable core;
+        1: this process only).
     callback : callable, optional
         Called with a :class:`GenerationInfo` after every generation; a true
         return value ends the run there, like a time limit.
