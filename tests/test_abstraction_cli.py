@@ -91,6 +91,9 @@ def test_time_limit_exits_0_with_the_best_so_far(
     (["--inputs", "omega,,alpha"], "--inputs: expected comma-separated column names"),
     (["--workers", "0"], "--workers: expected an integer >= 1"),
     (["--seed", "-4"], "--seed: expected an integer >= 0"),
+    # Nothing listens on the discard port: refused within the 10 s connect timeout.
+    (["--scheduler", "tcp://127.0.0.1:9"],
+     "--scheduler: expected a dask scheduler at tcp://127.0.0.1:9, found none"),
 ])
 def test_bad_input_exits_2_with_one_line(
     data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str

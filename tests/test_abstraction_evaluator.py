@@ -185,11 +185,12 @@ def test_from_sin_cos_equals_the_element_to_rounding(el) -> None:  # noqa: ANN00
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 10_000))
 def test_ga_rows_equal_the_simulators_rows_bit_for_bit(seed: int) -> None:
+    # The GA's reference path (no numba): the simulator's own realisations.
     pop = _population(seed, p=1, m=2, n=4)
     comp = Compensator(pop.matrix(0, NAMES), TS, {}, 20.0)
     x = np.vstack([3 * smooth_signal(1500, seed=seed + k) for k in range(3)])
     worker = Worker(SimContext(x, TS, comp.ranges), SimContext(x, TS, comp.ranges).decoder(),
-                    RowCache(2**20))
+                    use_kernel=False)
     table = row_table(pop.inputs[0], pop.codes[0], pop.ps[0])
     got = simulate_table(worker, table)
     for j, row in enumerate(comp.matrix.rows):
@@ -218,3 +219,35 @@ def test_a_sine_reading_an_input_uses_cached_sines_to_rounding(signals, name: st
     comp = Compensator(pop.matrix(0, NAMES), TS, {}, N * TS)
     want = simulate_row(comp, comp.matrix.rows[0], x[pop.inputs[0, 0]])
     assert np.allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))
+
+
+def test_a_cached_view_counts_with_its_whole_array() -> None:
+    cache = RowCache(max_bytes=10 * 800)
+    block = np.zeros((4, 100))  # 3200 bytes, four views of 800
+    for k in range(4):
+        cache.put(bytes([k]), block[k])
+    assert cache.nbytes == block.nbytes  # once, whole
+    cache.put(b"other", np.zeros(100))
+    assert cache.nbytes == block.nbytes + 800
+    for k in range(4):  # evicting the views one by one frees the block with the last
+        cache.put(bytes([10 + k]), np.zeros(600))
+    assert cache.nbytes <= 10 * 800 and cache.get(bytes([0])) is None
+
+
+@pytest.mark.parametrize("cache_mb", [0.5, 4.0])
+def test_cache_mb_bounds_the_stores_of_every_process(signals, cache_mb: float) -> None:
+    x, y = signals
+    cache = int(cache_mb * 2**20)
+    row = 8 * N
+    with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1, cache_bytes=cache,
+                   max_batch_rows=24 * 3) as ev:
+        for seed in range(6):
+            pop = _population(100 + seed)
+            ev.evaluate(pop.inputs, pop.codes, pop.ps)
+        own, pool = ev._local.own, ev._local.prefix_store()
+        # The row store holds at least two batches (72 rows here), else cache_mb.
+        assert own.nbytes <= max(cache, (2 * 24 * 3 + 16) * row)
+        assert pool.nbytes <= max(cache // 2, 8 * row)
+        assert len(own) <= own.slots and len(pool) <= pool.slots
+        if cache_mb == 4.0:  # room for all: nothing was simulated twice
+            assert ev.stats.rows_simulated <= 6 * 24 * 3

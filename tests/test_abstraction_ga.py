@@ -8,7 +8,7 @@ import pytest
 from edm_sym.core.elements import BY_NAME, REGISTRY, default_ranges
 from edm_sym.core.matrix import make_matrix
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
-from edm_sym.engines.abstraction.polish import gain_fit, scale_position
+from edm_sym.engines.abstraction.polish import gain_fit, row_scales, scale_places, scale_position
 from edm_sym.engines.abstraction.schedule import GaSettings
 
 P, M, N_EL = 40, 3, 4
@@ -147,6 +147,27 @@ def test_scale_position_finds_a_gain_with_a_linear_tail(names: list, want: tuple
         assert scale_position(codes, gain_allowed=False) in (None, (0, False))
 
 
+def _gain_fit(pop, rows, y, fit, n, ranges):  # noqa: ANN001, ANN202
+    # What a worker computes (row_scales) and the main process does with it (gain_fit).
+    places = scale_places(pop.codes, gain_allowed=True)
+    a = np.array(rows)
+    scales = [row_scales(a @ a.T, a @ y, places[0][0] >= 0, float(fit[0]), n)]
+    return gain_fit(pop, scales, places, ranges)
+
+
+def test_scale_places_is_scale_position_of_every_row() -> None:
+    rng = np.random.default_rng(3)
+    codes = rng.choice(sorted(REGISTRY), size=(40, 5, 4))
+    codes[rng.random(codes.shape) < 0.4] = BY_NAME["through"].code
+    for allowed in (True, False):
+        pos, through = scale_places(codes, gain_allowed=allowed)
+        for k in range(40):
+            for j in range(5):
+                want = scale_position(codes[k, j], gain_allowed=allowed)
+                got = None if pos[k, j] < 0 else (int(pos[k, j]), bool(through[k, j]))
+                assert got == want, (codes[k, j], allowed)
+
+
 def test_gain_fit_gives_the_least_squares_scale() -> None:
     ts, n = 1e-3, 3000
     omega = 30 * np.sin(np.linspace(0, 12, n))
@@ -161,11 +182,8 @@ def test_gain_fit_gives_the_least_squares_scale() -> None:
     resid = y - rows[0] - rows[1]
     fit = np.array([np.sqrt(np.mean(resid**2))])
 
-    def gram(k, r):  # noqa: ANN001, ANN202
-        a = np.array(r)
-        return a @ a.T, a @ y
-
-    idx, cand = gain_fit(pop, [(keys, rows)], fit, n, gram, ranges, gain_allowed=True)
+    del keys
+    idx, cand = _gain_fit(pop, rows, y, fit, n, ranges)
     assert idx.tolist() == [0]
     assert g.decode(cand.ps[0, 0, 1]) == pytest.approx(0.9, rel=1e-9)
     assert pg.decode(cand.ps[0, 1, 0]) == pytest.approx(0.02, rel=1e-9)
@@ -179,17 +197,12 @@ def test_gain_fit_turns_a_through_into_a_gain_and_skips_optimal_rows() -> None:
     m = make_matrix(["x"], [("x", [("sign", 0), ("through", 0)])])
     pop = Population.from_matrix(m)
 
-    def gram_for(y):  # noqa: ANN001, ANN202
-        return lambda k, r: (np.array(r) @ np.array(r).T, np.array(r) @ y)
-
     y = 2.5 * np.sign(x)
     fit = np.array([np.sqrt(np.mean((y - np.sign(x)) ** 2))])
-    idx, cand = gain_fit(pop, [([b"s"], [np.sign(x)])], fit, n, gram_for(y), ranges,
-                         gain_allowed=True)
+    idx, cand = _gain_fit(pop, [np.sign(x)], y, fit, n, ranges)
     assert REGISTRY[int(cand.codes[0, 0, 1])].name == "gain"
     assert ranges["gain"].decode(cand.ps[0, 0, 1]) == pytest.approx(2.5)
     y = np.sign(x) + 1e-3 * np.cos(40 * x)  # already the best scale: no candidate
     fit = np.array([np.sqrt(np.mean((y - np.sign(x)) ** 2))])
-    idx, cand = gain_fit(pop, [([b"s"], [np.sign(x)])], fit, n, gram_for(y), ranges,
-                         gain_allowed=True)
+    idx, cand = _gain_fit(pop, [np.sign(x)], y, fit, n, ranges)
     assert len(idx) == 0 and len(cand) == 0

@@ -48,7 +48,7 @@ def run_cli(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
-        ``workers``, ``validation_share``, ``validate``, ``select``,
+        ``workers``, ``scheduler``, ``validation_share``, ``validate``, ``select``,
         ``prune_tolerance``, ``no_prune``, ``time_column``, ``role`` (a list
         of ``COL=ROLE``), ``axis``.
 
@@ -102,7 +102,12 @@ def run_cli(args: argparse.Namespace) -> int:
                               seed=args.seed, time_limit=args.time_limit,
                               callback=reporter.abstraction,
                               checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                              validate=validate, select=getattr(args, "select", None), axis=axis)
+                              validate=validate, select=getattr(args, "select", None), axis=axis,
+                              scheduler=getattr(args, "scheduler", None))
+    except ConfigError as exc:
+        if exc.where == "scheduler":
+            raise ConfigError("--scheduler", exc.problem) from None
+        raise
     finally:
         signal.signal(signal.SIGTERM, old)
     save_result(result, output)

@@ -192,6 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a dask scheduler (tcp://host:8786): evaluate on its workers instead "
+                        "(needs edm_sym[dask]; docs/abstraction.md)")
     p.add_argument("--validation-share", type=float, metavar="SHARE",
                    help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
     p.add_argument("--validate", metavar="FILE",

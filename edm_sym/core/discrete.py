@@ -106,7 +106,13 @@ def _substitute(coeffs: tuple[float, ...], order: int, num_w: list[float],
         d = deg - i
         if c == 0.0:
             continue
-        term = _poly_mul(_poly_pow(num_w, d), _poly_pow(den_w, order - d))
-        for k, t in enumerate(term):
+        for k, t in enumerate(_term(tuple(num_w), tuple(den_w), order, d)):
             out[k] += c * t
     return out
+
+
+@lru_cache(maxsize=256)
+def _term(num_w: tuple[float, ...], den_w: tuple[float, ...], order: int, d: int
+          ) -> tuple[float, ...]:
+    # num_w^d den_w^(order - d): the same for every parameter value (the GA's misses).
+    return tuple(_poly_mul(_poly_pow(list(num_w), d), _poly_pow(list(den_w), order - d)))

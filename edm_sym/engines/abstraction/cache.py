@@ -1,9 +1,11 @@
-"""Row-output caches: an LRU of arrays, and an LRU of slots in shared memory.
+"""Row-output caches: an LRU of arrays, and an LRU of slots in one block of memory.
 
-:class:`RowCache` holds arrays and is bounded by their bytes. :class:`SlotStore`
-holds rows in one anonymous shared memory map of fixed-size slots; worker
-processes forked after it was made write simulated rows straight into their
-slots, so no row output is ever pickled between processes.
+:class:`RowCache` holds arrays and is bounded by the memory they keep alive
+(a view counts with the whole array it belongs to, once). :class:`SlotStore`
+holds rows in one anonymous memory map of fixed-size slots, shared with
+worker processes forked after it was made: they write simulated rows straight
+into their slots and read any row from it, so no row output is ever pickled
+between processes. A worker without a shared store keeps a private one.
 """
 
 from __future__ import annotations
@@ -16,20 +18,48 @@ from collections.abc import Collection
 import numpy as np
 
 
+def _owner(arr: np.ndarray) -> np.ndarray:
+    """The array whose memory ``arr`` uses (itself, or the base of a view)."""
+    while isinstance(arr.base, np.ndarray):
+        arr = arr.base
+    return arr
+
+
 class RowCache:
     """Least-recently-used row outputs, bounded by memory (safe to share between threads).
+
+    Views are welcome: ``nbytes`` counts each underlying array once, whole,
+    as long as any of its views is cached, so it is the memory the cache
+    really keeps alive.
 
     Parameters
     ----------
     max_bytes : int
-        Upper bound on the bytes of cached arrays (at least one row is kept).
+        Upper bound on ``nbytes`` (at least one entry is kept).
     """
 
     def __init__(self, max_bytes: int):
         self.max_bytes = int(max_bytes)
         self.nbytes = 0
         self._data: OrderedDict[bytes, np.ndarray] = OrderedDict()
+        self._refs: dict[int, int] = {}
         self._lock = threading.Lock()
+
+    def _hold(self, arr: np.ndarray) -> None:
+        base = _owner(arr)
+        count = self._refs.get(id(base), 0)
+        if count == 0:
+            self.nbytes += base.nbytes
+        self._refs[id(base)] = count + 1
+
+    def _drop(self, arr: np.ndarray) -> None:
+        base = _owner(arr)
+        count = self._refs[id(base)] - 1
+        if count == 0:
+            del self._refs[id(base)]
+            self.nbytes -= base.nbytes
+        else:
+            self._refs[id(base)] = count
 
     def __len__(self) -> int:
         return len(self._data)
@@ -49,15 +79,16 @@ class RowCache:
                 self._data.move_to_end(key)
                 return
             self._data[key] = arr
-            self.nbytes += arr.nbytes
+            self._hold(arr)
             while self.nbytes > self.max_bytes and len(self._data) > 1:
                 _, old = self._data.popitem(last=False)
-                self.nbytes -= old.nbytes
+                self._drop(old)
 
     def clear(self) -> None:
         """Drop every row."""
         with self._lock:
             self._data.clear()
+            self._refs.clear()
             self.nbytes = 0
 
 
@@ -77,8 +108,16 @@ class SlotStore:
 
     def __init__(self, slots: int, n: int):
         self.slots = int(slots)
-        # Anonymous and shared (mmap's default for fileno -1); pages are made on first use.
-        self._map = mmap.mmap(-1, max(1, self.slots * n * 8))
+        # Anonymous and shared (mmap's default for fileno -1). The pages are made now
+        # (MAP_POPULATE, where there is one): a page fault per 4 kB on first use
+        # would cost more than simulating the row that fills it.
+        size = max(1, self.slots * n * 8)
+        populate = getattr(mmap, "MAP_POPULATE", 0)
+        if populate:
+            flags = mmap.MAP_SHARED | getattr(mmap, "MAP_ANONYMOUS", 0x20) | populate
+            self._map = mmap.mmap(-1, size, flags=flags)
+        else:  # pragma: no cover (not Linux)
+            self._map = mmap.mmap(-1, size)
         self.rows = np.frombuffer(self._map, dtype=np.float64,
                                   count=self.slots * n).reshape(self.slots, n)
         self._lru: OrderedDict[bytes, int] = OrderedDict()
@@ -89,11 +128,15 @@ class SlotStore:
 
     def get(self, key: bytes) -> np.ndarray | None:
         """A view of the row of ``key`` (refreshing it), or None."""
+        slot = self.lookup(key)
+        return None if slot is None else self.rows[slot]
+
+    def lookup(self, key: bytes) -> int | None:
+        """The slot of the row of ``key`` (refreshing it), or None."""
         slot = self._lru.get(key)
-        if slot is None:
-            return None
-        self._lru.move_to_end(key)
-        return self.rows[slot]
+        if slot is not None:
+            self._lru.move_to_end(key)
+        return slot
 
     def allocate(self, count: int, keep: Collection[bytes]) -> list[int]:
         """``count`` free slots, evicting least recently used rows not in ``keep``.
@@ -121,6 +164,16 @@ class SlotStore:
         """Record that ``slot`` holds the row of ``key``; return its view."""
         self._lru[key] = slot
         return self.rows[slot]
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the store (all slots, used or not)."""
+        return self.rows.nbytes
+
+    def clear(self) -> None:
+        """Forget every row (the memory stays)."""
+        self._lru.clear()
+        self._free = list(range(self.slots - 1, -1, -1))
 
     def release(self, slots: list[int]) -> None:
         """Give back allocated slots that were not committed."""

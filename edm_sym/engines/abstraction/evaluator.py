@@ -1,32 +1,41 @@
-"""Batched fitness evaluation: cached rows, any concurrent.futures executor.
+"""Batched fitness evaluation: chunks of individuals to workers, rows cached where they run.
 
 The fitness of an individual is eq. 8 on ``target - sum(rows)``, and a row's
 output depends only on its genes (input code, element codes, parameters). So
-every row output is cached under a canonical key of its genes, and a
-generation only simulates the rows no earlier generation has left in the
-cache. The rows of a batch are sorted by their genes (so a chunk holds rows
-with common prefixes) and cut into chunks for the workers.
+every row is kept under a canonical key of its genes, a generation only
+simulates the rows no earlier generation has left in a store, and an
+individual seen before (an elite) is not evaluated again until the weighting
+changes.
 
-Where the rows are simulated:
+A batch of individuals is cut into one chunk per lane
+(:mod:`edm_sym.engines.abstraction.lanes`); a worker simulates the rows it
+lacks and sends back a few numbers per individual (eq. 8 and, for the gain
+fit, the least-squares scales of its rows), never a row. The run's data
+goes to each worker once, the weighting once per step.
 
-* ``workers=1``: in this process.
-* default (``executor=None``): a :class:`~concurrent.futures.ProcessPoolExecutor`
-  over every core, forked after a shared memory map of row slots was made.
-  Workers write rows into their slots; nothing but gene tables and slot
-  numbers is pickled, because sending a row back would cost more than
-  simulating it.
-* any other :class:`~concurrent.futures.Executor` (``executor=``, e.g. a
-  ``dask.distributed`` client's ``get_executor()``): the context is sent with
-  each chunk (unpickled once per worker) and the row outputs come back.
+Where the rows are simulated and kept:
+
+* ``workers=1``: in this process, in its own row store.
+* default (``executor=None``, ``workers=W > 1``): this process and W - 1
+  single-process pools forked after one shared memory map of row slots was
+  made. This process manages the slots; a worker writes the rows it
+  simulates into theirs and reads any row from the map, so a row simulated
+  once serves every worker.
+* ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker;
+  each keeps its own row store, and individuals go to the worker that holds
+  most of their rows.
+* ``executor=`` (any :class:`~concurrent.futures.Executor`): ``workers``
+  unpinned lanes with the same protocol.
 
 Results are gathered in submission order and are pure functions of the
-genes, so a run's outcome never depends on the number of workers or on
-which task finishes first.
+genes, so a run's outcome never depends on the number of workers or on which
+task finishes first.
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 import multiprocessing
 import os
 import pickle
@@ -35,22 +44,34 @@ import warnings
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from edm_sym.core.elements import ParamRange
+from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import RowCache, SlotStore
+from edm_sym.engines.abstraction.lanes import (
+    DaskLane,
+    ExecutorLane,
+    LocalLane,
+    PoolLane,
+    dask_lanes,
+)
 from edm_sym.engines.abstraction.rowsim import (
+    NEED_CONTEXT,
+    NEED_WEIGHTS,
+    Chunk,
+    ChunkResult,
     SimContext,
     default_workers,
-    fill_slots,
+    evaluate_chunk,
     forget,
     ping,
-    prefix_key,
     row_table,
-    simulate_chunk,
-    simulate_table,
+    run_chunk,
+    warm_up,
     worker_for,
     worker_init,
 )
@@ -60,7 +81,14 @@ __all__ = ["EvalStats", "Evaluator", "RowCache", "row_table"]
 
 @dataclass
 class EvalStats:
-    """Counters of an evaluator (for progress lines and benchmarks)."""
+    """Counters of an evaluator (for progress lines and benchmarks).
+
+    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
+    (simulation and scoring, in whichever process), ``sim_seconds`` and
+    ``task_seconds`` the time the workers spent simulating rows and running
+    tasks, summed over workers; ``peak_rss`` the peak resident memory of
+    each process that ran a task, by process id.
+    """
 
     individuals: int = 0
     row_requests: int = 0
@@ -68,10 +96,14 @@ class EvalStats:
     rows_simulated: int = 0
     element_samples: int = 0
     sim_seconds: float = 0.0
+    task_seconds: float = 0.0
+    eval_seconds: float = 0.0
+    tasks: int = 0
+    peak_rss: dict = field(default_factory=dict)
 
     @property
     def cache_hits(self) -> int:
-        """Row requests served without simulating (cache, memo or a twin in the batch)."""
+        """Row requests served without simulating (store, memo or a twin in the batch)."""
         return self.row_requests - self.rows_missed
 
     @property
@@ -94,92 +126,111 @@ class Evaluator:
     ranges : mapping of element name to ParamRange
         Decode ``p`` to ``a``.
     executor : concurrent.futures.Executor, optional
-        Where to simulate rows (it is not shut down here). None: a process
-        pool of ``workers`` processes (``workers=1``: this process).
+        Where to evaluate chunks (it is not shut down here): ``workers``
+        unpinned lanes.
     workers : int, optional
-        Processes of the default pool (default: every usable core). A batch
-        is cut into twice this many chunks (also for a caller's executor).
+        Lanes (default: every usable core; ``1``: this process only). Without
+        an executor or a client: this process plus ``workers - 1`` processes.
     cache_bytes : int
-        Memory bound of the row cache; each process's prefix cache gets half.
+        Memory bound of a process's row store (at least room for two batches);
+        each process's prefix cache gets half as much.
     max_batch_rows : int
         The most distinct rows one batch can hold (sizes the shared store).
+    client : distributed.Client, optional
+        A dask client: one lane per worker of its cluster (``workers`` is
+        then ignored).
     """
 
-    #: Batches with fewer new rows than this are simulated in this process.
-    MIN_PARALLEL_ROWS = 8
+    #: Batches with fewer individuals to evaluate than this run in this process.
+    MIN_PARALLEL = 4
 
     def __init__(self, inputs: np.ndarray, target: np.ndarray, ts: float,
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
                  workers: int | None = None, cache_bytes: int = 256 * 2**20,
-                 max_batch_rows: int = 1024):
+                 max_batch_rows: int = 1024, client: Any = None):
         self.inputs = np.ascontiguousarray(inputs, dtype=float)
         self.target = np.ascontiguousarray(target, dtype=float)
         n = self.target.shape[0]
-        self.ctx = SimContext(self.inputs, float(ts), dict(ranges), max(1, cache_bytes // 2))
+        self.n_samples = n
+        self.ctx = SimContext(self.inputs, float(ts), dict(ranges), max(1, cache_bytes // 2),
+                              self.target, int(cache_bytes))
         self._blob = pickle.dumps(self.ctx, protocol=pickle.HIGHEST_PROTOCOL)
-        self._token = hashlib.sha256(self._blob).hexdigest() + f"-{id(self):x}"
+        self._token = hashlib.sha256(self._blob).hexdigest() + f"-{os.getpid()}-{id(self):x}"
         self.executor = executor
-        self._own_pool = executor is None
+        self.client = client
         self.workers = int(workers) if workers else default_workers()
-        self.shared = (self._own_pool and self.workers > 1
+        self.shared = (executor is None and client is None and self.workers > 1
                        and "fork" in multiprocessing.get_all_start_methods())
+        self.store: SlotStore | None = None
         if self.shared:
             slots = max(cache_bytes // (8 * n), 2 * max_batch_rows + 16)
-            self.cache: RowCache | SlotStore = SlotStore(slots, n)
-            store = self.cache.rows
-        else:
-            self.cache = RowCache(cache_bytes)
-            store = None
+            self.store = SlotStore(slots, n)
         # Made before any fork, so forked workers inherit it (and the store).
-        self._local = worker_for(self._token, ctx=self.ctx, store=store)
+        self._local = worker_for(self._token, ctx=self.ctx,
+                                 rows=self.store.rows if self.shared else None)
+        self.lanes: list = [LocalLane()]
+        self._pools: list[ProcessPoolExecutor] = []
         self._started = False
-        self._pinned: list[ProcessPoolExecutor] = []
-        self._owner: OrderedDict[bytes, int] = OrderedDict()
+        self._sent_ctx: list[bool] = []
+        self._sent_w: list[str | None] = []
+        self._mirror: list[OrderedDict] = []
         self.stats = EvalStats()
         self._weights: np.ndarray | float = 1.0
-        self._memo: dict[bytes, float] = {}
+        self._wtoken = ""
+        self._wblob = b""
+        self._memo: dict[bytes, tuple[float, Any, bool]] = {}
         self._dots: dict[bytes, float] = {}
+        self.set_weights(1.0)
 
     # -- life cycle -------------------------------------------------------------
     def start(self) -> None:
-        """Start the default process pool now, before any other thread exists."""
-        if not self._own_pool or self.workers <= 1 or self._started:
+        """Make the lanes: fork the pool now, before any other thread exists."""
+        if self._started:
             return
         self._started = True
-        with warnings.catch_warnings():
-            # Forking is safe here: the pool starts before the run makes threads.
-            warnings.simplefilter("ignore", DeprecationWarning)
-            if self.shared:
-                # One single-process pool per worker, so rows can be routed to the
-                # worker whose prefix cache holds their first elements.
-                ctx = multiprocessing.get_context("fork")
-                self._pinned = [ProcessPoolExecutor(1, mp_context=ctx, initializer=worker_init,
-                                                    initargs=(os.getpid(),))
-                                for _ in range(self.workers)]
-                pools = self._pinned
-            else:
-                self.executor = ProcessPoolExecutor(self.workers, initializer=worker_init,
-                                                    initargs=(os.getpid(),))
-                pools = [self.executor] * self.workers
-            for f in [pool.submit(ping) for pool in pools]:
-                f.result()
+        warm_up()  # the row kernel, loaded once before the fork
+        if self.client is not None:
+            self.lanes = dask_lanes(self.client)
+        elif self.executor is not None:
+            self.lanes = [ExecutorLane(self.executor) for _ in range(self.workers)]
+        elif self.workers > 1:
+            with warnings.catch_warnings():
+                # Forking is safe here: the pool starts before the run makes threads.
+                warnings.simplefilter("ignore", DeprecationWarning)
+                ctx = multiprocessing.get_context("fork" if self.shared else None)
+                self._pools = [ProcessPoolExecutor(1, mp_context=ctx, initializer=worker_init,
+                                                   initargs=(os.getpid(),))
+                               for _ in range(self.workers - 1)]
+                for f in [pool.submit(ping) for pool in self._pools]:
+                    f.result()
+            # This process is a lane too: it works while the others do.
+            self.lanes = [LocalLane(), *(PoolLane(p) for p in self._pools)]
+        count = len(self.lanes)
+        self._sent_ctx = [lane.local or self.shared for lane in self.lanes]
+        self._sent_w = [None] * count
+        self._mirror = [OrderedDict() for _ in range(count)]
 
     def close(self) -> None:
-        """Shut down the process pool this evaluator started (not a caller's executor)."""
+        """Free the run's state in every worker; shut down the processes this evaluator started."""
+        for lane in self.lanes:
+            if isinstance(lane, DaskLane):
+                # A cluster's workers outlive the run: drop its data and stores there.
+                try:
+                    lane.submit(forget, self._token).result()
+                except Exception:  # noqa: BLE001 (a worker gone is as good as one cleared)
+                    pass
         self._shutdown(wait=True)
         forget(self._token)
 
     def abort(self) -> None:
-        """Shut down an own pool without waiting (after an interrupt)."""
+        """Shut down own processes without waiting (after an interrupt)."""
         self._shutdown(wait=False)
 
     def _shutdown(self, wait: bool) -> None:
-        if self._own_pool and self.executor is not None:
-            self.executor.shutdown(wait=wait, cancel_futures=True)
-            self.executor = None
-        for pool in self._pinned:
+        for pool in self._pools:
             pool.shutdown(wait=wait, cancel_futures=True)
-        self._pinned = []
+        self._pools = []
+        self.lanes = [LocalLane()]
 
     def __enter__(self) -> Evaluator:
         return self
@@ -196,12 +247,16 @@ class Evaluator:
     def set_weights(self, weights: np.ndarray | float) -> None:
         """Set Lambda(q) for the following evaluations."""
         self._weights = weights if np.isscalar(weights) else np.asarray(weights, dtype=float)
+        arr = np.ascontiguousarray(np.atleast_1d(np.asarray(weights, dtype=float)))
+        self._wtoken = hashlib.sha256(arr.tobytes()).hexdigest()[:24]
+        self._wblob = pickle.dumps(arr, protocol=pickle.HIGHEST_PROTOCOL)
+        self._local.set_weights(self._wtoken, arr)
         self._memo.clear()
         self._dots.clear()
 
     def gram(self, keys: Sequence[bytes], rows: Sequence[np.ndarray]
              ) -> tuple[np.ndarray, np.ndarray]:
-        """Weighted inner products of rows, remembered by their keys.
+        """Weighted inner products of rows (as the workers compute them for the gain fit).
 
         Parameters
         ----------
@@ -215,27 +270,9 @@ class Evaluator:
         gy : numpy.ndarray
             ``sum(Lambda * r_i * target)``, shape (m,).
         """
-        m = len(keys)
-        gram, gy = np.empty((m, m)), np.empty(m)
-        if len(self._dots) > 500_000:
-            self._dots.clear()
-        for i in range(m):
-            gy[i] = self._dot(keys[i], rows[i], b"target", self.target)
-            for j in range(i + 1):
-                gram[i, j] = gram[j, i] = self._dot(keys[i], rows[i], keys[j], rows[j])
-        return gram, gy
+        from edm_sym.engines.abstraction.rowsim import _gram
 
-    def _dot(self, ka: bytes, a: np.ndarray, kb: bytes, b: np.ndarray) -> float:
-        key = ka + b"|" + kb if ka <= kb else kb + b"|" + ka
-        v = self._dots.get(key)
-        if v is None:
-            w = self._weights
-            # einsum's own loops, not BLAS: the same bits whatever the thread settings.
-            with np.errstate(over="ignore", invalid="ignore"):
-                v = float(np.einsum("i,i", a, b) * w if np.isscalar(w)
-                          else np.einsum("i,i,i", w, a, b))
-            self._dots[key] = v
-        return v
+        return _gram(self._local, [np.asarray(r) for r in rows], list(keys), self.target)
 
     # -- evaluation -----------------------------------------------------------------
     def individual_keys(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray
@@ -246,7 +283,8 @@ class Evaluator:
         return [table[k * m:(k + 1) * m].tobytes() for k in range(p)]
 
     def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
-                 rows_out: list | None = None) -> np.ndarray:
+                 rows_out: list | None = None, free: np.ndarray | None = None,
+                 scales_out: list | None = None) -> np.ndarray:
         """Fitness of each individual.
 
         Parameters
@@ -258,147 +296,259 @@ class Evaluator:
         ps : numpy.ndarray
             Shape (P, m, n) normalised parameters.
         rows_out : list, optional
-            When given, filled with one entry per individual: its m row keys
-            and m row outputs (valid until the next call).
+            When given, the batch runs in this process and the list is filled
+            with one entry per individual: its m row keys and m row outputs
+            (valid until the next call).
+        free : numpy.ndarray, optional
+            Shape (P, m) bool: the rows whose scale the gain fit may change
+            (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
+        scales_out : list, optional
+            With ``free``: filled with one entry per individual, its
+            :func:`~edm_sym.engines.abstraction.polish.row_scales` (or None).
 
         Returns
         -------
         numpy.ndarray
             Shape (P,) eq. 8 values (inf for non-finite outputs).
         """
+        t0 = time.perf_counter()
+        if not self._started:
+            self.start()
         p, m, n = codes.shape
         table = row_table(inputs.reshape(-1), codes.reshape(-1, n), ps.reshape(-1, n))
         keys = [line.tobytes() for line in table]
         self.stats.individuals += p
-        self.stats.row_requests += len(keys)
+        self.stats.row_requests += p * m
+        want_scales = scales_out is not None and free is not None
         out = np.empty(p)
-        todo, want = [], []
+        scales: list = [None] * p
+        ikeys = [b"".join(keys[k * m:(k + 1) * m]) for k in range(p)]
+        need = []
         for k in range(p):
-            ikey = b"".join(keys[k * m:(k + 1) * m])
-            f = self._memo.get(ikey)
-            if f is None:
-                todo.append((k, ikey))
+            hit = self._memo.get(ikeys[k])
+            if hit is not None and (not want_scales or hit[2]):
+                out[k], scales[k] = hit[0], hit[1]
             else:
-                out[k] = f
-            if f is None or rows_out is not None:
-                want.append(k)
-        rows: dict[bytes, np.ndarray] = {}
-        missing: list[int] = []
-        for k in want:
-            for idx in range(k * m, (k + 1) * m):
-                key = keys[idx]
-                if key in rows:
-                    continue
-                arr = self.cache.get(key)
-                if arr is None:
-                    rows[key] = None  # placeholder: simulated below
-                    missing.append(idx)
-                else:
-                    rows[key] = arr
-        self.stats.rows_missed += len(missing)
-        if missing:
-            sub = table[missing]
-            sub = sub[np.lexsort(sub.T[::-1])]
-            for line, row in zip(sub, self._simulate(sub, keep=rows.keys()), strict=True):
-                rows[line.tobytes()] = row
-        if rows_out is not None:
-            rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[keys[k * m + j]] for j in range(m)])
-                           for k in range(p)]
-        for k, ikey in todo:
-            f = self._fitness([rows[keys[k * m + j]] for j in range(m)])
-            out[k] = f
-            if len(self._memo) > 200_000:
+                need.append(k)
+        local = rows_out is not None
+        send = list(range(p)) if local else need
+        if send:
+            index: dict[bytes, int] = {}
+            first: list[int] = []
+            members = np.empty((len(send), m), dtype=np.int64)
+            for a, k in enumerate(send):
+                for j in range(m):
+                    key = keys[k * m + j]
+                    at = index.get(key)
+                    if at is None:
+                        at = index[key] = len(first)
+                        first.append(k * m + j)
+                    members[a, j] = at
+            needed = set(need)
+            score = np.array([k in needed for k in send], dtype=bool)
+            utab = table[first]
+            ukeys = [keys[i] for i in first]
+            sub_free = free[send] if want_scales else None
+            fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
+            if len(self._memo) > 50_000:
                 self._memo.clear()
-            self._memo[ikey] = f
+            for a, k in enumerate(send):
+                if score[a]:
+                    out[k] = fit[a]
+                    scales[k] = sc[a] if want_scales else None
+                    self._memo[ikeys[k]] = (out[k], scales[k], want_scales)
+            if local:
+                rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[members[a, j]] for j in range(m)])
+                               for a, k in enumerate(send)]
+        if scales_out is not None:
+            scales_out[:] = scales
+        self.stats.eval_seconds += time.perf_counter() - t0
         return out
 
-    def _fitness(self, rows: Sequence[np.ndarray]) -> float:
-        # Eq. 8 in one pass over the residual (einsum's loops: no temporaries, no
-        # BLAS); equal to edm_sym.engines.simulate.fitness to rounding.
-        res = self.target - rows[0]
-        for r in rows[1:]:
-            res -= r
-        w = self._weights
-        with np.errstate(over="ignore", invalid="ignore"):
-            sq = (np.einsum("i,i", res, res) * w if np.isscalar(w)
-                  else np.einsum("i,i,i", w, res, res))
-            f = float(np.sqrt(sq / res.shape[0]))
-        return f if np.isfinite(f) else float("inf")
-
-    def simulate_rows(self, table: np.ndarray) -> list[np.ndarray]:
-        """Simulate the rows of a canonical gene table (bypassing the row cache).
-
-        Returns copies, in table order.
-        """
-        if isinstance(self.cache, SlotStore):
-            slots = self.cache.allocate(len(table), ())
-            try:
-                self._fill(table, slots)
-                return [self.cache.rows[s].copy() for s in slots]
-            finally:
-                self.cache.release(slots)
-        return [np.array(r) for r in self._simulate(table, keep=())]
-
-    def _simulate(self, table: np.ndarray, keep: object) -> list[np.ndarray]:
-        """Simulate rows and enter them in the cache; their outputs in table order."""
-        t0 = time.perf_counter()
-        rows = table.shape[0]
-        if isinstance(self.cache, SlotStore):
-            slots = self.cache.allocate(rows, keep)
-            self._fill(table, slots)
-            out = [self.cache.commit(line.tobytes(), s) for line, s in zip(table, slots,
-                                                                           strict=True)]
+    # -- dispatch -------------------------------------------------------------------
+    def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
+                  score: np.ndarray, free: np.ndarray | None, local: bool
+                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
+        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local)."""
+        count = len(members)
+        lanes = [0] if (local or len(self.lanes) == 1 or int(score.sum()) < self.MIN_PARALLEL
+                        ) else list(range(len(self.lanes)))
+        if lanes == [0] and not self.lanes[0].local:
+            lanes = []  # no local lane among a client's or an executor's: run here
+        slots = missing = None
+        if self.shared:
+            slots = np.empty(len(keys), dtype=np.int64)
+            missing = np.zeros(len(keys), dtype=bool)
+            miss = []
+            for r, key in enumerate(keys):
+                s = self.store.lookup(key)
+                if s is None:
+                    miss.append(r)
+                else:
+                    slots[r] = s
+            if miss:
+                fresh = self.store.allocate(len(miss), set(keys))
+                slots[miss] = fresh
+                missing[miss] = True
+        parts = self._partition(keys, members, missing, lanes)
+        fitness = np.full(count, np.nan)
+        scales: list = [None] * count
+        results: list[tuple[list[int], ChunkResult]] = []
+        pending = []
+        for lane, idx in parts:
+            if not idx:
+                continue
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, idx)
+            pending.append((lane, idx, lines, chunk))
+        if not lanes:
+            for _, idx, lines, chunk in pending:
+                results.append((idx, lines, run_chunk(self._local, chunk)))
         else:
-            if rows < self.MIN_PARALLEL_ROWS or self.executor is None:
-                out = simulate_table(self._local, table)
-            else:
-                futures = [self.executor.submit(simulate_chunk, self._token, self._blob, part)
-                           for part in self._chunks(table)]
-                # In submission order, never in completion order.
-                out = [row for f in futures for row in f.result()]
-            for line, row in zip(table, out, strict=True):
-                self.cache.put(line.tobytes(), row)
-        n = (table.shape[1] - 1) // 2
-        self.stats.rows_simulated += rows
-        self.stats.element_samples += rows * n * self.inputs.shape[1]
-        self.stats.sim_seconds += time.perf_counter() - t0
-        return out
+            results = self._gather(pending)
+        rows = None
+        for idx, _lines, res in results:
+            for a, i in enumerate(idx):
+                fitness[i] = res.fitness[a]
+                if res.scales is not None:
+                    scales[i] = res.scales[a]
+            self._account(res, table.shape[1])
+        if self.shared and missing is not None:
+            for r in np.flatnonzero(missing):
+                self.store.commit(keys[r], int(slots[r]))
+        if local:
+            _, lines, res = results[0]
+            store = self.store.rows if self.shared else self._local.own.rows
+            rows = [None] * len(keys)
+            for line, s in zip(lines, res.slots, strict=True):
+                rows[line] = store[s]
+        return fitness, scales, rows
 
-    def _fill(self, table: np.ndarray, slots: list[int]) -> None:
-        if len(table) < self.MIN_PARALLEL_ROWS or not self._pinned:
-            fill_slots(self._token, table, slots)
-            return
-        parts = self._route(table)
-        futures = [self._pinned[w].submit(fill_slots, self._token, table[idx],
-                                          [slots[i] for i in idx])
-                   for w, idx in enumerate(parts) if idx]
-        for f in futures:
-            f.result()
+    def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
+               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None, idx: list[int]
+               ) -> tuple[Chunk, list[int]]:
+        """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
+        sub = members[idx]
+        lines, inverse = np.unique(sub.reshape(-1), return_inverse=True)
+        chunk = Chunk(table[lines], inverse.reshape(sub.shape).astype(np.int64), score[idx],
+                      None if free is None else free[idx],
+                      None if slots is None else slots[lines],
+                      None if missing is None else missing[lines])
+        return chunk, lines.tolist()
 
-    def _route(self, table: np.ndarray) -> list[list[int]]:
-        """Rows per worker: to the worker that computed their longest known prefix.
+    def _partition(self, keys: list[bytes], members: np.ndarray, missing: np.ndarray | None,
+                   lanes: list[int]) -> list[tuple[int, list[int]]]:
+        """Individuals per lane. Changes speed only, never a result.
 
-        A row goes where its prefix most likely sits in a prefix cache, unless
-        that worker already has its share of the batch (then to the least
-        loaded one). Routing changes only speed, never a result.
+        With a shared store, individuals that need the same new row go to one
+        lane (which simulates it), and lanes get about equal work. Otherwise
+        each individual goes to the lane whose store most likely holds most
+        of its rows, unless that lane already has a quarter more than its
+        share.
         """
-        n = (table.shape[1] - 1) // 2
-        cap = -(-len(table) * 5 // (4 * self.workers))  # a quarter over an even share
-        parts: list[list[int]] = [[] for _ in range(self.workers)]
-        for r, line in enumerate(table):
-            keys = [prefix_key(line, n, k) for k in range(1, n)]
-            owner = next((self._owner[k] for k in reversed(keys) if k in self._owner), None)
-            if owner is None or len(parts[owner]) >= cap:
-                owner = min(range(self.workers), key=lambda w: len(parts[w]))
-            parts[owner].append(r)
-            for k in keys:
-                self._owner[k] = owner
-                self._owner.move_to_end(k)
-        while len(self._owner) > 200_000:
-            self._owner.popitem(last=False)
-        return parts
+        count = len(members)
+        if len(lanes) <= 1:
+            return [(lanes[0] if lanes else 0, list(range(count)))]
+        if missing is not None:
+            parent = list(range(count))
 
-    def _chunks(self, table: np.ndarray) -> list[np.ndarray]:
-        count = min(len(table), 2 * self.workers)
-        bounds = np.linspace(0, len(table), count + 1).astype(int)
-        return [table[bounds[c]:bounds[c + 1]] for c in range(count)]
+            def find(i: int) -> int:
+                while parent[i] != i:
+                    parent[i] = parent[parent[i]]
+                    i = parent[i]
+                return i
+
+            owner: dict[int, int] = {}
+            for i in range(count):
+                for r in members[i]:
+                    if missing[r]:
+                        j = owner.setdefault(int(r), i)
+                        parent[find(i)] = find(j)
+            groups: dict[int, list[int]] = {}
+            for i in range(count):
+                groups.setdefault(find(i), []).append(i)
+            new = {}
+            for g, idx in groups.items():
+                new[g] = len({int(r) for i in idx for r in members[i] if missing[r]})
+            load = [0.0] * len(lanes)
+            parts: list[list[int]] = [[] for _ in lanes]
+            for g in sorted(groups, key=lambda g: -(3 * new[g] + len(groups[g]))):
+                w = min(range(len(lanes)), key=lambda w: load[w])
+                parts[w].extend(groups[g])
+                load[w] += 3 * new[g] + len(groups[g])
+            return [(lanes[w], sorted(idx)) for w, idx in enumerate(parts)]
+        cap = math.ceil(count * 5 / (4 * len(lanes)))
+        parts = [[] for _ in lanes]
+        limit = max(64, self.ctx.row_bytes // (8 * self.n_samples))
+        for i in range(count):
+            rk = [keys[r] for r in members[i]]
+            best, held = None, -1
+            for w, lane in enumerate(lanes):
+                if len(parts[w]) >= cap:
+                    continue
+                have = sum(k in self._mirror[lane] for k in rk)
+                if have > held or (have == held and len(parts[w]) < len(parts[best])):
+                    best, held = w, have
+            parts[best].append(i)
+            mirror = self._mirror[lanes[best]]
+            for k in rk:
+                mirror[k] = True
+                mirror.move_to_end(k)
+            while len(mirror) > limit:
+                mirror.popitem(last=False)
+        return [(lanes[w], idx) for w, idx in enumerate(parts)]
+
+    def _gather(self, pending: list) -> list:
+        """Submit every chunk (this process's last), then collect in submission order.
+
+        A worker that lacks the run's data or the step's weighting says so and
+        gets the chunk again with them; a pinned lane gets them with its first
+        chunk, so that round trip happens only on unpinned executors.
+        """
+        out: list = [None] * len(pending)
+        todo = list(range(len(pending)))
+        for attempt in range(3):
+            futures = {}
+            order = sorted(todo, key=lambda i: self.lanes[pending[i][0]].local)
+            for i in order:
+                lane, _, _, chunk = pending[i]
+                ln = self.lanes[lane]
+                blob = None if (self._sent_ctx[lane] and attempt == 0) else self._blob
+                if attempt > 0 and ln.local:
+                    blob = None
+                wblob = (None if self._sent_w[lane] == self._wtoken and attempt == 0
+                         else self._wblob)
+                if not ln.pinned and attempt == 0:
+                    blob = wblob = None
+                futures[i] = ln.submit(evaluate_chunk, self._token, blob, self._wtoken, wblob,
+                                       chunk)
+            todo = []
+            for i in sorted(futures):
+                lane, idx, lines, _ = pending[i]
+                res = futures[i].result()
+                if res in (NEED_CONTEXT, NEED_WEIGHTS):
+                    todo.append(i)
+                    continue
+                if self.lanes[lane].pinned:
+                    self._sent_ctx[lane] = True
+                    self._sent_w[lane] = self._wtoken
+                out[i] = (idx, lines, res)
+            if not todo:
+                return out
+        raise RuntimeError("a worker did not take the run's data")
+
+    def _account(self, res: ChunkResult, width: int) -> None:
+        n = (width - 1) // 2
+        st = self.stats
+        st.rows_missed += res.simulated
+        st.rows_simulated += res.simulated
+        st.element_samples += res.simulated * n * self.n_samples
+        st.sim_seconds += res.sim_seconds
+        st.task_seconds += res.seconds
+        st.tasks += 1
+        if res.peak_rss:
+            st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
+
+
+def kernel_in_use() -> bool:
+    """Whether rows are simulated by the numba row kernel (else the reference realisations)."""
+    return kernel.NUMBA

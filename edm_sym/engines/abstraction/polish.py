@@ -14,11 +14,15 @@ This is the parameter shift of Fig. 7a taken to its optimum along the few
 directions where the optimum has a closed form. A row with the right shape
 but a wrong scale survives at once, which makes structures (a sign with a
 level, a viscous gain) much easier to find; it draws no random numbers.
+
+The small least-squares problem is solved where the rows are, in the worker
+that evaluated the individual (:func:`row_scales`); the main process only
+writes the candidates (:func:`gain_fit`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -51,15 +55,84 @@ def scale_position(codes: Sequence[int], gain_allowed: bool) -> tuple[int, bool]
     return (through_at, True) if through_at is not None else None
 
 
+#: Lookup tables by element code (codes outside the registry: neither).
+_SCALABLE = np.array([c in SCALABLE for c in range(max(REGISTRY) + 1)], dtype=bool)
+_HOMOGENEOUS = np.array([c in HOMOGENEOUS for c in range(max(REGISTRY) + 1)], dtype=bool)
+
+
+def scale_places(codes: np.ndarray, gain_allowed: bool) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`scale_position` of every row of a population at once.
+
+    Parameters
+    ----------
+    codes : numpy.ndarray
+        Shape (..., n) element codes.
+    gain_allowed : bool
+        Whether a ``through`` may become a ``gain``.
+
+    Returns
+    -------
+    pos : numpy.ndarray
+        Shape (...): the element index, -1 where the row cannot be scaled.
+    through : numpy.ndarray
+        Shape (...): True where it is a ``through`` to replace.
+    """
+    codes = np.asarray(codes)
+    shape, n = codes.shape[:-1], codes.shape[-1]
+    pos = np.full(shape, -1, dtype=np.int64)
+    through_at = np.full(shape, -1, dtype=np.int64)
+    done = np.zeros(shape, dtype=bool)
+    for i in range(n - 1, -1, -1):
+        c = codes[..., i]
+        hit = ~done & _SCALABLE[c]
+        pos[hit] = i
+        done |= hit
+        if gain_allowed:
+            through_at[~done & (c == THROUGH) & (through_at < 0)] = i
+        done |= ~_HOMOGENEOUS[c]
+    through = (pos < 0) & (through_at >= 0)
+    pos[through] = through_at[through]
+    return pos, through
+
+
+def row_scales(gram: np.ndarray, gy: np.ndarray, free: np.ndarray, fitness: float,
+               n_samples: int) -> tuple[np.ndarray, float, float] | None:
+    """The least-squares change of the free rows' scales (computed where the rows are).
+
+    Parameters
+    ----------
+    gram, gy : numpy.ndarray
+        ``G[i, j] = sum(Lambda r_i r_j)`` and ``gy[i] = sum(Lambda r_i target)``.
+    free : numpy.ndarray
+        Bool, shape (m,): the rows that can be scaled.
+    fitness : float
+        The individual's eq. 8 value.
+    n_samples : int
+        N (eq. 8 is a mean).
+
+    Returns
+    -------
+    tuple or None
+        ``(delta, promise, base)``: the scales are ``1 + delta`` (one per
+        free row), ``promise`` the decrease of the weighted sum of squares
+        they give, ``base`` that sum now; None when there is nothing to fit.
+    """
+    if not free.any() or not np.isfinite(fitness) or fitness == 0.0:
+        return None
+    if not (np.all(np.isfinite(gram)) and np.all(np.isfinite(gy))):
+        return None
+    # Residual e = y - sum(r): r_i' W e = r_i' W y - sum_j r_i' W r_j.
+    g = (gy - gram.sum(axis=1))[free]
+    delta = np.linalg.lstsq(gram[np.ix_(free, free)], g, rcond=1e-10)[0]
+    return delta, float(g @ delta), float(fitness) ** 2 * n_samples
+
+
 def gain_fit(
     pop: Population,
-    rows: Sequence[tuple[Sequence[bytes], Sequence[np.ndarray]] | None],
-    fitness: np.ndarray,
-    n_samples: int,
-    gram: Callable[[Sequence[bytes], Sequence[np.ndarray]], tuple[np.ndarray, np.ndarray]],
+    scales: Sequence[tuple[np.ndarray, float, float] | None],
+    places: tuple[np.ndarray, np.ndarray],
     ranges: Mapping[str, ParamRange],
     *,
-    gain_allowed: bool,
     tol: float = 1e-5,
 ) -> tuple[np.ndarray, Population]:
     """Candidates with least-squares row scales, for individuals that would gain from them.
@@ -68,19 +141,13 @@ def gain_fit(
     ----------
     pop : Population
         The individuals.
-    rows : sequence
-        Per individual its m row keys and outputs (None: skip it).
-    fitness : numpy.ndarray
-        Their eq. 8 values.
-    n_samples : int
-        N, the number of samples (eq. 8 is a mean).
-    gram : callable
-        ``gram(keys, rows) -> (G, gy)``: weighted inner products of the rows
-        with each other and with the target (see :meth:`Evaluator.gram`).
+    scales : sequence
+        Per individual :func:`row_scales` over its free rows (as
+        :meth:`Evaluator.evaluate` gives them with ``free=``); None: skip it.
+    places : tuple of numpy.ndarray
+        :func:`scale_places` of ``pop.codes``: where each row is scaled.
     ranges : mapping
         Parameter ranges (new values are clipped into them).
-    gain_allowed : bool
-        Whether a ``through`` may become a ``gain``.
     tol : float
         Least relative decrease of the squared fitness the fit must promise.
 
@@ -91,31 +158,22 @@ def gain_fit(
     candidates : Population
         The candidates, in the order of ``idx``.
     """
+    pos_all, through_all = places
     idx: list[int] = []
     out_in, out_codes, out_ps = [], [], []
-    for k, entry in enumerate(rows):
-        if entry is None or not np.isfinite(fitness[k]) or fitness[k] == 0.0:
+    for k, entry in enumerate(scales):
+        if entry is None:
             continue
-        keys, outs = entry
-        places = [scale_position(pop.codes[k, j], gain_allowed) for j in range(len(keys))]
-        free = [j for j, pl in enumerate(places) if pl is not None]
-        if not free:
+        delta, promise, base = entry
+        if not promise > tol * base:
             continue
-        g_all, gy = gram(keys, outs)
-        if not (np.all(np.isfinite(g_all)) and np.all(np.isfinite(gy))):
-            continue
-        # Residual e = y - sum(r): r_i' W e = r_i' W y - sum_j r_i' W r_j.
-        g = (gy - g_all.sum(axis=1))[free]
-        base = float(fitness[k]) ** 2 * n_samples
-        delta = np.linalg.lstsq(g_all[np.ix_(free, free)], g, rcond=1e-10)[0]
-        if not float(g @ delta) > tol * base:
-            continue
+        free = np.flatnonzero(pos_all[k] >= 0)
         codes, ps = pop.codes[k].copy(), pop.ps[k].copy()
         for i, j in enumerate(free):
             if abs(float(delta[i])) < 1e-9:
                 continue
             c = 1.0 + float(delta[i])
-            pos, is_through = places[j]
+            pos, is_through = int(pos_all[k, j]), bool(through_all[k, j])
             if is_through:
                 codes[j, pos] = GAIN
                 ps[j, pos] = ranges["gain"].encode(c)

@@ -1,11 +1,23 @@
-"""Row simulation where it runs: in this process or in a worker.
+"""Where individuals are evaluated: in this process or in a worker, one chunk at a time.
 
 Rows travel as a canonical gene table (:func:`row_table`), one float64 line
-``[input, c_1..c_n, p_1..p_n]`` per row. A worker keeps, per run, the input
-signals, a decoder from codes to element classes and ranges, and a cache of
-row prefixes (the signal after the first k elements), so a row that differs
-from an earlier one only in its later elements starts where they part. A
-row's output is a pure function of its genes, whatever any cache holds.
+``[input, c_1..c_n, p_1..p_n]`` per row. A worker keeps, per run, a
+:class:`Worker`: the input signals and the target (sent once per worker), a
+decoder from codes to element classes and ranges, the current weighting (sent
+once per step), a store of whole rows, and a store of row prefixes (the
+signal after the first k elements), so a row that differs from an earlier one
+only in its later elements starts where they part. Both stores are fixed
+blocks of slots, bounded by the config's ``cache_mb``.
+
+A task (:func:`evaluate_chunk`) gets a :class:`Chunk`: a batch of individuals
+as indices into a table of their distinct rows. The worker simulates the rows
+its store lacks (with the numba row kernel, :mod:`edm_sym.engines.kernel`,
+when it is installed, else the reference realisations) and returns each
+individual's eq. 8 and, on request, the gain fit's least-squares row scales
+(:class:`ChunkResult`): a few numbers per individual, never a row.
+
+Every number returned is a pure function of the genes, the data and the
+weighting, whichever worker computes it and whatever its caches hold.
 """
 
 from __future__ import annotations
@@ -18,15 +30,22 @@ import time
 from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from edm_sym.core.elements import REGISTRY, Element, ParamRange
-from edm_sym.engines.abstraction.cache import RowCache
+from edm_sym.engines import kernel
+from edm_sym.engines.abstraction.cache import SlotStore
+from edm_sym.engines.abstraction.polish import row_scales
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
                       for c in range(max(REGISTRY) + 1)], dtype=bool)
+
+#: What a task answers when this process lacks the run's context or the weighting.
+NEED_CONTEXT = "need-context"
+NEED_WEIGHTS = "need-weights"
 
 
 def row_table(inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray) -> np.ndarray:
@@ -58,15 +77,18 @@ def row_table(inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray) -> np.ndarr
 
 @dataclass(frozen=True)
 class SimContext:
-    """What a worker needs to simulate rows: the input signals, Ts, the ranges.
+    """What a worker needs for a run: the input signals, the target, Ts, the ranges.
 
-    ``prefix_bytes`` bounds the worker's cache of row prefixes.
+    ``row_bytes`` bounds a worker's own row store (a worker sharing the main
+    process's store has none), ``prefix_bytes`` its cache of row prefixes.
     """
 
     inputs: np.ndarray
     ts: float
     ranges: Mapping[str, ParamRange]
     prefix_bytes: int = 128 * 2**20
+    target: np.ndarray | None = None
+    row_bytes: int = 128 * 2**20
 
     def decoder(self) -> dict[int, tuple[type[Element], ParamRange | None]]:
         """Element class and range by element code."""
@@ -74,21 +96,103 @@ class SimContext:
                 for c, cls in REGISTRY.items()}
 
 
+@dataclass(frozen=True)
+class Chunk:
+    """A batch of individuals for one task.
+
+    Attributes
+    ----------
+    table : numpy.ndarray
+        Shape (R, 1 + 2 n): the distinct rows of the individuals.
+    members : numpy.ndarray
+        Shape (P, m) int64: each individual's rows, as lines of ``table``.
+    score : numpy.ndarray
+        Shape (P,) bool: whose eq. 8 is wanted (the others only need their rows).
+    free : numpy.ndarray or None
+        Shape (P, m) bool: the rows whose scale the gain fit may change; when
+        given, each scored individual also gets its least-squares scales
+        (:func:`~edm_sym.engines.abstraction.polish.row_scales`).
+    slots : numpy.ndarray or None
+        Shape (R,): where each row is in the shared store (the main process
+        manages it); None: the worker finds them in its own store.
+    simulate : numpy.ndarray or None
+        Shape (R,) bool, with ``slots``: the rows this task must simulate
+        into their slots (the others are there already).
+    """
+
+    table: np.ndarray
+    members: np.ndarray
+    score: np.ndarray
+    free: np.ndarray | None = None
+    slots: np.ndarray | None = None
+    simulate: np.ndarray | None = None
+
+
+@dataclass
+class ChunkResult:
+    """What a task sends back: a few numbers per individual.
+
+    Attributes
+    ----------
+    fitness : numpy.ndarray
+        Shape (P,) eq. 8 (NaN where not scored, inf for non-finite outputs).
+    scales : list or None
+        With ``Chunk.free``: per individual its :func:`row_scales` (None where
+        not scored or nothing to fit).
+    slots : numpy.ndarray
+        Where the table's rows are in the store the task used.
+    simulated : int
+        Rows simulated.
+    sim_seconds : float
+        Seconds spent simulating them.
+    seconds : float
+        Seconds of the whole task.
+    pid : int
+        The process that ran it.
+    peak_rss : int
+        That process's peak resident memory [bytes] (0 where unknown).
+    """
+
+    fitness: np.ndarray
+    scales: list | None
+    slots: np.ndarray
+    simulated: int
+    sim_seconds: float
+    seconds: float
+    pid: int
+    peak_rss: int
+
+
 @dataclass
 class Worker:
-    """A process's state for one run: context, decoder, prefix cache, shared rows.
+    """A process's state for one run: context, decoder, stores, weighting.
 
+    ``rows`` is the shared store's rows when the main process manages the
+    slots; otherwise the worker keeps its own :class:`SlotStore` (``own``).
+    Row prefixes go into a store of this process (:meth:`prefix_store`),
+    slots reused in place, so simulating a row allocates no memory.
     ``trig`` holds sin and cos of each input signal: a sine element reading an
     input directly (the paper's position-dependent friction; its class
     declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
-    per sample.
+    per sample. ``use_kernel``: simulate with the numba row kernel (default
+    when numba is installed), else with the reference realisations.
     """
 
     ctx: SimContext
     decoder: dict
-    prefixes: RowCache
-    store: np.ndarray | None = field(default=None)
+    rows: np.ndarray | None = field(default=None)
+    own: SlotStore | None = field(default=None)
     trig: dict = field(default_factory=dict)
+    weights: np.ndarray | None = field(default=None)
+    wtoken: str | None = field(default=None)
+    dots: dict = field(default_factory=dict)
+    use_kernel: bool = field(default=kernel.NUMBA)
+    stages: dict = field(default_factory=dict)
+    encoders: dict = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    pool: SlotStore | None = field(default=None)
+    work: np.ndarray | None = field(default=None)
+    pool_pid: int = field(default=0)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -98,24 +202,78 @@ class Worker:
             hit = self.trig[k] = (np.sin(x), np.cos(x))
         return hit
 
+    def stage(self, code: int, p: float) -> Any:
+        """Gene ``(code, p)`` as the kernel's steps, or as its realisation (remembered)."""
+        key = (code, p)
+        hit = self.stages.get(key)
+        if hit is None:
+            cls, rng = self.decoder[code]
+            a = rng.decode(p) if rng is not None else None
+            if self.use_kernel:
+                make = self.encoders.get(code)
+                if make is None:
+                    probe = rng.decode(0.5) if rng is not None else None
+                    make = self.encoders[code] = kernel.gene_encoder(cls, self.ctx.ts, probe)
+                hit = make(a)
+            else:
+                hit = cls.realise(a, self.ctx.ts)
+            if len(self.stages) > 100_000:
+                self.stages.clear()
+            self.stages[key] = hit
+        return hit
+
+    def scratch(self) -> np.ndarray:
+        """A signal-sized array to compute in (this process's, reused)."""
+        if self.work is None or self.work.shape[0] != self.ctx.inputs.shape[1]:
+            self.work = np.empty(self.ctx.inputs.shape[1])
+        return self.work
+
+    def prefix_store(self) -> SlotStore:
+        """This process's store of row prefixes (made on first use, in this process)."""
+        if self.pool is None or self.pool_pid != os.getpid():
+            n = self.ctx.inputs.shape[1]
+            # At least a row's worth of prefixes; the rest as the bound allows.
+            self.pool = SlotStore(max(self.ctx.prefix_bytes // (8 * n), 8), n)
+            self.pool_pid = os.getpid()
+        return self.pool
+
+    def store_for(self, count: int) -> SlotStore:
+        """This worker's own row store, with room for ``count`` rows at once."""
+        n = self.ctx.inputs.shape[1]
+        if self.own is None or self.own.slots < count + 16:
+            slots = max(self.ctx.row_bytes // (8 * n), 2 * count + 16)
+            self.own = SlotStore(slots, n)
+        return self.own
+
+    def set_weights(self, token: str, weights: np.ndarray) -> None:
+        """The step's weighting (shape (N,) or (1,)); forgets the inner products."""
+        self.weights = np.ascontiguousarray(weights, dtype=float)
+        self.wtoken = token
+        self.dots.clear()
+
 
 _WORKERS: OrderedDict[str, Worker] = OrderedDict()
 _LOCK = threading.Lock()  # executors may run tasks in threads (dask, thread pools)
 
 
 def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = None,
-               store: np.ndarray | None = None) -> Worker:
-    """This process's :class:`Worker` of run ``token`` (made from ``ctx`` or ``blob``)."""
+               rows: np.ndarray | None = None) -> Worker | None:
+    """This process's :class:`Worker` of run ``token`` (made from ``ctx`` or ``blob``).
+
+    None when it has none and neither ``ctx`` nor ``blob`` is given.
+    """
     with _LOCK:
         hit = _WORKERS.get(token)
         if hit is not None:
             _WORKERS.move_to_end(token)
             return hit
         if ctx is None:
+            if blob is None:
+                return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        hit = Worker(ctx, ctx.decoder(), RowCache(ctx.prefix_bytes), store)
+        hit = Worker(ctx, ctx.decoder(), rows)
         _WORKERS[token] = hit
-        while len(_WORKERS) > 8:
+        while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)
         return hit
 
@@ -131,90 +289,206 @@ def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
     return line[:1 + k].tobytes() + line[1 + n:1 + n + k].tobytes()
 
 
-def simulate_table(worker: Worker, table: np.ndarray) -> list[np.ndarray]:
+def simulate_table(worker: Worker, table: np.ndarray,
+                   outs: list[np.ndarray] | np.ndarray | None = None) -> list[np.ndarray]:
     """Simulate the rows of a canonical gene table.
 
     Each row starts from the longest prefix found in the worker's prefix
-    cache; each prefix it computes goes into that cache.
+    store; each prefix it computes goes into that store. With numba the row
+    kernel runs the rest of the row in one call (writing the prefixes
+    straight into their slots), else the realisations do, one numpy call per
+    element.
 
     Parameters
     ----------
     worker : Worker
-        Context, decoder and prefix cache of this process.
+        Context, decoder and prefix store of this process.
     table : numpy.ndarray
         Shape (R, 1 + 2 n).
+    outs : sequence of numpy.ndarray, optional
+        Where each row's output goes (shape (N,) each); new arrays when None.
 
     Returns
     -------
     list of numpy.ndarray
-        R row outputs of shape (N,) (read-only use: they may be shared).
+        The R row outputs (``outs`` when given).
     """
-    ctx, decoder, cache = worker.ctx, worker.decoder, worker.prefixes
+    ctx, decoder = worker.ctx, worker.decoder
+    pool = worker.prefix_store()
     n = (table.shape[1] - 1) // 2
-    out = []
-    for line in table:
+    length = ctx.inputs.shape[1]
+    result = []
+    for r, line in enumerate(table):
         y, start = None, 0
         for k in range(n - 1, 0, -1):
-            y = cache.get(prefix_key(line, n, k))
+            y = pool.get(prefix_key(line, n, k))
             if y is not None:
                 start = k
                 break
         if y is None:
             y = ctx.inputs[int(line[0])]
+        stages = []
         for i in range(start, n):
-            code = int(line[1 + i])
+            code, p = int(line[1 + i]), float(line[1 + n + i])
             cls, rng = decoder[code]
-            a = rng.decode(float(line[1 + n + i])) if rng is not None else None
-            fast = cls.from_sin_cos if i == 0 else None
-            prev, y = y, (cls.realise(a, ctx.ts).run(y) if fast is None
-                          else fast(*worker.sin_cos(int(line[0])), a))
-            if i < n - 1 and y is not prev:
-                cache.put(prefix_key(line, n, i + 1), y)
-        out.append(y)
-    return out
+            if i == 0 and cls.from_sin_cos is not None:
+                a = rng.decode(p) if rng is not None else None
+                y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
+                start = 1
+                if n > 1:
+                    _keep(pool, prefix_key(line, n, 1), y)
+                continue
+            stages.append(worker.stage(code, p))
+        out = outs[r] if outs is not None else np.empty(length)
+        if worker.use_kernel:
+            program, stored = kernel.compile_steps(stages, store=True)
+            slots = pool.allocate(len(stored), ())
+            kernel.run_program(program, y, out, pool.rows, np.array(slots, dtype=np.int64))
+            for slot, count in zip(slots, stored, strict=True):
+                pool.commit(prefix_key(line, n, start + count), slot)
+        else:
+            for i, stage in enumerate(stages):
+                prev, y = y, stage.run(y)
+                if start + i + 1 < n and y is not prev:
+                    _keep(pool, prefix_key(line, n, start + i + 1), y)
+            out[:] = y
+        result.append(out)
+    return result
 
 
-def simulate_chunk(token: str, blob: bytes, table: np.ndarray) -> list[np.ndarray]:
-    """Executor task: simulate rows and send their outputs back.
+def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
+    """Copy a prefix into the pool (unless it is there)."""
+    if pool.lookup(key) is None:
+        slot = pool.allocate(1, ())[0]
+        pool.rows[slot] = y
+        pool.commit(key, slot)
+
+
+def _gram(worker: Worker, rows: list[np.ndarray], keys: list[bytes], target: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted inner products of rows (remembered by their keys) and with the target."""
+    m = len(keys)
+    gram, gy = np.empty((m, m)), np.empty(m)
+    w, memo = worker.weights, worker.dots
+    if len(memo) > 100_000:
+        memo.clear()
+    for i in range(m):
+        key = keys[i] + b"|target"
+        v = memo.get(key)
+        if v is None:
+            v = memo[key] = kernel.dot(rows[i], target, w)
+        gy[i] = v
+        for j in range(i + 1):
+            # Canonical order, so the sum is the same bits whichever pair asks.
+            a, b = (i, j) if keys[i] <= keys[j] else (j, i)
+            key = keys[a] + b"|" + keys[b]
+            v = memo.get(key)
+            if v is None:
+                v = memo[key] = kernel.dot(rows[a], rows[b], w)
+            gram[i, j] = gram[j, i] = v
+    return gram, gy
+
+
+def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
+    """Evaluate a chunk in ``worker`` (see :class:`Chunk` and :class:`ChunkResult`)."""
+    t0 = time.perf_counter()
+    table = chunk.table
+    keys = [line.tobytes() for line in table]
+    sim_seconds, simulated = 0.0, 0
+    if chunk.slots is not None:
+        store_rows, slots = worker.rows, np.asarray(chunk.slots, dtype=np.int64)
+        todo = np.flatnonzero(chunk.simulate)
+    else:
+        store = worker.store_for(len(table))
+        slots = np.empty(len(table), dtype=np.int64)
+        todo_list = []
+        for r, key in enumerate(keys):
+            slot = store.lookup(key)
+            if slot is None:
+                todo_list.append(r)
+            else:
+                slots[r] = slot
+        if todo_list:
+            fresh = store.allocate(len(todo_list), set(keys))
+            for r, slot in zip(todo_list, fresh, strict=True):
+                slots[r] = slot
+        store_rows, todo = store.rows, np.array(todo_list, dtype=np.intp)
+    if len(todo):
+        s0 = time.perf_counter()
+        simulate_table(worker, table[todo], [store_rows[slots[r]] for r in todo])
+        sim_seconds, simulated = time.perf_counter() - s0, len(todo)
+        if chunk.slots is None:
+            for r in todo:
+                worker.own.commit(keys[r], int(slots[r]))
+    target = worker.ctx.target
+    p = chunk.members.shape[0]
+    fitness = np.full(p, np.nan)
+    scales: list | None = [None] * p if chunk.free is not None else None
+    for k in np.flatnonzero(chunk.score):
+        mine = slots[chunk.members[k]]
+        f = fitness[k] = kernel.score(store_rows, mine, target, worker.weights, worker.scratch())
+        if scales is not None and chunk.free[k].any() and np.isfinite(f) and f != 0.0:
+            gram, gy = _gram(worker, [store_rows[s] for s in mine],
+                             [keys[r] for r in chunk.members[k]], target)
+            scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
+    return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
+                       time.perf_counter() - t0, os.getpid(), peak_rss())
+
+
+def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,
+                   chunk: Chunk) -> ChunkResult | str:
+    """Executor task: evaluate a chunk of individuals.
 
     Parameters
     ----------
     token : str
-        Digest of ``blob``; a worker unpickles each run's context once.
-    blob : bytes
-        The pickled :class:`SimContext`.
-    table : numpy.ndarray
-        Canonical gene table.
+        The run (a digest of its pickled :class:`SimContext`).
+    blob : bytes or None
+        The pickled context, sent once per worker: without it a worker that
+        lacks the run answers :data:`NEED_CONTEXT`.
+    wtoken : str
+        The weighting.
+    wblob : bytes or None
+        The pickled weights, sent once per worker and step (else
+        :data:`NEED_WEIGHTS`).
+    chunk : Chunk
+        The individuals.
 
     Returns
     -------
-    list of numpy.ndarray
-        The row outputs, in table order.
+    ChunkResult or str
     """
-    return simulate_table(worker_for(token, blob), table)
+    worker = worker_for(token, blob)
+    if worker is None:
+        return NEED_CONTEXT
+    if worker.wtoken != wtoken:
+        if wblob is None:
+            return NEED_WEIGHTS
+        worker.set_weights(wtoken, pickle.loads(wblob))  # noqa: S301 (from the evaluator)
+    with worker.lock:  # an executor may run two tasks of one process in threads
+        return run_chunk(worker, chunk)
 
 
-def fill_slots(token: str, table: np.ndarray, slots: list[int]) -> int:
-    """Executor task of a forked pool: simulate rows into the shared row store.
+def peak_rss() -> int:
+    """Peak resident memory of this process [bytes] (0 where unknown)."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover (not POSIX)
+        return 0
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
-    Parameters
-    ----------
-    token : str
-        The run; its :class:`Worker` (with the store) was made before the fork.
-    table : numpy.ndarray
-        Canonical gene table.
-    slots : list of int
-        Store slot of each row.
 
-    Returns
-    -------
-    int
-        The number of rows written.
-    """
-    worker = _WORKERS[token]
-    for slot, y in zip(slots, simulate_table(worker, table), strict=True):
-        worker.store[slot] = y
-    return len(slots)
+def warm_up() -> None:
+    """Load (or compile, the first time on a machine) the row kernel before any fork."""
+    if not kernel.NUMBA:
+        return
+    from edm_sym.core.elements.realisation import Relay
+
+    x = np.zeros(4)
+    program, _ = kernel.compile_row([Relay(1.0)], store=True)
+    kernel.run_program(program, x, np.empty(4), np.empty((program.stores, 4)))
+    kernel.score(np.zeros((1, 4)), np.zeros(1, dtype=np.int64), x, np.ones(1))
+    kernel.dot(x, x, np.ones(1))
 
 
 def worker_init(parent: int) -> None:

@@ -23,6 +23,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from edm_sym.engines.abstraction.checkpoint import (
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.engines.abstraction.local_search import tune_parameters
-from edm_sym.engines.abstraction.polish import GAIN, gain_fit
+from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.validation import Scorer, plan_holdout
@@ -278,13 +279,13 @@ class _Runner:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
         if not ops.ga.gain_fit:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
-        rows: list = []
-        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        places = scale_places(pop.codes, GAIN in ops.allowed)
+        scales: list = []
+        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                                      scales_out=scales)
         if keep_first:
-            rows[0] = None
-        idx, cand = gain_fit(pop, rows, fit, len(self.y), self.evaluator.gram, self.ranges,
-                             gain_allowed=GAIN in ops.allowed)
-        del rows
+            scales[0] = None
+        idx, cand = gain_fit(pop, scales, places, self.ranges)
         if len(idx):
             cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
             better = cfit < fit[idx]
@@ -390,6 +391,7 @@ def abstract(
     validation_share: float | None = None,
     select: str | None = None,
     axis: str = "rotary",
+    scheduler: Any = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -409,15 +411,17 @@ def abstract(
         Wall-clock seconds; the run ends at the first generation boundary
         after it and returns the best so far.
     executor : concurrent.futures.Executor, optional
-        Where rows are simulated (e.g. ``dask.distributed.Client(...).get_executor()``);
-        it is not shut down. None: a process pool over ``workers`` cores.
+        Where chunks of individuals are evaluated (``workers`` unpinned lanes;
+        for a dask cluster ``scheduler`` is better); it is not shut down.
+        None: this process and ``workers - 1`` forked processes.
     checkpoint : pathlib.Path, optional
         Where to write the run's state after every generation (removed when
         the run completes).
     resume : bool
         Continue from ``checkpoint`` when that file exists.
     workers : int, optional
-        Processes of the default pool (default: every usable core; 1: no pool).
+        Processes evaluating, this one included (default: every usable core;
+        1: this process only).
     callback : callable, optional
         Called with a :class:`GenerationInfo` after every generation; a true
         return value ends the run there, like a time limit. The engine prints
@@ -429,6 +433,11 @@ def abstract(
         Share of ``data`` held out at its end, in [0, 0.9]; None: the
         config's ``[validation] share`` (default 0.2). See
         :mod:`edm_sym.engines.abstraction.validation`.
+    scheduler : str or distributed.Client, optional
+        A dask.distributed scheduler's address (``tcp://host:8786``) or a
+        connected client: chunks of individuals go to its workers, one lane
+        each (``workers`` and ``executor`` are then ignored). Needs the extra
+        ``edm_sym[dask]``.
     select : str, optional
         Which member of the complexity-vs-fitness front is exported:
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
@@ -503,9 +512,16 @@ def abstract(
     else:
         state = RunState(fingerprint, rng.bit_generator.state)
     batch = max(s.ga.population * s.n_rows for s in cfg.steps)
+    client, own_client = _dask_client(scheduler)
     evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
-                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch)
-    evaluator.start()
+                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
+                          client=client)
+    try:
+        evaluator.start()
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
     runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
                      time_limit=time_limit, callback=callback)
@@ -521,6 +537,8 @@ def abstract(
             raise
     finally:
         evaluator.close()
+        if own_client:
+            client.close()
     steps = []
     for r in runner.records():
         matrix = r.best.matrix(0, inputs)
@@ -595,6 +613,38 @@ def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
     check(est, cfg.source, "use a smaller population or matrix, or a shorter log",
           time_hint="use a smaller population or matrix, fewer generations (or patience), "
                     "a shorter log or a time limit")
+
+
+def _dask_client(scheduler: Any) -> tuple[Any, bool]:
+    """A dask client for ``scheduler`` (an address or a client) and whether it is ours to close.
+
+    Raises
+    ------
+    ConfigError
+        When dask.distributed is not installed, or no scheduler answers at
+        the address, or it has no worker within a minute.
+    """
+    if scheduler is None:
+        return None, False
+    try:
+        import distributed
+    except ImportError:
+        raise ConfigError("scheduler", "expected dask.distributed (pip install 'edm_sym[dask]'), "
+                                       "found it not installed") from None
+    if not isinstance(scheduler, str):
+        return scheduler, False
+    try:
+        client = distributed.Client(scheduler, timeout=10)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigError("scheduler", f"expected a dask scheduler at {scheduler}, found none "
+                                       f"({type(exc).__name__}: {exc})") from None
+    try:
+        client.wait_for_workers(1, timeout=60)
+    except (OSError, TimeoutError) as exc:
+        client.close()
+        raise ConfigError("scheduler", f"expected a worker on the dask scheduler at {scheduler}, "
+                                       f"found none within 60 s ({type(exc).__name__})") from None
+    return client, True
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

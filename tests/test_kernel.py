@@ -1,0 +1,192 @@
+"""The numba row kernel against the reference simulator, to 1e-12.
+
+Without numba the kernel's functions are plain Python: these tests then run
+the same code, slowly, on the same short signals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import TS, smooth_signal
+
+from edm_sym.core.elements import REGISTRY, all_elements, default_ranges
+from edm_sym.core.elements.base import StaticElement
+from edm_sym.core.elements.realisation import REALISATIONS, StaticMap
+from edm_sym.core.fitness import fitness
+from edm_sym.core.matrix import Compensator
+from edm_sym.engines import kernel
+from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
+from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.simulate import simulate_row
+
+N = 2000
+RANGES = default_ranges(TS, N * TS)
+
+
+def _close(got: np.ndarray, want: np.ndarray) -> None:
+    """Equal to 1e-12 of the signal's scale, NaN where the reference has NaN."""
+    assert got.shape == want.shape
+    assert np.array_equal(np.isnan(got), np.isnan(want))
+    ok = ~np.isnan(want)
+    assert np.array_equal(np.isinf(got[ok]), np.isinf(want[ok]))
+    fin = ok & np.isfinite(want)
+    scale = max(1.0, float(np.max(np.abs(want[fin]))) if fin.any() else 1.0)
+    assert np.max(np.abs(got[fin] - want[fin]), initial=0.0) <= 1e-12 * scale
+
+
+def _signal(seed: int, amplitude: float = 3.0) -> np.ndarray:
+    return amplitude * smooth_signal(N, seed=seed)
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_every_element_alone_equals_its_realisation(el) -> None:  # noqa: ANN001
+    x = _signal(el.code)
+    for p in (0.0, 0.13, 0.5, 0.87, 1.0):
+        a = RANGES[el.name].decode(p) if el.param is not None else None
+        stage = el.realise(a, TS)
+        program, _ = kernel.compile_row([stage])
+        _close(kernel.run_program(program, x), stage.run(x.copy()))
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_non_finite_inputs_go_through_as_in_numpy(el) -> None:  # noqa: ANN001
+    x = _signal(el.code + 50)
+    x[[100, 400, 401, 900]] = [np.nan, np.inf, -np.inf, np.nan]
+    a = RANGES[el.name].decode(0.4) if el.param is not None else None
+    stage = el.realise(a, TS)
+    program, _ = kernel.compile_row([stage])
+    with np.errstate(all="ignore"):
+        _close(kernel.run_program(program, x), stage.run(x.copy()))
+
+
+def test_every_realisation_type_has_an_encoder() -> None:
+    enc = kernel._Encoder()
+    for cls in REALISATIONS:
+        assert callable(getattr(enc, f"_encode_{cls.__name__}"))
+
+
+def _random_rows(seed: int, count: int, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # Every registered element, uniformly (no extra weight on ``through``).
+    ops = Operators(GaSettings(through_rate=0.0), 3)
+    return ops.random_rows(np.random.default_rng(seed), count, n)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_rows_of_all_elements_equal_the_reference_simulator(seed: int) -> None:
+    inputs, codes, ps = _random_rows(seed, 60, 4)
+    assert set(np.unique(codes)) <= set(REGISTRY)
+    x = np.vstack([_signal(10 * seed + k) for k in range(3)])
+    ctx = SimContext(x, TS, RANGES)
+    kernel_worker = Worker(ctx, ctx.decoder(), use_kernel=True)
+    table = row_table(inputs, codes, ps)
+    # Twice: the second time rows start from the prefixes the first one stored.
+    for _ in range(2):
+        got = simulate_table(kernel_worker, table)
+        for r in range(len(table)):
+            genes = [(int(c), float(p)) for c, p in zip(codes[r], ps[r], strict=True)]
+            y = x[int(inputs[r])]
+            with np.errstate(all="ignore"):
+                for i, (c, p) in enumerate(genes):
+                    el = REGISTRY[c]
+                    a = RANGES[el.name].decode(p) if el.param is not None else None
+                    if i == 0 and el.from_sin_cos is not None:
+                        # The GA's shortcut for a sine reading an input (not the kernel's).
+                        y = el.from_sin_cos(np.sin(y), np.cos(y), a)
+                        continue
+                    y = el.realise(a, TS).run(y)
+            _close(got[r], y)
+    assert len(kernel_worker.prefix_store()) > 0
+
+
+def test_the_kernel_worker_equals_simulate_row_on_a_compensator() -> None:
+    inputs, codes, ps = _random_rows(99, 8, 4)
+    from edm_sym.engines.abstraction.ga import Population
+
+    pop = Population(inputs.reshape(1, 8), codes.reshape(1, 8, 4), ps.reshape(1, 8, 4))
+    comp = Compensator(pop.matrix(0, ["u0", "u1", "u2"]), TS, RANGES, N * TS)
+    x = np.vstack([_signal(k + 7) for k in range(3)])
+    ctx = SimContext(x, TS, RANGES)
+    got = simulate_table(Worker(ctx, ctx.decoder(), use_kernel=True),
+                         row_table(inputs, codes, ps))
+    for j, row in enumerate(comp.matrix.rows):
+        with np.errstate(all="ignore"):
+            want = simulate_row(comp, row, x[row.input])
+        if row.genes[0].element.from_sin_cos is not None:
+            # From the input's cached sine and cosine: equal to rounding of the input's scale.
+            assert np.allclose(got[j], want, rtol=0, atol=1e-12 * max(1, np.max(np.abs(want))))
+            continue
+        _close(got[j], want)
+
+
+def test_stored_prefixes_are_the_outputs_of_the_first_stages() -> None:
+    names = ["lpf", "through", "tanh", "hysteresis", "gain"]
+    stages = [REGISTRY[next(c for c, e in REGISTRY.items() if e.name == nm)] for nm in names]
+    real = [el.realise(RANGES[el.name].decode(0.6) if el.param else None, TS) for el in stages]
+    program, stored = kernel.compile_row(real, store=True)
+    assert stored == [1, 3, 4]  # ``through`` changes nothing: its prefix is the one before
+    x = _signal(3)
+    inter = np.empty((program.stores, N))
+    out = kernel.run_program(program, x, inter=inter)
+    y = x
+    prefixes = []
+    for r in real:
+        y = r.run(y)
+        prefixes.append(y)
+    for j, count in enumerate(stored):
+        _close(inter[j], prefixes[count - 1])
+    _close(out, prefixes[-1])
+
+
+def test_score_is_eq_8_and_dot_the_weighted_inner_product() -> None:
+    rng = np.random.default_rng(0)
+    store = rng.standard_normal((6, N))
+    y = rng.standard_normal(N)
+    w = rng.uniform(0, 3, N)
+    slots = np.array([4, 0, 2], dtype=np.int64)
+    want = fitness(y - store[slots].sum(axis=0), w)
+    assert kernel.score(store, slots, y, w) == pytest.approx(want, rel=1e-12)
+    assert kernel.score(store, slots, y, np.ones(1)) == pytest.approx(
+        fitness(y - store[slots].sum(axis=0)), rel=1e-12)
+    assert kernel.dot(store[1], store[3], w) == pytest.approx(float(np.sum(w * store[1] * store[3])),
+                                                              rel=1e-12)
+    store[2, 17] = np.inf
+    assert kernel.score(store, slots, y, w) == np.inf
+
+
+def test_a_static_element_the_tracer_cannot_follow_is_refused() -> None:
+    class Square(StaticElement):
+        _abstract = True  # not registered
+
+        @staticmethod
+        def f(m, x, a):  # noqa: ANN001, ANN205
+            return x * x
+
+    with pytest.raises(TypeError, match="one signal"):
+        kernel.compile_row([StaticMap(Square, None)])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_simulate_rows_equals_the_reference_simulator(seed: int) -> None:
+    from edm_sym.engines.abstraction.ga import Population
+    from edm_sym.engines.simulate import simulate_rows
+
+    inputs, codes, ps = _random_rows(100 + seed, 20, 4)
+    pop = Population(inputs.reshape(1, 20), codes.reshape(1, 20, 4), ps.reshape(1, 20, 4))
+    comp = Compensator(pop.matrix(0, ["u0", "u1", "u2"]), TS, RANGES, N * TS)
+    x = np.vstack([_signal(k + 20 * seed) for k in range(3)])
+    with np.errstate(all="ignore"):
+        want = simulate_rows(comp, comp.matrix.rows, x)
+    got = kernel.simulate_rows(comp, comp.matrix.rows, x)
+    for j in range(len(want)):
+        _close(got[j], want[j])
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_the_gene_encoder_gives_the_steps_of_the_realisation(el) -> None:  # noqa: ANN001
+    rng = RANGES[el.name] if el.param is not None else None
+    make = kernel.gene_encoder(el, TS, rng.decode(0.5) if rng else None)
+    for p in (0.0, 0.31, 1.0):
+        a = rng.decode(p) if rng else None
+        assert make(a) == kernel.encode(el.realise(a, TS))
