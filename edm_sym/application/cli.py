@@ -614,6 +614,15 @@ def _process(entry: Callable[[], int]) -> int:
     code = entry()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
+    if code == EXIT_INTERRUPTED:
+        # The work is cleaned up (checkpoint kept, no temporaries) and the message written.
+        # Leave at once: a KeyboardInterrupt that went through an exec of source text
+        # (dataclasses and namedtuple build their methods so, during a lazy import) leaves
+        # CPython's "unhandled interrupt" mark set, and the normal shutdown would then kill
+        # the process with SIGINT (status -2) instead of exiting 130.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     return code
 
 
