@@ -7,15 +7,13 @@ float) and Python of random matrices whose parameters sit at their range edges.
 
 from __future__ import annotations
 
-import importlib.util
 import re
-import sys
 import warnings
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
+from firmware import cg_support as cg  # tests/ is on sys.path (pytest rootdir import mode)
 
 from edm_sym.core.elements import all_elements
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
@@ -23,15 +21,6 @@ from edm_sym.outputs.render import render
 
 REPO = Path(__file__).resolve().parents[1]
 NON_FINITE = re.compile(r"\b(INFINITY|NAN|HUGE_VAL[FL]?|inf|nan|Infinity|NaN)\b|float\(\s*['\"](inf|nan)")
-
-
-def _support() -> ModuleType:
-    name = "edm_codegen_support"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, REPO / "tests" / "firmware" / "cg_support.py")
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
 
 
 def _code_lines(text: str, suffix: str) -> list[str]:
@@ -69,7 +58,6 @@ def test_the_scan_finds_a_planted_literal() -> None:
 
 
 def test_random_matrices_at_their_range_edges_export_finite_literals() -> None:
-    cg = _support()
     rng = np.random.default_rng(18)
     codes = [e.code for e in all_elements()]
     with warnings.catch_warnings():

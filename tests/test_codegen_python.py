@@ -12,23 +12,14 @@ from types import ModuleType
 import numpy as np
 import pytest
 
+# tests/ is on sys.path (pytest's rootdir-relative import mode): the shared harness.
+from firmware import cg_support as cg  # noqa: E402
+
 from edm_sym import load_result
 from edm_sym.application.exporting import export
 from edm_sym.core.elements import all_elements
 from edm_sym.engines.simulate import simulate
 
-
-def _support() -> ModuleType:
-    name = "edm_codegen_support"
-    if name not in sys.modules:
-        path = Path(__file__).parent / "firmware" / "cg_support.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-cg = _support()
 LOG = cg.make_log()
 _count = [0]
 

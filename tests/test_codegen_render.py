@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import os
 import re
 import subprocess
 import sys
 import warnings
 from pathlib import Path
-from types import ModuleType
 
 import pytest
+
+# tests/ is on sys.path (pytest's rootdir-relative import mode): the shared harness.
+from firmware import cg_support as cg  # noqa: E402
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -27,18 +28,6 @@ from edm_sym.outputs.render.context import c_context, input_macros, plan, source
 from edm_sym.outputs.render.environment import environment, template_dir
 from edm_sym.outputs.render.writer import OutputError, write_files
 
-
-def _support() -> ModuleType:
-    name = "edm_codegen_support"
-    if name not in sys.modules:
-        path = Path(__file__).parent / "firmware" / "cg_support.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-cg = _support()
 # The hand-written fixture: these tests assert its known rows (the shipped example may change).
 EXAMPLE = load_result(cg.HANDWRITTEN)
 

@@ -20,14 +20,13 @@ Needs a host C compiler (marked ``toolchain``).
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
+
+# tests/ is on sys.path (pytest's rootdir-relative import mode): the shared harness.
+from firmware import cg_support as cg  # noqa: E402
 
 from edm_sym.application.exporting import export
 from edm_sym.core.elements import BY_NAME, default_ranges
@@ -35,18 +34,6 @@ from edm_sym.core.elements.ops import NUMPY, TAN_LIMIT
 from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.engines.simulate import simulate
 
-
-def _support() -> ModuleType:
-    name = "edm_codegen_support"
-    if name not in sys.modules:
-        path = Path(__file__).parent / "firmware" / "cg_support.py"
-        spec = importlib.util.spec_from_file_location(name, path)
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-cg = _support()
 pytestmark = pytest.mark.toolchain
 CC = next((cc for cc in ("gcc", "clang") if shutil.which(cc)), None)
 
