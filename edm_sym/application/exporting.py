@@ -70,13 +70,10 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     check_state([g.element.state_size(comp.value(g), comp.sample_time)
                  for row in comp.matrix.rows for g in row.genes],
                 real if "c" in names else "double", source_of(result).name)
-    from edm_sym.engines.symbolic import build_model, decode  # sympy only when exporting
+    from edm_sym.engines.symbolic import build_model  # sympy only when exporting
 
     source = source_of(result)
-    if REPORT in names:
-        model = decode(result)
-    else:
-        model = build_model(result.compensator, sha256=source.sha256, target=result.target)
+    model = build_model(result.compensator, sha256=source.sha256, target=result.target)
     files = render(result, target, prefix=prefix, real=real, model=model)
     if REPORT not in names:
         return write_files(out_dir, files)
@@ -87,8 +84,8 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     # target is written on its own: a PDF that fails (latexmk missing, LaTeX stopping)
     # leaves the .tex, the figures and the C and Python in place, and says so.
     try:
-        written = write_report(result, out_dir, prefix=prefix, ts=ts, pdf=pdf, model=model,
-                               **inputs)
+        # The report decodes the model itself, judged on its data as `edm describe` does.
+        written = write_report(result, out_dir, prefix=prefix, ts=ts, pdf=pdf, **inputs)
     except (ToolMissingError, ExternalToolError) as exc:
         code = write_files(out_dir, files)
         if not code:

@@ -225,32 +225,45 @@ def recorded_data(result: EdmResult) -> str | Path | None:
     return base / spec
 
 
-def held_out_rows(result: EdmResult, log: DataLog) -> tuple[int, int] | None:
+def held_out_rows(result: EdmResult, log: DataLog) -> tuple[int, int] | list[list[int]] | None:
     """The rows of ``log`` the search held out, when ``log`` is the log it was fitted to.
 
     A result that records a held-out segment (``validation.held_out``, kind
-    ``segment``, rows ``[n_train, N]``) of a log with the digest
-    ``provenance.data_sha256`` gives those rows for a log of that digest and
-    length; any other log (an evaluation log, a file held out whole) gives None:
-    all of it is data the search did not fit, or the caller's choice.
+    ``segment``, rows ``[n_train, N]``) or held-out blocks (kind ``blocks``,
+    ``[[start, stop], ...]``) of a log with the digest ``provenance.data_sha256``
+    gives those rows (``(start, stop)`` or the list of blocks) for a log of that
+    digest and length; any other log (an evaluation log, a file held out whole)
+    gives None: all of it is data the search did not fit, or the caller's choice.
     """
     val = result.validation if isinstance(result.validation, Mapping) else {}
     held = val.get("held_out")
-    if not isinstance(held, Mapping) or held.get("kind") != "segment":
+    if not isinstance(held, Mapping) or held.get("kind") not in ("segment", "blocks"):
         return None
-    rows = held.get("rows")
     digest = (result.provenance or {}).get("data_sha256")
-    if not (isinstance(rows, list | tuple) and len(rows) == 2
-            and all(isinstance(r, int) for r in rows)):
+    if digest is None or log.sha256 != digest:
         return None
-    start, stop = rows
-    if digest is None or log.sha256 != digest or stop != len(log) or not 0 <= start < stop:
+    pair = lambda r: (isinstance(r, list | tuple) and len(r) == 2  # noqa: E731
+                      and all(isinstance(v, int) for v in r) and 0 <= r[0] < r[1] <= len(log))
+    if held["kind"] == "blocks":
+        blocks = held.get("blocks")
+        if not (isinstance(blocks, list) and blocks and all(pair(b) for b in blocks)):
+            return None
+        return [list(b) for b in blocks]
+    rows = held.get("rows")
+    if not pair(rows) or rows[1] != len(log):
         return None
-    return start, stop
+    return rows[0], rows[1]
+
+
+def held_out_selector(held: tuple[int, int] | list[list[int]]) -> slice | np.ndarray:
+    """The samples of :func:`held_out_rows`' answer: a slice, or the indices of the blocks."""
+    if isinstance(held, tuple):
+        return slice(*held)
+    return np.concatenate([np.arange(a, b) for a, b in held])
 
 
 def data_velocity_range(signals: Mapping[str, np.ndarray], roles: Mapping[str, str | None],
-                        ts: float, part: slice = slice(None)) -> float | None:
+                        ts: float, part: slice | np.ndarray = slice(None)) -> float | None:
     """The velocities a log reaches: the ``VELOCITY_PERCENTILE`` of |velocity| on ``part``.
 
     From the inputs with the role ``velocity``, else from the differences of
@@ -264,20 +277,48 @@ def data_velocity_range(signals: Mapping[str, np.ndarray], roles: Mapping[str, s
         Each input's role.
     ts : float
         Sample time [s].
-    part : slice
-        The samples judged (the held-out rows).
+    part : slice or numpy.ndarray
+        The samples judged (the held-out rows: a slice, or indices of blocks).
     """
     found = [np.abs(np.asarray(signals[n], dtype=float)[part]) for n, r in roles.items()
              if r == "velocity" and n in signals]
     if not found:
-        found = [np.abs(np.diff(np.asarray(signals[n], dtype=float)[part])) / ts
-                 for n, r in roles.items() if r == "angle" and n in signals]
+        angles = [np.asarray(signals[n], dtype=float) for n, r in roles.items()
+                  if r == "angle" and n in signals]
+        if isinstance(part, slice):
+            found = [np.abs(np.diff(a[part])) / ts for a in angles]
+        else:  # differences within the log, taken at the judged samples (not across blocks)
+            found = [np.abs(np.diff(a))[part[part < len(a) - 1]] / ts for a in angles]
     found = [f[np.isfinite(f)] for f in found if f.size > 1]
     found = [f for f in found if f.size]
     if not found:
         return None
     v = max(float(np.percentile(f, VELOCITY_PERCENTILE)) for f in found)
     return v if v > 0 and math.isfinite(v) else None
+
+
+def classify_on(result: EdmResult, x: np.ndarray, *, roles: Mapping[str, str | None] | None = None,
+                part: slice | np.ndarray = slice(None)) -> ClassifyOptions:
+    """The classifier's options for judging ``result`` on a log: the axis's, over its velocities.
+
+    ``edm describe`` and the report both judge through this, so they name rows alike.
+
+    Parameters
+    ----------
+    result : EdmResult
+    x : numpy.ndarray
+        The log's inputs, stacked in the order of ``result``'s inputs (whole log).
+    roles : mapping, optional
+        Input roles over those the result records and the defaults.
+    part : slice or numpy.ndarray
+        The samples judged.
+    """
+    classify = ClassifyOptions.for_axis(result.axis)
+    inputs = result.compensator.matrix.inputs
+    role_map = input_roles(inputs, {**getattr(result, "roles", {}), **(roles or {})})
+    signals = dict(zip(inputs, x, strict=True))
+    v_range = data_velocity_range(signals, role_map, result.sample_time, part)
+    return replace(classify, velocity_range=v_range) if v_range is not None else classify
 
 
 def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles | None,
@@ -386,24 +427,19 @@ def describe(
         # (simulated after the training rows, as the search scored them).
         held = held_out_rows(result, log)
         if held is not None:
-            sl = slice(*held)
+            sl = held_out_selector(held)
             outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
         resid = target - outputs.sum(axis=0)
         data_fit = {"source": str(log.source), "samples": len(target),
                     "target_rms": [float(np.sqrt(np.mean(target ** 2))), force],
                     "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
         if held is not None:
-            data_fit["rows"] = list(held)
+            data_fit["rows"] = list(held) if isinstance(held, tuple) else held
     # Shapes are judged over the velocities the data reaches, not a fixed range:
     # a gentle saturation that looks viscous over +-10 rad/s acts as Coulomb at 60.
-    classify = ClassifyOptions.for_axis(result.axis)
-    role_map = input_roles(comp.matrix.inputs, {**getattr(result, "roles", {}), **(roles or {})})
-    if inputs is not None:
-        signals = dict(zip(comp.matrix.inputs, x, strict=True))
-        v_range = data_velocity_range(signals, role_map, result.sample_time,
-                                      slice(*held) if held is not None else slice(None))
-        if v_range is not None:
-            classify = replace(classify, velocity_range=v_range)
+    classify = (classify_on(result, x, roles=roles,
+                            part=held_out_selector(held) if held is not None else slice(None))
+                if inputs is not None else ClassifyOptions.for_axis(result.axis))
     model = decode(result, roles=roles, systems=False, classify=classify)
     judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),

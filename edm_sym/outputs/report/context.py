@@ -61,6 +61,9 @@ class ReportInputs:
         The ``--ts`` option the logs were read with.
     steady : SteadyState or None
         The friction characteristic of the velocity rows.
+    classify : ClassifyOptions or None
+        The options ``model`` was decoded and its rows are judged with
+        (:func:`edm_sym.outputs.report.flags.report_classify`; None: the axis's defaults).
     """
 
     result: Any
@@ -75,6 +78,7 @@ class ReportInputs:
     versions: Sequence[tuple[str, str]] = ()
     ts: float | None = None
     steady: SteadyState | None = None
+    classify: Any = None
 
 
 def package_versions() -> tuple[tuple[str, str], ...]:
@@ -356,7 +360,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
     if inp.lugre is not None:
         facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
     facts.append(bounds_fact(p, model))
-    judged = judge_report_rows(model, runs)  # honest names (edm_sym.outputs.report.flags)
+    judged = judge_report_rows(model, runs, inp.classify)  # honest names (edm_sym.outputs.report.flags)
     facts.append(negligible_fact(p, judged, bool(runs)))
     rows = [row_context(p, model, row, runs, j) for row, j in zip(model.rows, judged, strict=True)]
     overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),

@@ -9,21 +9,35 @@ does on that log. Every string returned here is finished LaTeX.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from edm_sym.core.bounds import bound_flags
+from edm_sym.engines.description import classify_on
+from edm_sym.engines.symbolic.classify import ClassifyOptions
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.engines.symbolic.significance import JudgedRow, judge_rows
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.runs import LogRun
 
 
-def judge_report_rows(model: SymbolicModel, runs: Sequence[LogRun]) -> tuple[JudgedRow, ...]:
+def report_classify(result: Any, runs: Sequence[LogRun]) -> ClassifyOptions | None:
+    """The classifier's options ``edm describe`` uses on the last log of ``runs`` (None: no log)."""
+    if not runs or runs[-1].inputs is None:
+        return None
+    return classify_on(result, runs[-1].inputs)
+
+
+def judge_report_rows(model: SymbolicModel, runs: Sequence[LogRun],
+                      classify: ClassifyOptions | None = None) -> tuple[JudgedRow, ...]:
     """The rows judged on the last log of ``runs`` (none: nothing is measured).
 
     Parameters
     ----------
     model : SymbolicModel
+        Decoded with ``classify``.
     runs : sequence of LogRun
+    classify : ClassifyOptions, optional
+        :func:`report_classify`'s, as ``edm describe`` judges.
 
     Returns
     -------
@@ -32,9 +46,9 @@ def judge_report_rows(model: SymbolicModel, runs: Sequence[LogRun]) -> tuple[Jud
     if not runs:
         return judge_rows(model)
     run = runs[-1]
-    # A row's input is needed only to measure its static terms; the run keeps none, so the
-    # rows' own outputs decide (a static term is then judged with its row).
-    return judge_rows(model, run.rows, run.target)
+    inputs = (None if run.inputs is None
+              else [run.inputs[row.input] for row in model.compensator.matrix.rows])
+    return judge_rows(model, run.rows, run.target, inputs, classify=classify)
 
 
 def row_flags(p: EdmLatexPrinter, judged: JudgedRow) -> list[str]:

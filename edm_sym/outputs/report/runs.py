@@ -63,6 +63,8 @@ class LogRun:
         Row RMS and cumulative RMSE.
     lugre, lugre_rmse : numpy.ndarray or None, float or None
         The LuGre model's torque on this log and its RMSE, when a LuGre result is given.
+    inputs : numpy.ndarray or None
+        Shape (n_inputs, N): the compensator's inputs on this log, in the result's order.
     """
 
     label: str
@@ -77,6 +79,7 @@ class LogRun:
     contributions: Contributions
     lugre: np.ndarray | None = None
     lugre_rmse: float | None = None
+    inputs: np.ndarray | None = None
 
     @property
     def residual(self) -> np.ndarray:
@@ -150,7 +153,8 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
         lugre_rmse = rms(target - lugre_tau)
     contrib = contributions(result, data, target)
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
-                  sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse)
+                  sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse,
+                  data.stack(result.compensator.matrix.inputs))
 
 
 @dataclass(frozen=True)

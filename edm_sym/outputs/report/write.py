@@ -9,6 +9,7 @@ import numpy as np
 
 from edm_sym.outputs.report import figures as fg
 from edm_sym.outputs.report.context import ReportInputs, package_versions, report_context
+from edm_sym.outputs.report.flags import report_classify
 from edm_sym.outputs.report.front import FIGURE as FRONT
 from edm_sym.outputs.report.front import front_figure
 from edm_sym.outputs.report.runs import LogRun, SteadyState, load_log, load_lugre_ref, run_log, steady_state
@@ -137,29 +138,33 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
 
     validate_prefix(prefix)
     out = Path(out_dir)
-    if model is None:
-        from edm_sym.engines.symbolic import decode
-
-        model = decode(result)
     ref = load_lugre_ref(lugre) if lugre is not None else None
     runs: dict[str, LogRun] = {}
     v_max = 0.0
-    roles = [row.role for row in model.rows]
     for label, path in (("abstraction", data), ("evaluation", eval_data)):
         if path is not None:
             log = load_log(path, result, ts=ts, lugre=ref)
             runs[label] = run_log(result, log, label=label, lugre=ref)
-            for j, role in enumerate(roles):
-                if role == "velocity":
-                    col = result.inputs[result.compensator.matrix.rows[j].input]
-                    v_max = max(v_max, float(np.max(np.abs(log.column(col)))))
+    # Decoded and judged as `edm describe` does on the same log (the last one), so both
+    # name the rows alike.
+    classify = report_classify(result, list(runs.values()))
+    if model is None:
+        from edm_sym.engines.symbolic import decode
+
+        model = decode(result, classify=classify) if classify is not None else decode(result)
+    roles = [row.role for row in model.rows]
+    for run in runs.values():
+        for j, role in enumerate(roles):
+            if role == "velocity":
+                signal = run.inputs[result.compensator.matrix.rows[j].input]
+                v_max = max(v_max, float(np.max(np.abs(signal))))
     steady = steady_state(result, roles, v_max or DEFAULT_VELOCITY, lugre=ref)
     source = source_of(result)
     # Render before writing anything, so a failure leaves no file behind.
     inputs = ReportInputs(result, model, source.name, source.sha256, prefix,
                           runs.get("abstraction"), runs.get("evaluation"), ref,
                           {k: figure_name(prefix, k) for k in _figure_keys(result, runs, steady)},
-                          package_versions(), ts, steady)
+                          package_versions(), ts, steady, classify)
     text = render_report(inputs)
     tex_name = f"{prefix}_report.tex"
     written = write_files(out, {tex_name: text})
