@@ -367,6 +367,28 @@ def test_report_names_rows_honestly_and_shows_their_flags(tmp_path: Path) -> Non
     assert "row 3 element 2 (lpf" in fact and "high bound" in fact
 
 
+def test_report_and_describe_name_the_shipped_example_alike() -> None:
+    """The report judges its last log as `edm describe` does: same kinds, same parameters."""
+    from edm_sym.engines.description import describe
+    from edm_sym.engines.symbolic import decode
+    from edm_sym.outputs.report.flags import judge_report_rows, report_classify
+    from edm_sym.outputs.report.runs import load_log, run_log
+
+    result = load_result(ROOT / "examples" / "auger" / "result.json")
+    run = run_log(result, load_log("plant:auger/evaluation", result), label="evaluation")
+    classify = report_classify(result, [run])
+    judged = judge_report_rows(decode(result, classify=classify), [run], classify)
+    desc = describe(result, "plant:auger/evaluation")
+    assert len(judged) == len(desc.rows)
+    for j, row in zip(judged, desc.rows, strict=True):
+        assert [(t.term.kind, t.term.parameters) for t in j.terms] == [
+            (t.term.kind, t.term.parameters) for t in row.terms], f"row {row.index}"
+        assert j.contribution == pytest.approx(row.contribution)
+    # The plant's friction (docs/plant.md), named alike in both: Coulomb on row 3, viscous on 4.
+    assert [t.term.kind for t in desc.rows[2].terms] == ["coulomb"]
+    assert [t.term.kind for t in desc.rows[3].terms] == ["viscous"]
+
+
 def test_recorded_data_that_cannot_be_used_is_a_warning(tmp_path: Path, capsys) -> None:  # noqa: ANN001
     doc = _doc()
     doc["report_inputs"] = {"data": "moved_away.csv"}
