@@ -46,11 +46,20 @@ def log() -> DataLog:
     return friction_log(1.5)[0]
 
 
-def test_the_last_fifth_is_held_out_by_default_and_recorded(log: DataLog) -> None:
+BLOCKS = [[120 + 150 * j, 150 + 150 * j] for j in range(10)]
+HELD = np.concatenate([np.arange(a, b) for a, b in BLOCKS])
+TRAIN = np.setdiff1d(np.arange(1500), HELD)
+END = {**TINY, "validation": {"layout": "end"}}
+
+
+def test_ten_blocks_spread_over_the_log_are_held_out_by_default_and_recorded(
+        log: DataLog) -> None:
     res = run(log)
     held = res.validation["held_out"]
-    assert held == {"kind": "segment", "end": "last", "share": 0.2, "rows": [1200, 1500],
-                    "t": [pytest.approx(1.2), pytest.approx(1.499)]}
+    # 20 % of 1500 samples in 10 blocks of 30, each at the end of its tenth of the log.
+    assert held == {"kind": "blocks", "share": 0.2, "count": 10, "blocks": BLOCKS,
+                    "times": [[pytest.approx(a * TS), pytest.approx((b - 1) * TS)]
+                              for a, b in BLOCKS]}
     assert res.validation["training"]["samples"] == 1200
     assert res.validation["validation"]["samples"] == 300
     assert res.validation["training"]["fitness"][1] == "N m"
@@ -58,13 +67,31 @@ def test_the_last_fifth_is_held_out_by_default_and_recorded(log: DataLog) -> Non
                                            "below": 1.0}
 
 
+def test_the_last_fifth_is_held_out_with_the_end_layout(log: DataLog) -> None:
+    res = run(log, END)
+    held = res.validation["held_out"]
+    assert held == {"kind": "segment", "end": "last", "share": 0.2, "rows": [1200, 1500],
+                    "t": [pytest.approx(1.2), pytest.approx(1.499)]}
+    assert res.validation["training"]["samples"] == 1200
+    assert res.validation["validation"]["samples"] == 300
+
+
 NO_PRUNE = {**TINY, "parsimony": {"prune": False}}
 
 
-def test_the_held_out_segment_never_enters_the_ga(log: DataLog) -> None:
+def corrupted_at(log: DataLog, index: np.ndarray) -> DataLog:
+    """The same log with its target at ``index`` replaced by a large unrelated signal."""
+    cols = dict(log.columns)
+    tau = cols["tau_ext"].copy()
+    tau[index] = 50.0 * np.cos(np.arange(len(index)) * 0.37) + 20.0
+    cols["tau_ext"] = tau
+    return DataLog(cols, log.ts, "corrupted")
+
+
+def test_the_held_out_blocks_never_enter_the_ga(log: DataLog) -> None:
     # Without the pruning pass, which scores simplifications on the held-out part on purpose.
     clean = run(log, NO_PRUNE)
-    bad = run(corrupted(log, 1200), NO_PRUNE)
+    bad = run(corrupted_at(log, HELD), NO_PRUNE)
     # Every step, every history value and the final matrix are the same bytes ...
     assert [matrix_to_json(s.matrix) for s in bad.steps] == [
         matrix_to_json(s.matrix) for s in clean.steps]
@@ -73,17 +100,34 @@ def test_the_held_out_segment_never_enters_the_ga(log: DataLog) -> None:
     assert bad.validation["training"] == clean.validation["training"]
     # ... but the held-out score sees the corruption.
     assert bad.validation["validation"]["rmse"][0] > 10 * clean.validation["validation"]["rmse"][0]
-    # Corrupting one sample before the segment changes the fit: the check can fail.
-    assert dumps(run(corrupted(log, 1199), NO_PRUNE)) != dumps(bad)
+    # Corrupting one training sample between two blocks changes the fit: the check can fail.
+    assert dumps(run(corrupted_at(log, np.array([200])), NO_PRUNE)) != dumps(clean)
 
 
-def test_both_scores_match_an_independent_recomputation(log: DataLog) -> None:
-    res = run(log)
+def test_the_held_out_segment_never_enters_the_ga(log: DataLog) -> None:
+    end = {**NO_PRUNE, "validation": {"layout": "end"}}
+    clean = run(log, end)
+    bad = run(corrupted(log, 1200), end)
+    assert [matrix_to_json(s.matrix) for s in bad.steps] == [
+        matrix_to_json(s.matrix) for s in clean.steps]
+    assert [s.history for s in bad.steps] == [s.history for s in clean.steps]
+    assert bad.validation["training"] == clean.validation["training"]
+    assert bad.validation["validation"]["rmse"][0] > 10 * clean.validation["validation"]["rmse"][0]
+    assert dumps(run(corrupted(log, 1199), end)) != dumps(bad)
+
+
+@pytest.mark.parametrize(("doc", "parts"), [
+    (TINY, (("training", TRAIN), ("validation", HELD))),
+    (END, (("training", slice(0, 1200)), ("validation", slice(1200, None)))),
+])
+def test_both_scores_match_an_independent_recomputation(log: DataLog, doc: dict,
+                                                        parts: tuple) -> None:
+    res = run(log, doc)
     # The per-sample loop (a firmware-like realisation) over the whole log, from rest.
     total = plain_loop(res.compensator, log).sum(axis=0)
     e = log.columns["tau_ext"] - total
     lam = np.where(np.abs(log.columns["tau_ext"]) >= 0.5, 4.0, 1.0)
-    for part, sl in (("training", slice(0, 1200)), ("validation", slice(1200, None))):
+    for part, sl in parts:
         score = res.validation[part]
         assert score["fitness"][0] == pytest.approx(np.sqrt(np.mean(lam[sl] * e[sl] ** 2)),
                                                     rel=1e-9)
@@ -91,15 +135,17 @@ def test_both_scores_match_an_independent_recomputation(log: DataLog) -> None:
     # The result's fitness is the exported model's training eq. 8 ...
     assert res.fitness == pytest.approx(res.validation["training"]["fitness"][0], rel=1e-12)
     # ... which, without pruning, is the last step's, as the GA ranked it.
-    plain = run(log, NO_PRUNE)
-    assert plain.steps[-1].fitness == pytest.approx(plain.fitness, rel=1e-12)
-    assert plain.validation["training"]["fitness"][0] == pytest.approx(plain.fitness, rel=1e-12)
+    plain = run(log, {**doc, "parsimony": {"prune": False}})
+    assert plain.steps[-1].fitness == pytest.approx(plain.fitness, rel=1e-9)
+    assert plain.validation["training"]["fitness"][0] == pytest.approx(plain.fitness, rel=1e-9)
 
 
 def test_a_share_from_the_config_or_the_call(log: DataLog) -> None:
-    res = run(log, {**TINY, "validation": {"share": 0.4, "unit": "N"}})
+    res = run(log, {**TINY, "validation": {"share": 0.4, "unit": "N", "layout": "end"}})
     assert res.validation["held_out"]["rows"] == [900, 1500]
     assert res.validation["training"]["rmse"][1] == "N"
+    res = run(log, {**TINY, "validation": {"share": 0.4, "blocks": 3}})
+    assert res.validation["held_out"]["blocks"] == [[300, 500], [800, 1000], [1300, 1500]]
     res = run(log, {**TINY, "validation": {"share": 0.4}}, validation_share=0.0)
     assert res.validation["held_out"] == {"kind": "none"}
     assert res.validation["validation"] is None
@@ -153,6 +199,11 @@ def test_settings_are_checked() -> None:
     with pytest.raises(ConfigError, match="c.toml: validation.fraction: unknown key"):
         parse_validation("c.toml: validation", {"fraction": 0.2})
     assert ValidationSettings().share == 0.2
+    assert (ValidationSettings().layout, ValidationSettings().blocks) == ("blocks", 10)
+    with pytest.raises(ConfigError, match="validation.layout: expected one of blocks, end, found"):
+        parse_validation("c.toml: validation", {"layout": "middle"})
+    with pytest.raises(ConfigError, match="validation.blocks: expected an integer >= 1, found 0"):
+        parse_validation("c.toml: validation", {"blocks": 0})
     with pytest.raises(ConfigError, match="validation.share: expected a share that leaves"):
         run(DataLog({"omega": np.ones(3), "alpha": np.zeros(3), "tau_ext": np.ones(3)}, TS),
             validation_share=0.1)
@@ -192,7 +243,8 @@ def _abstract(files: tuple[Path, Path, Path], out: Path, *extra: str) -> int:
 def test_cli_validation_share_and_validate(files: tuple[Path, Path, Path], tmp_path: Path,
                                            capsys: pytest.CaptureFixture) -> None:
     assert _abstract(files, tmp_path / "a.json", "--validation-share", "0.5") == 0
-    assert load_result(tmp_path / "a.json").validation["held_out"]["rows"] == [500, 1000]
+    held = load_result(tmp_path / "a.json").validation["held_out"]
+    assert (held["kind"], held["share"], len(held["blocks"])) == ("blocks", 0.5, 10)
     assert _abstract(files, tmp_path / "b.json", "--validate", str(files[1])) == 0
     out = capsys.readouterr().out
     assert "held out: val.csv (500 samples)" in out

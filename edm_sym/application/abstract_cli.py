@@ -61,7 +61,6 @@ def run_cli(args: argparse.Namespace) -> int:
     from edm_sym.core.result import save_result
     from edm_sym.engines.abstraction.run import abstract
     from edm_sym.engines.abstraction.schedule import default_config, load_config
-    from edm_sym.engines.abstraction.validation import ValidationSettings
     from edm_sym.engines.sources import load_data
 
     config = load_config(args.config) if args.config else default_config()
@@ -78,7 +77,7 @@ def run_cli(args: argparse.Namespace) -> int:
                                                 f"second log is held out whole), found {share}")
     if share is not None:
         try:
-            config = replace(config, validation=ValidationSettings(share, config.validation.unit))
+            config = replace(config, validation=replace(config.validation, share=share))
         except ConfigError as exc:
             raise ConfigError("--validation-share", exc.problem) from None
     config = _parsimony_options(config, args)
@@ -220,6 +219,9 @@ def summary_lines(validation: dict) -> list[str]:
     if held["kind"] == "segment":
         out = [f"held out: rows {held['rows'][0]}-{held['rows'][1]} of the log "
                f"(last {100 * held['share']:g} %)"]
+    elif held["kind"] == "blocks":
+        out = [f"held out: {100 * held['share']:g} % of the log in {held['count']} blocks "
+               f"spread over it (rows {held['blocks'][0][0]}-{held['blocks'][0][1]}, ...)"]
     elif held["kind"] == "file":
         out = [f"held out: {held['file']} ({held['samples']} samples)"]
     else:

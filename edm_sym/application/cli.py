@@ -196,7 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a dask scheduler (tcp://host:8786): evaluate on its workers instead "
                         "(needs edm_sym[dask]; docs/abstraction.md)")
     p.add_argument("--validation-share", type=float, metavar="SHARE",
-                   help="share of DATA held out at its end, 0-0.9 (default: the config's, 0.2)")
+                   help="share of DATA held out, 0-0.9, in the config's layout (default: "
+                        "the config's, 0.2 in 10 blocks spread over the log)")
     p.add_argument("--validate", metavar="FILE",
                    help="a second log held out as a whole (the GA fits all of DATA)")
     p.add_argument("--select", metavar="RULE",

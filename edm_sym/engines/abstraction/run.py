@@ -46,7 +46,7 @@ from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
-from edm_sym.engines.abstraction.validation import Scorer, plan_holdout
+from edm_sym.engines.abstraction.validation import Scorer, mask_weights, plan_holdout
 from edm_sym.engines.simulate import fitness, simulate_rows
 
 #: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
@@ -183,8 +183,10 @@ class _Runner:
                  inputs: Sequence[str],
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
                  checkpoint: Path | None, time_limit: float | None,
-                 callback: Callable[[GenerationInfo], bool | None] | None):
+                 callback: Callable[[GenerationInfo], bool | None] | None,
+                 mask: np.ndarray | None = None):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
+        self.mask = mask
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
         self.inputs = tuple(inputs)
         self.state, self.rng, self.checkpoint = state, rng, checkpoint
@@ -226,7 +228,7 @@ class _Runner:
         k0 = self.state.current.step if self.state.current else len(self.state.finished)
         for k in range(k0, len(steps)):
             step = steps[k]
-            lam = step.weighting.weights(self.t, self.y)
+            lam = mask_weights(step.weighting.weights(self.t, self.y), self.mask)
             if not np.any(np.asarray(lam) > 0):
                 raise ConfigError(f"{self.cfg.source}: step[{k}].weighting",
                                   "expected a positive weight for some sample of the data, "
@@ -495,7 +497,8 @@ def abstract(
     check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
     _require_samples(data, hold.n_train, cfg)
     data.require_varying(inputs)
-    # The GA sees the training samples only (causal rows: they do not depend on later ones).
+    # The GA sees the training samples only (causal rows: they do not depend on later ones);
+    # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training
     x = np.ascontiguousarray(part.x[:, :hold.n_train])
     y, t = part.y[:hold.n_train], part.t[:hold.n_train]
@@ -524,7 +527,7 @@ def abstract(
         raise
     runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
                      evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
-                     time_limit=time_limit, callback=callback)
+                     time_limit=time_limit, callback=callback, mask=hold.mask)
     reason = "completed"
     try:
         runner.run()
@@ -542,7 +545,7 @@ def abstract(
     steps = []
     for r in runner.records():
         matrix = r.best.matrix(0, inputs)
-        lam = cfg.steps[r.step - 1].weighting.weights(t, y)
+        lam = mask_weights(cfg.steps[r.step - 1].weighting.weights(t, y), hold.mask)
         steps.append(StepRecord(step=r.step, matrix=matrix,
                                 fitness=_reference_fitness(matrix, ts, ranges, x, y, lam,
                                                            r.fitness, r.step),
