@@ -73,10 +73,13 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     from edm_sym.engines.symbolic import build_model, decode  # sympy only when exporting
 
     source = source_of(result)
+    # The axis given explicitly: the model's units (N or N m in the header's and module's
+    # comments, the report's terms) are the result's, never a default.
     if REPORT in names:
-        model = decode(result)
+        model = decode(result, axis=source.axis)
     else:
-        model = build_model(result.compensator, sha256=source.sha256, target=result.target)
+        model = build_model(result.compensator, sha256=source.sha256, target=result.target,
+                            axis=source.axis)
     files = render(result, target, prefix=prefix, real=real, model=model)
     if REPORT not in names:
         return write_files(out_dir, files)
