@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -43,10 +44,14 @@ from edm_sym.engines.observer import (
 from edm_sym.engines.simulate import simulate
 
 REPO = Path(__file__).resolve().parents[1]
-#: The EMPS log beside the checkout (``../shared``), or beside a worktree's parent.
-EMPS = next((p for p in (REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat",
-                         REPO.parents[1] / "shared" / "data" / "emps" / "DATA_EMPS.mat")
-             if p.exists()), REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat")
+#: The environment variable naming DATA_EMPS.mat (as for the tests: tests/conftest.py).
+EMPS_ENV = "EDM_EMPS_DATA"
+#: The EMPS log: ``$EDM_EMPS_DATA``, else beside the checkout (``../shared``), else the
+#: project machines' shared folder; the first of those when none exists (main says so).
+_PLACES = ([Path(os.environ[EMPS_ENV]).expanduser()] if os.environ.get(EMPS_ENV) else
+           [REPO.parent / "shared" / "data" / "emps" / "DATA_EMPS.mat",
+            Path("/work/shared/data/emps/DATA_EMPS.mat")])
+EMPS = next((p for p in _PLACES if p.is_file()), _PLACES[0])
 CONFIG = REPO / "examples" / "emps" / "abstraction.toml"
 #: Nominal mass the observer assumes [kg] (the identified one is about 95 kg).
 NOMINAL_MASS = 90.0
@@ -129,7 +134,7 @@ def main() -> None:
     parser.add_argument("--json", action="store_true", help="print the runs and summary as JSON")
     args = parser.parse_args()
     if not args.train.exists():
-        print(f"skipped: {args.train} not found")
+        print(f"skipped: {args.train} not found (give --train FILE or set {EMPS_ENV})")
         return
     seeds = [int(s) for s in args.seeds.split(",")]
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:

@@ -1,6 +1,9 @@
-"""Shared fixtures: small hand-written matrices and signals."""
+"""Shared fixtures: small hand-written matrices and signals; where the EMPS log is."""
 
 from __future__ import annotations
+
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -41,6 +44,38 @@ def coulomb_viscous() -> Compensator:
         ],
     )
     return Compensator(m, TS, {}, 20.0)
+
+
+#: The environment variable naming DATA_EMPS.mat, the measured EMPS log (not shipped: its
+#: readme says it is for tests and benchmarks, not for the package).
+EMPS_ENV = "EDM_EMPS_DATA"
+#: Where DATA_EMPS.mat is looked for without the variable: beside the checkout, then the
+#: project machines' shared folder.
+EMPS_PLACES = (Path(__file__).resolve().parents[1].parent / "shared" / "data" / "emps" / "DATA_EMPS.mat",
+               Path("/work/shared/data/emps/DATA_EMPS.mat"))
+
+
+def emps_path() -> Path:
+    """DATA_EMPS.mat for a test that needs it; the test is skipped, saying why, when it is missing.
+
+    The file named by ``$EDM_EMPS_DATA`` when that is set, else the first of
+    :data:`EMPS_PLACES` that exists.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    given = os.environ.get(EMPS_ENV)
+    if given:
+        path = Path(given).expanduser()
+        if not path.is_file():
+            pytest.skip(f"{EMPS_ENV}={given}: no such file (set it to DATA_EMPS.mat, the EMPS log)")
+        return path
+    for path in EMPS_PLACES:
+        if path.is_file():
+            return path
+    pytest.skip(f"DATA_EMPS.mat not found in {' or '.join(map(str, EMPS_PLACES))}: set {EMPS_ENV} "
+                "to its path (the EMPS log is not shipped)")
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

@@ -42,3 +42,13 @@ def test_an_unknown_axis_is_refused_naming_the_field(tmp_path: Path) -> None:
     path.write_text(json.dumps(doc))
     with pytest.raises(ResultFormatError, match=r"bad.json: axis.*angular"):
         load_result(path)
+
+
+def test_the_closing_summarys_fitness_is_in_the_axis_unit() -> None:
+    from edm_sym.application.summary import fitness_line
+
+    res = replace(load_result(HANDWRITTEN), fitness=0.25, validation={})
+    assert fitness_line(res) == ("fitness (weighted eq. 8): training 0.25 N m, "
+                                 "validation: none held out")
+    assert fitness_line(replace(res, axis="linear")) == ("fitness (weighted eq. 8): training 0.25 N, "
+                                                         "validation: none held out")

@@ -201,3 +201,29 @@ def test_the_c_step_never_reads_the_slot_of_an_input_no_row_reads(tmp_path: Path
     subprocess.run(["gcc", "-std=c99", "-O1", "-o", "prog", "main.c", "edm_comp.c", "-lm"],
                    cwd=tmp_path, check=True, capture_output=True)
     assert subprocess.run([str(tmp_path / "prog")], cwd=tmp_path).returncode == 0
+
+
+def test_export_builds_the_model_on_the_results_axis(tmp_path: Path, monkeypatch) -> None:
+    """The C/Python model is built with the linear axis, not a rotary default (issue 14 item 2)."""
+    import edm_sym.application.exporting as exporting
+    from edm_sym.engines.symbolic import build_model
+    from edm_sym.outputs.render import render
+
+    result, _ = _result(tmp_path)
+    seen = []
+
+    def spy(res, target, **kw):  # noqa: ANN001, ANN202
+        seen.append(kw["model"].axis)
+        return render(res, target, **kw)
+
+    monkeypatch.setattr(exporting, "render", spy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        header = (export(result, "c", tmp_path / "out")[0]).read_text()
+    assert seen == ["linear"]
+    comment = _comment_text(header)
+    assert "[N]" in comment and "[m/s]" in comment
+    assert "N m" not in comment and "rad/s" not in comment
+    # A model of another axis than the result's is refused, not printed with the wrong units.
+    with pytest.raises(ValueError, match=r"model: axis: expected 'linear' as in result.json, found 'rotary'"):
+        render(result, "c", model=build_model(result.compensator))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 import subprocess
 import sys
 from importlib import resources
@@ -131,6 +133,18 @@ def test_bound_margin_in_normalised_p(p: float, flagged: bool) -> None:
     if flagged:
         f = flags[0]
         assert (f.row, f.col, f.element, f.side) == (2, 1, "lpf", "high" if p > 0.5 else "low")
+
+
+def test_flag_texts_give_four_significant_digits_and_the_unit() -> None:
+    doc = _doc()
+    doc["matrix"]["rows"][2]["elements"][1]["p"] = 0.9999999  # the lpf's corner, at its high bound
+    (flag,) = bound_flags(edm_sym.core.result.parse_result(doc).compensator)
+    text = flag.message()
+    assert re.search(rf"\(lpf, corner frequency\) = {flag.value:.4g} rad/s is at its high bound "
+                     rf"{flag.bound:.4g} rad/s \(p = 1\)$", text), text
+    assert "0.9999999" not in text and f"{flag.value:.6g}" not in text
+    # A dimensionless parameter gets no unit ("= 0.5 1" would read as two numbers).
+    assert dataclasses.replace(flag, unit="1", value=0.123456).message().count("= 0.1235 is at") == 1
 
 
 def test_periodic_phase_is_never_at_a_bound() -> None:

@@ -6,6 +6,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
+from conftest import emps_path
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks" / "bench_emps.py"
@@ -20,10 +21,9 @@ def _bench():
 
 @pytest.mark.slow
 def test_emps_held_out_error_no_worse_than_reference() -> None:
+    path = emps_path()
     bench = _bench()
-    if not bench.EMPS.exists():
-        pytest.skip(f"{bench.EMPS} not present")
-    r = bench.run(time_limit=None, seed=1)
+    r = bench.run(time_limit=None, seed=1, path=path)
     print(f"EMPS held out: EDM {r['edm_held_out']:.4f} %, reference {r['reference_held_out']:.4f} % "
           f"(published {bench.PUBLISHED} %)")
     assert r["edm_held_out"] <= r["reference_held_out"]

@@ -95,10 +95,11 @@ def test_unknown_attribute_is_still_an_attribute_error() -> None:
 def test_params_clone_and_set_params_round_trip() -> None:
     roles = {"x": "velocity"}
     est = EDMRegressor(sample_time=2e-3, config=TINY_CONFIG, seed=7, time_limit=3.0, roles=roles,
-                       target_name="tau", workers=2, progress=True)
+                       target_name="tau", workers=2, progress=True, axis="linear")
     params = est.get_params()
     assert params == {"sample_time": 2e-3, "config": TINY_CONFIG, "seed": 7, "time_limit": 3.0,
-                      "roles": roles, "target_name": "tau", "workers": 2, "progress": True}
+                      "roles": roles, "target_name": "tau", "workers": 2, "progress": True,
+                      "axis": "linear"}
     twin = clone(est)
     assert twin is not est and twin.get_params() == params
     assert EDMRegressor(**params).get_params() == params
@@ -210,7 +211,30 @@ def test_array_names_and_feature_names(log: pd.DataFrame) -> None:
                                                              feature_names=["w", "a"])
 
 
+def test_a_linear_axis_reaches_the_result_and_its_outputs(tmp_path: Path) -> None:
+    """Issue 16 item 2 / issue 14 item 2: axis="linear" gives N, m/s and N s/m everywhere."""
+    t = np.arange(2000) * TS
+    v = 0.15 * np.sin(2 * np.pi * 1.5 * t) + 0.08 * np.sin(2 * np.pi * 4.1 * t + 0.3)
+    force = 20.0 * np.sign(v) + 60.0 * v + 0.2 * np.random.default_rng(0).standard_normal(len(t))
+    X = pd.DataFrame({"vel": v, "acc": np.gradient(v, TS)})
+    est = EDMRegressor(sample_time=TS, config=TINY_CONFIG, seed=1, axis="linear",
+                       target_name="force").fit(X, force)
+    assert est.result_.axis == "linear"
+    table = est.describe().table()
+    assert "linear axis, target in N" in table and "N s/m" in table
+    assert "N m" not in table and "rad/s" not in table
+    header = est.to_c(tmp_path, prefix="lin")[0].read_text()
+    assert "[N]" in header and "m/s" in header and "N m" not in header and "rad/s" not in header
+    assert est.to_control().dt == TS
+
+
 # --- errors ---
+
+@pytest.mark.parametrize("axis", ["angular", None, 1])
+def test_fit_refuses_an_unknown_axis(axis: object, log: pd.DataFrame) -> None:
+    with pytest.raises(ValueError, match=r"EDMRegressor.fit: axis: expected 'rotary' or 'linear', found"):
+        EDMRegressor(sample_time=TS, config=TINY_CONFIG, axis=axis).fit(log[["omega"]], log["tau_ext"])
+
 
 @pytest.mark.parametrize("ts", [None, 0.0, -1e-3, float("nan"), "1e-3", True])
 def test_fit_needs_a_sample_time(ts: object, log: pd.DataFrame) -> None:

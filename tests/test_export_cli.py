@@ -133,3 +133,20 @@ def test_console_script_runs_from_another_folder(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     names = {p.name for p in (tmp_path / "out").iterdir()}
     assert {"edm_comp.c", "edm_comp.h", "edm_comp.py", "edm_comp_report.tex"} <= names
+
+
+@pytest.mark.parametrize(("module", "argv"), [
+    ("edm_sym.application.exporting", ["export", str(EXAMPLE), "--target", "c"]),
+    ("edm_sym.application.abstract_cli", ["abstract", "plant:auger/abstraction"]),
+])
+def test_a_broken_internal_import_is_a_bug_not_a_missing_tool(
+        module: str, argv: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture) -> None:
+    # Internal modules are always installed: an ImportError there is a defect to report,
+    # not "not available in this build" (only optional extras are missing tools).
+    monkeypatch.setitem(sys.modules, module, None)  # the next import of it raises ImportError
+    assert main([*argv, "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert "failed: ModuleNotFoundError" in err and module in err and "this is a bug of edm_sym" in err
+    assert "not available" not in err
+    assert not (tmp_path / "out").exists()

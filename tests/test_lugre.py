@@ -12,6 +12,7 @@ from pathlib import Path
 import jsonschema
 import numpy as np
 import pytest
+from conftest import emps_path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy import signal
@@ -275,18 +276,14 @@ def test_identification_recovers_friction(truth):
     print(f"identified in {elapsed:.1f} s, {result.evaluations} evaluations: {result.params}")
 
 
-EMPS = Path("/work/shared/data/emps/DATA_EMPS.mat")
-
-
 @pytest.mark.slow
-@pytest.mark.skipif(not EMPS.exists(), reason="EMPS benchmark data not available")
 def test_identification_on_real_emps_axis_matches_published_friction():
     # Real data: Janot et al.'s EMPS axis. The published least-squares model
     # has Fc = 20.3935 N, Fv = 203.5034 N s/m; above the stiction region the
     # LuGre steady state must agree with Fc sgn(v) + Fv v within 3 %.
     from scipy.io import loadmat
 
-    data = loadmat(EMPS)
+    data = loadmat(emps_path())
     t, q = data["t"].ravel(), data["qm"].ravel()
     ts = float(t[1] - t[0])
     force = float(data["gtau"].item()) * data["vir"].ravel()

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import emps_path
 
 from edm_sym.application.cli import main
 from edm_sym.core.data import DataLog, load_data
@@ -16,8 +17,6 @@ from edm_sym.engines.observer import (
     reference_model,
     relative_error,
 )
-
-EMPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "DATA_EMPS.mat"
 
 
 def synthetic_axis(n: int = 20_000, ts: float = 1e-3) -> tuple[DataLog, np.ndarray]:
@@ -55,10 +54,9 @@ def test_bad_options_are_refused(tmp_path: Path, capsys) -> None:
     assert not (tmp_path / "o.csv").exists()
 
 
-@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
 def test_emps_reference_model_reproduced() -> None:
     """The published inverse-dynamics model fits the observer view of the real log."""
-    view = observer_view(load_data(EMPS), ObserverOptions("qm", "vir", 90.0, "gtau"))
+    view = observer_view(load_data(emps_path()), ObserverOptions("qm", "vir", 90.0, "gtau"))
     c = view.columns
     coef = fit_reference_model(c["qd"], c["qdd"], c["force"])
     np.testing.assert_allclose(coef[:3], [95.1089, 203.5034, 20.3935], rtol=0.03)

@@ -71,3 +71,44 @@ def test_every_scaling_element_declares_its_output_unit_scaled() -> None:
     for el in all_elements():
         assert el.unit_out in ("input", "one", "power", "scaled"), el.name
         assert (el.unit_out == "scaled") == el.scales_output, el.name
+
+
+def test_a_linear_axis_report_reads_n_m_s_and_kg_everywhere(tmp_path, monkeypatch) -> None:
+    """Issue 14 item 2: the report's tables, sentences and figures follow the result's axis."""
+    import dataclasses
+
+    import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)
+
+    from edm_sym.outputs.report import figures as fg
+    from edm_sym.outputs.report import write_report
+
+    labels: list[str] = []
+    save = fg._save
+
+    def record(fig, path):  # noqa: ANN001, ANN202
+        labels.extend(t for ax in fig.axes for t in (ax.get_xlabel(), ax.get_ylabel()) if t)
+        return save(fig, path)
+
+    monkeypatch.setattr(fg, "_save", record)
+    linear = dataclasses.replace(ugr.example_result(), axis="linear")
+    result, kw = ugr.case_inputs(ugr.Case("lin", lambda: linear, lugre=True), tmp_path)
+    tex = write_report(result, tmp_path, **kw)[0].read_text()
+
+    assert r"N\,m" not in tex and "kg m" not in tex and r"kg\,m" not in tex
+    assert "angular" not in tex  # roles: "velocity", "position"
+    assert "Forces are in N, positions in m, velocities in m/s." in tex
+    assert r"\shortstack[r]{RMS [N]\\ abstraction log}" in tex
+    assert r"Row & RMS of the row [N] & RMSE with rows up to it [N] & Drop [N] \\" in tex
+    assert re.search(r"fitness \$[-0-9.]+\$~N on its", tex)  # the LuGre paragraph
+    assert re.search(r"LuGre \(conventional\) & \$[0-9.]+\$ & \$\\mathrm\{N\}\$ \\\\", tex)
+    lugre = tex[tex.index(r"\label{tab:lugre}"):]
+    for unit in (r"\mathrm{m/s}", r"\mathrm{N}", r"\mathrm{N/m}", r"\mathrm{N\,s/m}"):
+        assert "& $" + unit + "$ \\\\" in lugre, unit
+    assert re.search(r"over \$\\pm [0-9.]+\$~m/s", tex)  # the friction characteristic
+    assert re.search(r"RMSE on the evaluation log & \$[0-9.]+\$~\$\\mathrm\{N\}\$ \\\\", tex)
+    # A corner frequency stays in rad/s and a phase in rad whatever the axis.
+    assert r"lpf: corner frequency & $100$" in tex
+
+    assert labels and not [t for t in labels if "N m" in t or "rad/s" in t]
+    assert "force [N]" in labels and "residual [N]" in labels and "velocity [m/s]" in labels
+    assert "row RMS [N]" in labels and "RMSE [N]" in labels

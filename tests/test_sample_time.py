@@ -11,14 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import TS
+from conftest import TS, emps_path
 
 from edm_sym.application.cli import main
 from edm_sym.core.data import JITTER_RTOL, TIME_RTOL, DataLog, load_data, match_sample_time, write_csv
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.result import EdmResult, StepRecord, dumps
-
-EMPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "DATA_EMPS.mat"
 
 
 def _second_recording(t: np.ndarray, *, drift: float, jitter: float, start: float,
@@ -31,9 +29,7 @@ def _second_recording(t: np.ndarray, *, drift: float, jitter: float, start: floa
 
 @pytest.fixture(scope="module")
 def emps_halves() -> tuple[DataLog, DataLog]:
-    if not EMPS.exists():
-        pytest.skip(f"{EMPS} not present")
-    log = load_data(EMPS)
+    log = load_data(emps_path())
     n = len(log) // 2
     return log.window(0, n), log.window(n)
 

@@ -315,10 +315,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
         from edm_sym.core.result import front_member
 
         result = front_member(result, args.front_member)
-    try:
-        from edm_sym.application.exporting import export
-    except ImportError:
-        raise ToolMissingError("edm export: code generation is not available in this build") from None
+    from edm_sym.application.exporting import export
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
     inputs = [args.result, args.data, args.eval_data, args.lugre]
     check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
@@ -492,10 +489,7 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
 
 
 def _cmd_abstract(args: argparse.Namespace) -> int:
-    try:
-        from edm_sym.application.abstract_cli import run_cli
-    except ImportError:
-        raise ToolMissingError("edm abstract: the genetic algorithm is not available in this build") from None
+    from edm_sym.application.abstract_cli import run_cli
     out = Path(args.output)
     # The checkpoint beside the output is written and, at the end, deleted: never an input.
     check_outputs([out, out.with_name(out.name + ".checkpoint")], [args.data, args.config] if args.config

@@ -38,6 +38,7 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess by th
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError
+from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction import AbstractionConfig, abstract, load_config
 from edm_sym.engines.simulate import simulate
 
@@ -88,6 +89,10 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
     progress : bool, default False
         Show the abstraction's progress on stderr: a bar on a terminal, a
         line every few seconds elsewhere (a notebook's log, CI).
+    axis : str, default "rotary"
+        ``"rotary"`` (rad, N m) or ``"linear"`` (m, N): the SI units of the
+        log (docs/data.md#units), recorded in ``result_.axis``; :meth:`describe`,
+        :meth:`to_c`, :meth:`to_python` and :meth:`to_control` print its units.
 
     Attributes
     ----------
@@ -124,6 +129,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         target_name: str = "tau_ext",
         workers: int | None = 1,
         progress: bool = False,
+        axis: str = "rotary",
     ) -> None:
         self.sample_time = sample_time
         self.config = config
@@ -133,6 +139,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         self.target_name = target_name
         self.workers = workers
         self.progress = progress
+        self.axis = axis
 
     # --- fitting and prediction ---
 
@@ -144,7 +151,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         X : pandas.DataFrame or array-like of shape (n_samples, n_features)
             The inputs, one row per sample, in time order.
         y : array-like of shape (n_samples,)
-            The target (e.g. the RTOB's external torque estimate) [N m].
+            The target (e.g. the RTOB's external torque estimate), in the
+            axis's force unit (N m rotary, N linear).
         feature_names : sequence of str, optional
             Names of the features when ``X`` has none (a plain array); with a
             DataFrame they must equal its column names.
@@ -157,13 +165,14 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         Raises
         ------
         ValueError
-            Missing or bad ``sample_time``, bad data (NaN, infinity, fewer than
-            2 samples, ``y`` of another length), names that are not unique or
-            equal ``target_name``.
+            Missing or bad ``sample_time``, an unknown ``axis``, bad data (NaN,
+            infinity, fewer than 2 samples, ``y`` of another length), names
+            that are not unique or equal ``target_name``.
         ConfigError
             A bad ``config``, ``seed``, ``workers`` (a subclass of ValueError).
         """
         ts = self._checked_sample_time()
+        axis = self._checked_axis()
         names = _names_of(X, feature_names)
         X, y = check_X_y(X, y, dtype=np.float64, ensure_min_samples=2, y_numeric=True)
         names = names if names is not None else [f"x{j}" for j in range(X.shape[1])]
@@ -185,7 +194,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         with ProgressReporter("EDMRegressor.fit", quiet=not self.progress) as reporter:
             result = abstract(data, target=self.target_name, inputs=names,
                               config=self._config(), seed=self.seed, time_limit=self.time_limit,
-                              workers=self.workers, callback=reporter.abstraction)
+                              workers=self.workers, callback=reporter.abstraction, axis=axis)
         self.result_ = result
         self.n_features_in_ = X.shape[1]
         self.feature_names_in_ = np.asarray(names, dtype=object)
@@ -207,7 +216,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         Returns
         -------
         numpy.ndarray of shape (n_samples,)
-            ``edm_sym.engines.simulate(result_, X).total`` [N m].
+            ``edm_sym.engines.simulate(result_, X).total``, in the axis's force
+            unit (N m or N).
         """
         check_is_fitted(self, "result_")
         return simulate(self.result_, self._columns(check_array(X, dtype=np.float64), X)).total
@@ -337,7 +347,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "result_")
         # The stages suffice: no simplification, no classification.
         comp = self.result_.compensator
-        return build_model(comp, target=self.result_.target).to_control(**options)
+        return build_model(comp, target=self.result_.target,
+                           axis=self.result_.axis).to_control(**options)
 
     # --- helpers ---
 
@@ -349,6 +360,13 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                 "EDMRegressor.fit: sample_time: expected the time between two rows of X in seconds "
                 f"(a number > 0), found {ts!r}; hint: EDMRegressor(sample_time=1e-3)")
         return float(ts)
+
+    def _checked_axis(self) -> str:
+        if not (isinstance(self.axis, str) and self.axis in AXES):
+            raise ValueError(
+                f"EDMRegressor.fit: axis: expected {' or '.join(map(repr, AXES))}, found "
+                f"{self.axis!r}; hint: EDMRegressor(axis='linear') for a log in m, m/s and N")
+        return self.axis
 
     def _config(self) -> AbstractionConfig | None:
         cfg = self.config

@@ -1,10 +1,11 @@
 """Export: a result as code and report, from one symbolic model (the application layer).
 
-:func:`export` checks the options, makes the result's symbolic model once --
-the full :func:`~edm_sym.engines.symbolic.decode` when the LaTeX report is among the
-targets, else only the stages the code needs -- and hands that same model to
-the code renderer (:mod:`edm_sym.outputs.render`) and to the report
-(:mod:`edm_sym.outputs.report`). ``edm_sym.export`` and ``edm export`` call it.
+:func:`export` checks the options, makes the stages of the result's symbolic
+model the code needs and hands them to the code renderer
+(:mod:`edm_sym.outputs.render`); the report (:mod:`edm_sym.outputs.report`)
+decodes the whole model itself, with the classifier options of the data it
+is judged on, as ``edm describe`` does. ``edm_sym.export`` and ``edm export``
+call it.
 """
 
 from __future__ import annotations
@@ -73,7 +74,11 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     from edm_sym.engines.symbolic import build_model  # sympy only when exporting
 
     source = source_of(result)
-    model = build_model(result.compensator, sha256=source.sha256, target=result.target)
+    # The axis given explicitly: the model's units (N or N m in the header's and module's
+    # comments) are the result's, never a default. The report decodes its own model,
+    # judged on its data as `edm describe` does.
+    model = build_model(result.compensator, sha256=source.sha256, target=result.target,
+                        axis=source.axis)
     files = render(result, target, prefix=prefix, real=real, model=model)
     if REPORT not in names:
         return write_files(out_dir, files)

@@ -28,6 +28,7 @@ import numpy as np
 
 from edm_sym.core.bounds import bound_summary
 from edm_sym.core.fitness import rms
+from edm_sym.core.units import axis_units
 
 __all__ = ["fitness_line", "negligible_rows", "print_summary", "result_flags"]
 
@@ -59,7 +60,8 @@ def fitness_line(result: Any) -> str:
                                        else f"{value:.6g} {unit}"))
     if not parts:
         fit = result.fitness
-        parts.append("training " + ("inf" if fit is None else f"{fit:.6g} N m"))
+        unit = axis_units(getattr(result, "axis", None) or "rotary").force
+        parts.append("training " + ("inf" if fit is None else f"{fit:.6g} {unit}"))
     if len(parts) == 1:
         parts.append("validation: none held out")
     return "fitness (weighted eq. 8): " + ", ".join(parts)
@@ -93,7 +95,7 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
         share = rms(y) / ref
         if share < NEGLIGIBLE:
             out.append(f"row {j + 1} ({comp.matrix.inputs[comp.matrix.rows[j].input]}) is "
-                       f"negligible: {100 * share:.2g} % of the target's RMS on "
+                       f"negligible: {100 * share:.4g} % of the target's RMS on "
                        f"{log.source} (threshold {100 * NEGLIGIBLE:g} %)")
     return out
 

@@ -57,16 +57,21 @@ class BoundFlag:
     bound: float
 
     def message(self) -> str:
-        """One line: where, what, and the bound."""
+        """One line: where, what, and the bound (4 significant digits, with the unit)."""
         return (f"row {self.row + 1} element {self.col + 1} ({self.element}, {self.meaning}) "
-                f"= {self.value:.6g} {self.unit} is at its {self.side} bound "
-                f"{self.bound:.6g} {self.unit} (p = {self.p:.4g})")
+                f"= {_quantity(self.value, self.unit)} is at its {self.side} bound "
+                f"{_quantity(self.bound, self.unit)} (p = {self.p:.4g})")
 
     def to_json(self) -> dict[str, Any]:
         """The entry of result.json's ``parameters_at_bound`` (row and element 1-based)."""
         return {"row": self.row + 1, "element": self.col + 1, "name": self.element,
                 "p": self.p, "value": self.value, "unit": self.unit, "side": self.side,
                 "bound": self.bound}
+
+
+def _quantity(value: float, unit: str) -> str:
+    """``0.3142 rad/s``; a dimensionless number (unit ``"1"``) without a unit."""
+    return f"{value:.4g}" if unit.strip() in ("", "1") else f"{value:.4g} {unit}"
 
 
 def bound_flags(comp: Compensator, *, margin: float = BOUND_MARGIN) -> tuple[BoundFlag, ...]:

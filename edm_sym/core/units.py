@@ -38,6 +38,16 @@ class AxisUnits:
     viscous: str
     inertia: str
 
+    @property
+    def effort(self) -> str:
+        """What the target is called on this axis: ``"torque"`` (rotary) or ``"force"`` (linear)."""
+        return "torque" if self.axis == "rotary" else "force"
+
+    @property
+    def motion(self) -> str:
+        """What the position is called: ``"angle"`` (rotary) or ``"position"`` (linear)."""
+        return "angle" if self.axis == "rotary" else "position"
+
     def of_role(self, role: str) -> str:
         """The unit of a signal with a role (position, velocity, acceleration, target); "1" otherwise."""
         return {"position": self.position, "velocity": self.velocity,

@@ -156,7 +156,7 @@ def _rms(x: np.ndarray) -> float:
 
 
 def _pct(share: float) -> str:
-    return f"{100 * share:.2g} %"
+    return f"{100 * share:.4g} %"
 
 
 def term_summary(term: PhysicalTerm) -> str:
@@ -187,10 +187,10 @@ def _term_flags(term: PhysicalTerm) -> list[Flag]:
         out.append(Flag("unclassified", term.description or "no physical pattern fits"))
     if "linearity_r2" in p and p["linearity_r2"][0] < 0.95:
         out.append(Flag("nonlinear", f"far from linear in the acceleration "
-                                     f"(R^2 {p['linearity_r2'][0]:.3f})"))
+                                     f"(R^2 {p['linearity_r2'][0]:.4g})"))
     if "filter_phase" in p and abs(math.cos(p["filter_phase"][0])) < math.sqrt(0.5):
         out.append(Flag("derivative_like",
-                        f"its filters shift it by {math.degrees(p['filter_phase'][0]):.3g} deg at "
+                        f"its filters shift it by {math.degrees(p['filter_phase'][0]):.4g} deg at "
                         f"{p.get('frequency', (float('nan'),))[0]:.4g} rad/s: mostly a derivative "
                         "or integral of the acceleration there"))
     if "wrap_jump" in p:

@@ -203,6 +203,19 @@ class EdmLatexPrinter(LatexPrinter):
         body = r"\,".join(parts)
         return rf"$\mathrm{{{body}}}$".replace(r"\mathrm{}", "")
 
+    @staticmethod
+    def unit_text(unit: str) -> str:
+        """An SI unit in running text: ``"N m"`` -> ``N\\,m``, ``"kg m^2"`` -> ``kg\\,m\\textsuperscript{2}``.
+
+        For headers and sentences, where :meth:`unit`'s math would change the type;
+        dimensionless (``"1"`` or empty) gives ``"--"``.
+        """
+        unit = unit.strip()
+        if unit in ("", "1"):
+            return "--"
+        parts = [re.sub(r"\\textasciicircum\{\}(-?\d+)", r"\\textsuperscript{\1}", escape_text(p))
+                 for p in unit.split()]
+        return r"\,".join(parts)
 
     def relay_equation(self, out: str, inp: str, threshold: float) -> str:
         """The relay's update as a ``cases`` right-hand side (held output, starting at 0)."""

@@ -57,7 +57,8 @@ def render(result: Any, target: str, *, prefix: str = "edm_comp",
     Raises
     ------
     ValueError
-        On a bad ``target``, ``prefix`` or ``real`` (one-line message).
+        On a bad ``target``, ``prefix`` or ``real``, or a ``model`` of another
+        axis than the result's (one-line message).
     """
     validate_prefix(prefix)
     validate_real(real)
@@ -66,7 +67,11 @@ def render(result: Any, target: str, *, prefix: str = "edm_comp",
     if model is None:
         from edm_sym.engines.symbolic.model import build_model  # sympy only when rendering
 
-        model = build_model(result.compensator, sha256=source.sha256, target=result.target)
+        model = build_model(result.compensator, sha256=source.sha256, target=result.target,
+                            axis=source.axis)
+    elif model.axis != source.axis:  # the comments would print one axis's units for the other's
+        raise ValueError(f"model: axis: expected {source.axis!r} as in {source.name}, found "
+                         f"{model.axis!r}; hint: build the model with axis=result.axis")
     files: dict[str, str] = {}
     for name in names:
         if name in TARGETS:  # the report (latex) is written by edm_sym.outputs.report

@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import matrix_diagram
@@ -27,8 +28,8 @@ from edm_sym.outputs.report.flags import (
 from edm_sym.outputs.report.front import front_context
 from edm_sym.outputs.report.rows import (
     KIND_TITLES,
-    ROLE_TITLES,
     equation_lines,
+    role_title,
     row_context,
 )
 from edm_sym.outputs.report.runs import LogRun, LuGreRef, SteadyState
@@ -191,14 +192,14 @@ def _figure(figures: Mapping[str, str], key: str, caption: str, width: float) ->
             "width": f"{width:.2f}"}
 
 
-def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun],
-                  figures: Mapping[str, str]) -> list[dict[str, str]]:
+def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun], figures: Mapping[str, str],
+                  effort: str) -> list[dict[str, str]]:
     out = []
     for r in runs:
         vs = ", the LuGre model's," if r.lugre is not None else ""
         for key, what in ((f"time_{r.label}", "over the whole log"),
                           (f"zoom_{r.label}", "enlarged where the EDM residual is largest")):
-            f = _figure(figures, key, f"Target torque, EDM compensation torque{vs} and the "
+            f = _figure(figures, key, f"Target {effort}, EDM compensation {effort}{vs} and the "
                         f"residuals on the {r.label} log {p.mono(r.name)}, {what}.", 1.0)
             if f:
                 out.append(f)
@@ -206,8 +207,8 @@ def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun],
 
 
 def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, str],
-              has_data: bool) -> dict[str, list[str]]:
-    """The friction characteristic's figure and what it shows, as sentences."""
+              has_data: bool, units: AxisUnits) -> dict[str, list[str]]:
+    """The friction characteristic's figure and what it shows, as sentences (in ``units``)."""
     if st is None:
         return {"figures": [], "notes": ["No row has a velocity input, so the compensator has "
                                          "no friction characteristic."]}
@@ -217,7 +218,8 @@ def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, 
     notes = []
     if st.rows:
         notes.append(f"The rows with a velocity input ({rows}) held at each constant velocity "
-                     f"for {p.math(p.number(st.settle))}~s, over {span}~rad/s ({where}): the "
+                     f"for {p.math(p.number(st.settle))}~s, over {span}~{p.unit_text(units.velocity)} "
+                     f"({where}): the "
                      "friction the compensator predicts in steady state, to check against the "
                      "axis's friction curve (Coulomb level, viscous slope, Stribeck hump).")
     if st.unsettled:
@@ -225,7 +227,7 @@ def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, 
         notes.append(f"Not shown: {un}, whose output is still changing after "
                      f"{p.math(p.number(st.settle))}~s at constant velocity (a slow filter or "
                      "an integral).")
-    caption = ("Steady-state torque of the velocity rows against constant velocity"
+    caption = (f"Steady-state {units.effort} of the velocity rows against constant velocity"
                + (", with the LuGre model's (eq.~14)" if st.lugre is not None else "") + ".")
     fig = _figure(figures, "friction", caption, 0.95)
     return {"figures": [fig] if fig else [], "notes": notes}
@@ -255,17 +257,24 @@ def _citation(p: EdmLatexPrinter) -> str:
     return ", ".join(parts) + "."
 
 
-def _units(obj: Any) -> Any:
-    """The SI units of the axis a result (or LuGre file) belongs to (rotary until it records one)."""
-    from edm_sym.core.units import axis_units
-
-    return axis_units(getattr(obj, "axis", None) or "rotary")
+def _units(result: Any) -> AxisUnits:
+    """The SI units of the axis the result belongs to (rotary until it records one)."""
+    return axis_units(getattr(result, "axis", None) or "rotary")
 
 
-def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun) -> dict[str, Any]:
+def _units_context(p: EdmLatexPrinter, u: AxisUnits) -> dict[str, str]:
+    """The axis's units in running text, for the template's headers and sentences."""
+    return {"force": p.unit_text(u.force), "velocity": p.unit_text(u.velocity),
+            "position": p.unit_text(u.position),
+            "note": p.text(f"{u.effort.capitalize()}s are in ") + p.unit_text(u.force)
+            + p.text(f", {u.motion}s in ") + p.unit_text(u.position)
+            + ", velocities in " + p.unit_text(u.velocity) + "."}
+
+
+def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun, u: AxisUnits) -> dict[str, Any]:
+    """The LuGre comparison, in the units of the result's axis (the LuGre file records none)."""
     from edm_sym.engines.lugre import PARAMETER_NAMES
 
-    u = _units(ref)
     units = {"v_s": u.velocity, "tau_c": u.force, "tau_s": u.force, "z0": u.position,
              "sigma0": f"{u.force}/{u.position}", "sigma1": u.viscous, "sigma2": u.viscous}
     symbols = {"v_s": r"\dot\nu_s", "tau_c": r"\tau_c", "tau_s": r"\tau_s", "z0": "z_0",
@@ -278,11 +287,12 @@ def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun) -> dict[str, Any]:
     return {
         "name": p.mono(ref.name), "log": p.text(run.label), "log_name": p.mono(run.name),
         "method": p.text(lr.method), "fitness": p.math(p.number(lr.rmse)),
+        "fitness_unit": p.unit_text(u.force),
         "params": params,
         "rmse": [{"method": "LuGre (conventional)", "value": p.math(p.number(run.lugre_rmse)),
-                  "unit": p.unit("N m")},
+                  "unit": p.unit(u.force)},
                  {"method": "EDM (this compensator)", "value": p.math(p.number(run.rmse)),
-                  "unit": p.unit("N m")}],
+                  "unit": p.unit(u.force)}],
         "ratio": p.math(p.number(run.rmse / run.lugre_rmse if run.lugre_rmse else float("nan"))),
     }
 
@@ -332,9 +342,10 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
     """
     p = EdmLatexPrinter()
     model, result = inp.model, inp.result
+    units = _units(result)
     runs = [r for r in (inp.abstraction, inp.evaluation) if r is not None]
     mat = model.compensator.matrix
-    roles = [f"{p.mono(n)} ({p.text(ROLE_TITLES.get(model.roles.get(n), 'no physical role'))})"
+    roles = [f"{p.mono(n)} ({p.text(role_title(model.roles.get(n), model.axis))})"
              for n in model.inputs]
     facts = [
         ("Result file", p.mono(inp.source_name)),
@@ -347,7 +358,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         ("Hierarchical steps", str(len(result.steps)) if result.steps
          else "none recorded (hand-written or imported model)"),
         ("Weighted fitness (eq. 8)",
-         p.math(r"\Gamma = " + p.number(result.fitness)) + "~" + p.unit(_units(result).force)
+         p.math(r"\Gamma = " + p.number(result.fitness)) + "~" + p.unit(units.force)
          if result.fitness is not None else "not recorded"),
     ]
     for r in runs:
@@ -356,7 +367,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         if r.sha256:
             facts.append((f"sha256 of the {r.label} log", p.digest(r.sha256)))
         facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + "~"
-                      + p.unit(_units(result).force)))
+                      + p.unit(units.force)))
     if inp.lugre is not None:
         facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
     facts.append(bounds_fact(p, model))
@@ -371,7 +382,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
                 for r, row, j in zip(rows, model.rows, judged, strict=True)]
     total = [(row.expr_numeric, f"row {row.index + 1}") for row in model.rows]
     compare = runs[-1] if runs else None
-    lugre = ([_lugre(p, inp.lugre, compare)]
+    lugre = ([_lugre(p, inp.lugre, compare, units)]
              if inp.lugre is not None and compare is not None and compare.lugre is not None else [])
     fig = inp.figures
     prov = result.provenance
@@ -386,7 +397,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
         "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
         "rows": rows,
-        "friction": _friction(p, inp.steady, fig, bool(runs)),
+        "friction": _friction(p, inp.steady, fig, bool(runs), units),
         "param_chunks": _chunks(p, _params(model)),
         "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
         "contributions": _contribution_tables(p, runs, fig),
@@ -394,7 +405,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
                                         "hierarchical step (weighted RMSE, eq.~8).", 1.0)] if f],
         "steps": _steps(p, result),
         "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
-        "time": _time_figures(p, runs, fig),
+        "time": _time_figures(p, runs, fig, units.effort),
         "lugre": lugre,
         "no_lugre": [] if lugre else ["no LuGre result was given (edm-export --lugre LUGRE.json)"],
         "provenance": [
@@ -410,8 +421,9 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "versions": [{"name": p.text(n), "version": p.text(v)} for n, v in inp.versions],
         "commands": _commands(p, inp),
         "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
-        "force_unit": p.unit(_units(result).force),
-        "viscous_unit": p.unit(_units(result).viscous),
+        "force_unit": p.unit(units.force),
+        "viscous_unit": p.unit(units.viscous),
+        "units": _units_context(p, units),
         "paper": _citation(p),
         **front_context(p, result, fig),
     }
@@ -421,7 +433,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
 #: Keys every report context holds.
 REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "param_chunks",
                "contributions",
-               "fitness", "steps", "time", "lugre", "provenance", "versions", "commands")
+               "fitness", "units", "steps", "time", "lugre", "provenance", "versions", "commands")
 
 
 def check_report_context(ctx: dict[str, Any]) -> dict[str, Any]:

@@ -14,11 +14,17 @@ from pathlib import Path
 import numpy as np
 
 from edm_sym.core.fitness import rms
+from edm_sym.core.units import AxisUnits, axis_units
 
 #: Points per plotted curve after decimation.
 MAX_POINTS = 1500
 #: Column width of the report in inches (A4 with 2.5 cm margins).
 WIDTH = 6.0
+
+
+def _units(units: AxisUnits | None) -> AxisUnits:
+    """The axis's units; rotary when none is given (the default of every file)."""
+    return units if units is not None else axis_units("rotary")
 
 
 def _pyplot():
@@ -78,7 +84,8 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def fitness_history(steps: Sequence[tuple[str, Sequence[float]]], path: Path) -> Path:
+def fitness_history(steps: Sequence[tuple[str, Sequence[float]]], path: Path, *,
+                    units: AxisUnits | None = None) -> Path:
     """Best fitness per generation for each hierarchical step (paper, Fig. 17).
 
     Parameters
@@ -86,7 +93,10 @@ def fitness_history(steps: Sequence[tuple[str, Sequence[float]]], path: Path) ->
     steps : sequence of (label, history)
     path : path-like
         The PDF to write.
+    units : AxisUnits, optional
+        The result's axis (the fitness is in its force unit); rotary by default.
     """
+    u = _units(units)
     plt = _pyplot()
     k = max(1, len(steps))
     cols = min(k, 4)
@@ -98,7 +108,7 @@ def fitness_history(steps: Sequence[tuple[str, Sequence[float]]], path: Path) ->
         ax.plot(np.arange(1, len(hist) + 1), hist, color="C0")
         ax.set_title(label)
         ax.set_xlabel("generation")
-        ax.set_ylabel("fitness [N m]")
+        ax.set_ylabel(f"fitness [{u.force}]")
     fig.tight_layout()
     return _save(fig, path)
 
@@ -106,13 +116,13 @@ def fitness_history(steps: Sequence[tuple[str, Sequence[float]]], path: Path) ->
 def time_series(t: np.ndarray, target: np.ndarray, compensation: np.ndarray, path: Path, *,
                 title: str = "", target_label: str = r"$\hat\tau_{ext}$ (target)",
                 others: Sequence[tuple[str, np.ndarray]] = (),
-                window: tuple[float, float] | None = None) -> Path:
-    """Target, compensation torque and residual over time (paper, Figs. 24-25).
+                window: tuple[float, float] | None = None, units: AxisUnits | None = None) -> Path:
+    """Target, compensation torque (force) and residual over time (paper, Figs. 24-25).
 
     Parameters
     ----------
     t, target, compensation : numpy.ndarray
-        Time [s], the target torque and the EDM compensation torque [N m].
+        Time [s], the target and the EDM compensation, in the axis's force unit (N m or N).
     path : path-like
         The PDF to write.
     title : str
@@ -123,7 +133,10 @@ def time_series(t: np.ndarray, target: np.ndarray, compensation: np.ndarray, pat
         Further compensation torques to compare (e.g. the LuGre model's).
     window : (float, float), optional
         Show only ``t0 <= t <= t1`` (an enlarged view).
+    units : AxisUnits, optional
+        The result's axis; rotary by default.
     """
+    u = _units(units)
     plt = _pyplot()
     t = np.asarray(t, dtype=float)
     sel = slice(None)
@@ -138,7 +151,7 @@ def time_series(t: np.ndarray, target: np.ndarray, compensation: np.ndarray, pat
         a1.plot(*decimate(tt, np.asarray(y)[sel]), color=f"C{k}", label=label)
     a1.plot(*decimate(tt, np.asarray(compensation)[sel]), color="C3",
             label=r"$\tau_{cmp}$ (EDM)")
-    a1.set_ylabel("torque [N m]")
+    a1.set_ylabel(f"{u.effort} [{u.force}]")
     if title:
         a1.set_title(title, loc="left")
     a1.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2 + len(others), frameon=False,
@@ -151,7 +164,7 @@ def time_series(t: np.ndarray, target: np.ndarray, compensation: np.ndarray, pat
     if others:
         a2.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=1 + len(others),
                   frameon=False, borderaxespad=0.1)
-    a2.set_ylabel("residual [N m]")
+    a2.set_ylabel(f"residual [{u.force}]")
     a2.set_xlabel("time [s]")
     a2.set_xlim(float(tt[0]), float(tt[-1]))
     fig.tight_layout()
@@ -202,8 +215,13 @@ def row_outputs(t: np.ndarray, rows: np.ndarray, path: Path, *, labels: Sequence
 
 
 def contributions(labels: Sequence[str], rms: Sequence[float], cumulative_rmse: Sequence[float],
-                  path: Path, *, baseline: float | None = None) -> Path:
-    """RMS of each row and the RMSE as rows are added one by one (paper, Fig. 18 f-j)."""
+                  path: Path, *, baseline: float | None = None,
+                  units: AxisUnits | None = None) -> Path:
+    """RMS of each row and the RMSE as rows are added one by one (paper, Fig. 18 f-j).
+
+    Both are in the force unit of ``units`` (the result's axis; rotary by default).
+    """
+    u = _units(units)
     plt = _pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(WIDTH, 2.0))
     x = np.arange(len(labels))
@@ -211,33 +229,36 @@ def contributions(labels: Sequence[str], rms: Sequence[float], cumulative_rmse: 
     a1.set_xticks(x, labels)
     pad = max(0, 3 - len(labels)) / 2  # a lone bar keeps a bar's width
     a1.set_xlim(-0.6 - pad, len(labels) - 0.4 + pad)
-    a1.set_ylabel("row RMS [N m]")
+    a1.set_ylabel(f"row RMS [{u.force}]")
     xs = np.arange(len(cumulative_rmse) + (baseline is not None))
     ys = ([baseline] if baseline is not None else []) + list(cumulative_rmse)
     ticks = (["none"] if baseline is not None else []) + [f"+{lab}" for lab in labels]
     a2.plot(xs, ys, marker="o", color="C0")
     a2.set_xticks(xs, ticks)
     a2.set_ylim(bottom=0.0)
-    a2.set_ylabel("RMSE [N m]")
+    a2.set_ylabel(f"RMSE [{u.force}]")
     fig.tight_layout()
     return _save(fig, path)
 
 
 def friction_curve(velocity: np.ndarray, rows: Sequence[tuple[str, np.ndarray]], path: Path, *,
-                   lugre: np.ndarray | None = None) -> Path:
-    """Steady-state torque against constant velocity: each row and their sum (paper, Fig. 13).
+                   lugre: np.ndarray | None = None, units: AxisUnits | None = None) -> Path:
+    """Steady-state torque (force) against constant velocity: each row and their sum (paper, Fig. 13).
 
     Parameters
     ----------
     velocity : numpy.ndarray
-        The constant velocities [rad/s].
+        The constant velocities, in the axis's velocity unit (rad/s or m/s).
     rows : sequence of (label, numpy.ndarray)
-        Each velocity row's settled output [N m].
+        Each velocity row's settled output, in the axis's force unit.
     path : path-like
         The PDF to write.
     lugre : numpy.ndarray, optional
         The LuGre model's steady state, drawn dashed.
+    units : AxisUnits, optional
+        The result's axis; rotary by default.
     """
+    u = _units(units)
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(WIDTH, 2.3))
     for k, (label, y) in enumerate(rows):
@@ -247,8 +268,9 @@ def friction_curve(velocity: np.ndarray, rows: Sequence[tuple[str, np.ndarray]],
         ax.plot(velocity, total, color="C3", lw=1.4, label="sum (EDM)")
     if lugre is not None:
         ax.plot(velocity, lugre, color="C0", lw=1.0, ls="--", label="LuGre")
-    ax.set_xlabel("angular velocity [rad/s]")
-    ax.set_ylabel("torque [N m]")
+    ax.set_xlabel(("angular velocity" if u.axis == "rotary" else "velocity")
+                  + f" [{u.velocity}]")
+    ax.set_ylabel(f"{u.effort} [{u.force}]")
     ax.legend(loc="upper left", ncol=2)
     fig.tight_layout()
     return _save(fig, path)

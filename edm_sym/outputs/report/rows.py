@@ -42,6 +42,21 @@ ROLE_TITLES = {
     None: "no physical role",
 }
 
+#: The same on a linear axis (a position in m, not an angle).
+LINEAR_ROLE_TITLES = {
+    "velocity": "velocity",
+    "acceleration": "acceleration",
+    "angle": "position",
+    "angle_wrapped": "wrapped position",
+    None: "no physical role",
+}
+
+
+def role_title(role: str | None, axis: str = "rotary") -> str:
+    """The readable name of an input role on ``axis`` (``"angular velocity"``, ``"velocity"``)."""
+    titles = LINEAR_ROLE_TITLES if axis == "linear" else ROLE_TITLES
+    return titles.get(role, str(role) if role is not None else "no physical role")
+
 #: How each discretisation method is named in the report.
 METHOD_TITLES = {"bilinear": "Tustin", "backward_diff": "backward difference"}
 
@@ -240,7 +255,7 @@ def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
         "title": p.math(p._print(row.input_symbol)) + " -- " + p.text(", ".join(titles)),
         "bookmark": p.text(f"Row {j}: {row.input}, {', '.join(titles)}"),
         "input": p.text(row.input),
-        "role": p.text(ROLE_TITLES.get(row.role, str(row.role))),
+        "role": p.text(role_title(row.role, model.axis)),
         "elements": _elements_text(p, row),
         "chain": [chain_diagram(row, chain_printer())],
         "equations": _row_equations(p, row),

@@ -54,11 +54,12 @@ class LogRun:
     ts : float
         Sample time [s].
     t, target, total : numpy.ndarray
-        Time [s], target torque, compensation torque (the sum of the rows) [N m].
+        Time [s], the target and the compensation (the sum of the rows) in the axis's force
+        unit (N m or N).
     rows : numpy.ndarray
-        Shape (m, N): each row's output [N m].
+        Shape (m, N): each row's output (N m or N).
     rmse : float
-        RMSE of ``target - total`` [N m].
+        RMSE of ``target - total`` (N m or N).
     contributions : Contributions
         Row RMS and cumulative RMSE.
     lugre, lugre_rmse : numpy.ndarray or None, float or None
@@ -83,7 +84,7 @@ class LogRun:
 
     @property
     def residual(self) -> np.ndarray:
-        """``target - total`` [N m]."""
+        """``target - total`` (N m or N)."""
         return self.target - self.total
 
     @property
@@ -164,14 +165,14 @@ class SteadyState:
     Attributes
     ----------
     velocity : numpy.ndarray
-        The constant velocities [rad/s].
+        The constant velocities (rad/s or m/s).
     settle : float
         How long each velocity was held [s].
     rows : tuple of int
         The rows shown (0-based): those whose input is a velocity and whose
         output settles.
     torque : numpy.ndarray
-        Shape (len(rows), len(velocity)): each row's settled output [N m].
+        Shape (len(rows), len(velocity)): each row's settled output (N m or N).
     unsettled : tuple of int
         Velocity rows whose output keeps changing (an integral, say).
     lugre : numpy.ndarray or None
@@ -196,7 +197,7 @@ def steady_state(result: Any, roles: Any, v_max: float, *, lugre: LuGreRef | Non
     roles : sequence of str or None
         The role of each row's input (``RowModel.role``).
     v_max : float
-        The velocities span ``[-v_max, v_max]`` [rad/s].
+        The velocities span ``[-v_max, v_max]`` (rad/s or m/s).
     lugre : LuGreRef, optional
     settle : float
         Seconds each velocity is held; a row still changing by more than

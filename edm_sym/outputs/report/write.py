@@ -16,9 +16,17 @@ from edm_sym.outputs.report.runs import LogRun, SteadyState, load_log, load_lugr
 
 #: The template of the report (in the templates folder).
 TEMPLATE = "report.tex.j2"
-#: Velocity range of the friction characteristic without a data log [rad/s]
-#: (the classification's default velocity range).
-DEFAULT_VELOCITY = 10.0
+
+
+def _default_velocity(axis: str) -> float:
+    """Velocity range of the friction characteristic without a data log, in the axis's unit.
+
+    The classification's default velocity range of the axis (10 rad/s rotary,
+    0.5 m/s linear: ``ClassifyOptions.for_axis``).
+    """
+    from edm_sym.engines.symbolic.classify import ClassifyOptions
+
+    return ClassifyOptions.for_axis(axis).velocity_range
 
 
 def figure_name(prefix: str, key: str) -> str:
@@ -41,6 +49,7 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
         The friction characteristic.
     """
     out: dict[str, Path] = {}
+    units = result.units  # every figure's units follow the result's axis
 
     def path(key: str) -> Path:
         return out_dir / figure_name(prefix, key)
@@ -48,11 +57,11 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
     if steady is not None and steady.rows:
         curves = [(f"$y_{{{j + 1}}}$", y) for j, y in zip(steady.rows, steady.torque, strict=True)]
         out["friction"] = fg.friction_curve(steady.velocity, curves, path("friction"),
-                                            lugre=steady.lugre)
+                                            lugre=steady.lugre, units=units)
     if result.steps:
         hist = [(f"Step {s.step} ({s.matrix.n_elements}x{s.matrix.n_rows})", s.history)
                 for s in result.steps]
-        out["fitness"] = fg.fitness_history(hist, path("fitness"))
+        out["fitness"] = fg.fitness_history(hist, path("fitness"), units=units)
     if getattr(result, "parsimony", None):
         out[FRONT] = front_figure(result, path(FRONT))
     for r in runs:
@@ -60,16 +69,17 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
         c = r.contributions
         out[f"contributions_{r.label}"] = fg.contributions(
             labels, c.rms, c.rmse_cumulative, path(f"contributions_{r.label}"),
-            baseline=c.rmse_none)
+            baseline=c.rmse_none, units=units)
         out[f"rows_{r.label}"] = fg.row_outputs(r.t, r.rows, path(f"rows_{r.label}"),
                                                 labels=labels)
         others = [("LuGre (conventional)", r.lugre)] if r.lugre is not None else []
         out[f"time_{r.label}"] = fg.time_series(r.t, r.target, r.total, path(f"time_{r.label}"),
-                                                title=f"{r.label} log", others=others)
+                                                title=f"{r.label} log", others=others,
+                                                units=units)
         window = fg.zoom_window(r.t, r.residual)
         out[f"zoom_{r.label}"] = fg.time_series(
             r.t, r.target, r.total, path(f"zoom_{r.label}"), others=others, window=window,
-            title=f"{window[0]:.3g} s to {window[1]:.3g} s")
+            title=f"{window[0]:.3g} s to {window[1]:.3g} s", units=units)
     return out
 
 
@@ -158,7 +168,7 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
             if role == "velocity":
                 signal = run.inputs[result.compensator.matrix.rows[j].input]
                 v_max = max(v_max, float(np.max(np.abs(signal))))
-    steady = steady_state(result, roles, v_max or DEFAULT_VELOCITY, lugre=ref)
+    steady = steady_state(result, roles, v_max or _default_velocity(result.axis), lugre=ref)
     source = source_of(result)
     # Render before writing anything, so a failure leaves no file behind.
     inputs = ReportInputs(result, model, source.name, source.sha256, prefix,
