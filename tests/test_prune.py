@@ -50,7 +50,8 @@ PLANTED = [
 
 
 def scorer(log: DataLog) -> Scorer:
-    hold = plan_holdout(log, target="tau_ext", inputs=INPUTS, settings=ValidationSettings())
+    hold = plan_holdout(log, target="tau_ext", inputs=INPUTS,
+                        settings=ValidationSettings(layout="end"))
     return Scorer(hold, Weighting())
 
 

@@ -46,7 +46,7 @@ def log() -> DataLog:
     return friction_log(1.5)[0]
 
 
-BLOCKS = [[120 + 150 * j, 150 + 150 * j] for j in range(10)]
+BLOCKS = [[150 * j, 150 * j + 30] for j in range(10)]
 HELD = np.concatenate([np.arange(a, b) for a, b in BLOCKS])
 TRAIN = np.setdiff1d(np.arange(1500), HELD)
 END = {**TINY, "validation": {"layout": "end"}}
@@ -145,7 +145,7 @@ def test_a_share_from_the_config_or_the_call(log: DataLog) -> None:
     assert res.validation["held_out"]["rows"] == [900, 1500]
     assert res.validation["training"]["rmse"][1] == "N"
     res = run(log, {**TINY, "validation": {"share": 0.4, "blocks": 3}})
-    assert res.validation["held_out"]["blocks"] == [[300, 500], [800, 1000], [1300, 1500]]
+    assert res.validation["held_out"]["blocks"] == [[0, 200], [500, 700], [1000, 1200]]
     res = run(log, {**TINY, "validation": {"share": 0.4}}, validation_share=0.0)
     assert res.validation["held_out"] == {"kind": "none"}
     assert res.validation["validation"] is None
@@ -284,3 +284,58 @@ def test_cli_bad_validation_table_names_file_and_key(files: tuple[Path, Path, Pa
     assert err.startswith("edm: v.toml: validation.share: expected a number in [0, 0.9], "
                           "found 'a fifth'")
     assert not out.exists()
+
+
+def _held_out_rmse(res: object, log: DataLog, matrix: object) -> float:
+    from dataclasses import replace
+
+    comp = replace(res.compensator, matrix=matrix)
+    e = log.columns["tau_ext"] - plain_loop(comp, log).sum(axis=0)
+    return float(np.sqrt(np.mean(e[HELD] ** 2)))
+
+
+def test_pruning_starts_from_the_step_best_the_held_out_data_likes_most(log: DataLog) -> None:
+    res = run(log)
+    rmse = [_held_out_rmse(res, log, s.matrix) for s in res.steps]
+    best = min(range(len(rmse)), key=lambda q: (rmse[q], -q))
+    assert res.parsimony["start_step"] == res.steps[best].step
+    assert res.parsimony["criterion"] == "validation.rmse"
+    first = res.parsimony["front"][-1]
+    assert first["change"].startswith(f"search (step {res.steps[best].step} best)")
+    # The criterion of every member is its plain held-out RMSE.
+    for member in res.parsimony["front"]:
+        assert member["criterion"][0] == pytest.approx(member["validation"]["rmse"][0], rel=1e-12)
+
+
+#: A last step that fits only the first 0.15 s: worse on the held-out blocks than step 1.
+NARROW_LAST = {**TINY, "step": [TINY["step"][0], {
+    "n_rows": 3, "n_elements": 3, "weighting": {"windows": [[0.0, 0.15, 1.0]], "otherwise": 0.0}}]}
+
+
+def test_an_earlier_step_best_is_exported_when_the_last_one_fits_a_narrow_window(
+        log: DataLog) -> None:
+    res = run(log, NARROW_LAST)
+    assert res.parsimony["start_step"] == 1
+    last = run(log, {**NARROW_LAST, "parsimony": {"start": "last-step"}})
+    assert last.parsimony["start_step"] == 2
+    assert res.validation["validation"]["rmse"][0] < last.validation["validation"]["rmse"][0]
+
+
+def test_the_paper_s_last_step_and_eq8_criterion_on_request(log: DataLog) -> None:
+    res = run(log, {**TINY, "parsimony": {"start": "last-step", "criterion": "fitness"}})
+    assert res.parsimony["start_step"] == res.steps[-1].step
+    assert res.parsimony["criterion"] == "validation.fitness"
+    for member in res.parsimony["front"]:
+        assert member["criterion"][0] == pytest.approx(member["validation"]["fitness"][0],
+                                                       rel=1e-12)
+
+
+@pytest.mark.parametrize(("doc", "message"), [
+    ({"criterion": "mse"}, "parsimony.criterion: expected one of rmse, fitness, found 'mse'"),
+    ({"start": "first"}, "parsimony.start: expected one of best-step, last-step, found 'first'"),
+])
+def test_parsimony_criterion_and_start_are_checked(doc: dict, message: str) -> None:
+    from edm_sym.engines.abstraction.selection import parse_parsimony
+
+    with pytest.raises(ConfigError, match=message):
+        parse_parsimony("c.toml: parsimony", doc)

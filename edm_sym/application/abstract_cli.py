@@ -220,8 +220,9 @@ def summary_lines(validation: dict) -> list[str]:
         out = [f"held out: rows {held['rows'][0]}-{held['rows'][1]} of the log "
                f"(last {100 * held['share']:g} %)"]
     elif held["kind"] == "blocks":
-        out = [f"held out: {100 * held['share']:g} % of the log in {held['count']} blocks "
-               f"spread over it (rows {held['blocks'][0][0]}-{held['blocks'][0][1]}, ...)"]
+        spans = ", ".join(f"{a}-{b}" for a, b in held["blocks"][:2])
+        out = [f"held out: {100 * held['share']:g} % of the log in {held['count']} blocks, one at "
+               f"the start of each {100 / held['count']:g} % (rows {spans}, ...)"]
     elif held["kind"] == "file":
         out = [f"held out: {held['file']} ({held['samples']} samples)"]
     else:

@@ -278,7 +278,8 @@ def _key(v: float) -> float:
 
 
 def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettings,
-                    rule: str | None = None) -> tuple[Compensator, dict[str, Any]]:
+                    rule: str | None = None, *, start_step: int | None = None
+                    ) -> tuple[Compensator, dict[str, Any]]:
     """Prune ``comp``, choose the exported member and describe the front for result.json.
 
     Parameters
@@ -291,6 +292,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         Whether to prune, the tolerance and the configured rule.
     rule : str, optional
         A selection rule overriding the settings' (``--select``).
+    start_step : int, optional
+        The step whose best ``comp`` is (recorded as ``start_step``).
 
     Returns
     -------
@@ -307,7 +310,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
 
     search = comp
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
-    start = "search" + (f", {moved} parameter(s) moved off a range bound" if moved else "")
+    origin = "search" if start_step is None else f"search (step {start_step} best)"
+    start = origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
     front = prune(comp, scorer, start=start)
     if not front:  # no model with a finite criterion: nothing to choose from
         return comp, {}
@@ -326,4 +330,6 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     record = {"complexity": COMPLEXITY, "criterion": scorer.criterion_name,
               "tolerance": settings.tolerance, "select": rule, "selected": k + 1,
               "search_complexity": complexity(search, search.matrix), "front": members}
+    if start_step is not None:
+        record["start_step"] = start_step
     return _with(comp, front[k].matrix), record

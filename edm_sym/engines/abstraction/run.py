@@ -552,8 +552,17 @@ def abstract(
                                 history=tuple(r.history), generations=r.generations,
                                 evaluations=r.evaluations, weighting=r.weighting))
     comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
-    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting)
-    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select)
+    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
+    start_step = steps[-1].step
+    if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
+        # The step best the held-out data likes most (a later step on a tie): Step 4's eq. 16
+        # weighting, say, may buy large torques with reversals and the cold start
+        # (docs/abstraction.md#seed-robustness).
+        scored = [(scorer.criterion(replace(comp, matrix=s.matrix)), -q)
+                  for q, s in enumerate(steps)]
+        q = -min(scored)[1]
+        comp, start_step = replace(comp, matrix=steps[q].matrix), steps[q].step
+    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step)
     final = scorer.report(comp)
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance = {"seed": int(seed), "package_version": __version__,

@@ -26,7 +26,13 @@ from edm_sym.core.errors import ConfigError
 from edm_sym.engines.abstraction.tables import settings_from_table
 
 KNEE_WITHIN = 1.5
-_KEYS = ("prune", "tolerance", "select")
+_KEYS = ("prune", "tolerance", "select", "criterion", "start")
+#: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
+#: final step's weighting.
+CRITERIA = ("rmse", "fitness")
+#: Which model the pruning starts from: the step best with the lowest criterion, or the
+#: last step's best.
+STARTS = ("best-step", "last-step")
 _SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+))$")
 
 
@@ -49,11 +55,19 @@ class ParsimonySettings:
     select : str or None
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
         simplest member within ``tolerance``.
+    criterion : str
+        ``"rmse"`` (default): the plain RMSE on the held-out part;
+        ``"fitness"``: eq. 8 there with the final step's weighting.
+    start : str
+        ``"best-step"`` (default): prune the step best with the lowest
+        criterion; ``"last-step"``: the last step's best (the paper's model).
     """
 
     prune: bool = True
     tolerance: float = 0.01
     select: str | None = None
+    criterion: str = "rmse"
+    start: str = "best-step"
 
     def __post_init__(self) -> None:
         if not isinstance(self.prune, bool):
@@ -65,6 +79,12 @@ class ParsimonySettings:
         object.__setattr__(self, "tolerance", float(t))
         if self.select is not None:
             check_select(self.select, "parsimony.select")
+        if self.criterion not in CRITERIA:
+            raise ConfigError("parsimony.criterion",
+                              f"expected one of {', '.join(CRITERIA)}, found {self.criterion!r}")
+        if self.start not in STARTS:
+            raise ConfigError("parsimony.start",
+                              f"expected one of {', '.join(STARTS)}, found {self.start!r}")
 
     @property
     def selection(self) -> str:
@@ -73,7 +93,8 @@ class ParsimonySettings:
 
     def to_json(self) -> dict[str, Any]:
         """The settings as a config table."""
-        return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection}
+        return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection,
+                "criterion": self.criterion, "start": self.start}
 
 
 def check_select(text: Any, where: str) -> str:

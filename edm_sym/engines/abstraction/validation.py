@@ -3,12 +3,14 @@
 Two layouts hold out ``share`` (default 20 %) of the abstraction log:
 
 * ``blocks`` (the default): ``blocks`` (default 10) contiguous blocks of
-  equal length, one at the end of each of ``blocks`` equal sections of the
+  equal length, one at the start of each of ``blocks`` equal sections of the
   log, so the held-out data samples every regime of a log made of several
   experiments (a staircase and a chirp, say). The GA simulates the whole log
   (its rows need the inputs of every sample to carry their state) but its
   weighting Lambda is 0 on the held-out samples: their **target** is never
-  fitted. Each block is scored after a warm-up on the samples before it.
+  fitted. The first block is the cold start of the log, which the firmware
+  goes through after every power-up (a relay that starts at 0 and switches
+  late shows there); every other block is scored after the samples before it.
 * ``end``: the last ``share`` of the log as one segment. The compensator is
   causal, so the GA runs on the first part alone and provably never sees the
   held-out samples. On a log whose end is one regime (the fast end of a
@@ -66,8 +68,8 @@ class ValidationSettings:
         Share of the abstraction log held out, in [0, 0.9] (0: nothing held
         out; ignored when a second log is given).
     layout : str
-        ``"blocks"``: ``blocks`` blocks spread over the log (one at the end of
-        each of ``blocks`` equal sections); ``"end"``: one segment at the end.
+        ``"blocks"``: ``blocks`` blocks spread over the log (one at the start
+        of each of ``blocks`` equal sections); ``"end"``: one segment at the end.
     blocks : int
         Number of held-out blocks of the ``blocks`` layout (>= 1).
     unit : str or None
@@ -251,7 +253,7 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
 
 def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSettings,
             unit: str | None) -> Holdout:
-    """The ``blocks`` layout: one held-out block at the end of each of k equal sections."""
+    """The ``blocks`` layout: one held-out block at the start of each of k equal sections."""
     n, k = len(y), settings.blocks
     length = int(round(n * settings.share / k))
     if not (1 <= length and k * length < n and n // k >= length):
@@ -262,9 +264,9 @@ def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSet
     held = np.zeros(n, dtype=bool)
     spans = []
     for j in range(k):
-        stop = (j + 1) * n // k
-        held[stop - length:stop] = True
-        spans.append([stop - length, stop])
+        start = j * n // k
+        held[start:start + length] = True
+        spans.append([start, start + length])
     record = {"kind": "blocks", "share": settings.share, "count": k, "blocks": spans,
               "times": [[float(t[a]), float(t[b - 1])] for a, b in spans]}
     # n / n_train on the fitted samples: eq. 8 over the whole log (what the GA computes)
@@ -290,10 +292,13 @@ class Scorer:
         The parts to score.
     weighting : Weighting
         Lambda of eq. 8 (the final step's).
+    measure : str
+        What :meth:`criterion` takes: ``"fitness"``, eq. 8 (its RMSE where Lambda
+        is 0 on every sample), or ``"rmse"``, the plain RMSE.
     """
 
-    def __init__(self, holdout: Holdout, weighting: Weighting):
-        self.holdout, self.weighting = holdout, weighting
+    def __init__(self, holdout: Holdout, weighting: Weighting, measure: str = "fitness"):
+        self.holdout, self.weighting, self.measure = holdout, weighting, measure
         self.parts = {"training": holdout.training}
         if holdout.validation is not None:
             self.parts["validation"] = holdout.validation
@@ -350,13 +355,17 @@ class Scorer:
                 "rmse": [_finite(rmse), self.holdout.unit], "samples": p.samples}
 
     def criterion(self, comp: Compensator) -> float:
-        """The number a simpler model must not worsen: validation eq. 8, else its RMSE.
+        """The number a simpler model must not worsen, on the held-out part.
 
-        Without held-out data, the training eq. 8. Non-finite: ``inf``.
+        The plain RMSE there (``measure="rmse"``) or eq. 8 (``"fitness"``, its
+        RMSE where Lambda is 0 on every held-out sample); without held-out
+        data, the same on the training part. Non-finite: ``inf``.
         """
         part = "validation" if "validation" in self.parts else "training"
         s = self.score(comp, part)
-        value = s["fitness"][0] if s["fitness"][0] is not None else s["rmse"][0]
+        value = s["rmse"][0]
+        if self.measure == "fitness" and s["fitness"][0] is not None:
+            value = s["fitness"][0]
         return float("inf") if value is None else float(value)
 
     @property
@@ -364,7 +373,7 @@ class Scorer:
         """What :meth:`criterion` measures, as recorded in result.json."""
         part = "validation" if "validation" in self.parts else "training"
         lam = self.weights(part)
-        kind = "fitness" if np.any(np.asarray(lam) > 0) else "rmse"
+        kind = "fitness" if self.measure == "fitness" and np.any(np.asarray(lam) > 0) else "rmse"
         return f"{part}.{kind}"
 
     def report(self, comp: Compensator) -> dict[str, Any]:
