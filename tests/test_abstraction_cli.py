@@ -55,8 +55,8 @@ def test_abstract_writes_the_result_and_prints_fitness_and_path(
     tr, va = res.validation["training"], res.validation["validation"]
     par = res.parsimony
     assert lines == [f"wrote {out}", f"fitness {res.fitness:.10g}",
-                     "held out: 20 % of the log in 10 blocks, one at the start of each 10 % "
-                     "(rows 0-20, 100-120, ...)",
+                     "held out: 20 % of the log in 10 blocks, one in the middle of each 10 % "
+                     "(rows 40-60, 140-160, ...)",
                      f"training: fitness (eq. 8) {tr['fitness'][0]:.6g} N m, "
                      f"rmse {tr['rmse'][0]:.6g} N m",
                      f"validation: fitness (eq. 8) {va['fitness'][0]:.6g} N m, "

@@ -14,7 +14,7 @@ from edm_sym.core.data import DataLog, write_csv
 from edm_sym.core.elements import default_ranges
 from edm_sym.core.errors import ConfigError, ResultFormatError
 from edm_sym.core.matrix import Compensator, make_matrix
-from edm_sym.core.result import front_member, load_result, save_result
+from edm_sym.core.result import front_member, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
 from edm_sym.engines.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony, select
@@ -85,15 +85,24 @@ def test_the_front_is_pareto_and_its_numbers_recompute(log: DataLog) -> None:
     cx = [m.complexity for m in front]
     cr = [m.criterion for m in front]
     assert cx == sorted(set(cx)) and all(a > b for a, b in zip(cr, cr[1:], strict=False))
-    _, record = apply_parsimony(comp0, sc, ParsimonySettings())
     y = log.columns["tau_ext"]
-    for m, rec in zip(front, record["front"], strict=True):
+    for m in front:  # unguarded: the held-out RMSE
         comp = Compensator(m.matrix, TS, comp0.ranges, comp0.record_length)
         e = y - plain_loop(comp, log).sum(axis=0)
-        assert rec["criterion"][0] == pytest.approx(np.sqrt(np.mean(e[1600:] ** 2)), rel=1e-9)
-        assert rec["training"]["rmse"][0] == pytest.approx(np.sqrt(np.mean(e[:1600] ** 2)),
-                                                           rel=1e-9)
-        assert rec["complexity"] == complexity(comp0, m.matrix)
+        assert m.criterion == pytest.approx(np.sqrt(np.mean(e[1600:] ** 2)), rel=1e-9)
+    _, record = apply_parsimony(comp0, sc, ParsimonySettings())
+    e0 = y - plain_loop(comp0, log).sum(axis=0)
+    v0, t0 = np.sqrt(np.mean(e0[1600:] ** 2)), np.sqrt(np.mean(e0[:1600] ** 2))
+    sc.guard(comp0)
+    for m, rec in zip(prune(comp0, sc), record["front"], strict=True):
+        comp = Compensator(m.matrix, TS, comp0.ranges, comp0.record_length)
+        assert rec["matrix"] == matrix_to_json(m.matrix)
+        e = y - plain_loop(comp, log).sum(axis=0)
+        v, t = np.sqrt(np.mean(e[1600:] ** 2)), np.sqrt(np.mean(e[:1600] ** 2))
+        # Guarded by the training part: the worse of the two relative changes.
+        assert rec["criterion"][0] == pytest.approx(v0 * max(v / v0, t / t0), rel=1e-9)
+        assert rec["training"]["rmse"][0] == pytest.approx(t, rel=1e-9)
+        assert rec["complexity"] == complexity(comp0, comp.matrix)
 
 
 def test_selection_rules() -> None:

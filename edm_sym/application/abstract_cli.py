@@ -221,8 +221,8 @@ def summary_lines(validation: dict) -> list[str]:
                f"(last {100 * held['share']:g} %)"]
     elif held["kind"] == "blocks":
         spans = ", ".join(f"{a}-{b}" for a, b in held["blocks"][:2])
-        out = [f"held out: {100 * held['share']:g} % of the log in {held['count']} blocks, one at "
-               f"the start of each {100 / held['count']:g} % (rows {spans}, ...)"]
+        out = [f"held out: {100 * held['share']:g} % of the log in {held['count']} blocks, one in "
+               f"the middle of each {100 / held['count']:g} % (rows {spans}, ...)"]
     elif held["kind"] == "file":
         out = [f"held out: {held['file']} ({held['samples']} samples)"]
     else:

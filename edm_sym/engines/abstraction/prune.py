@@ -309,6 +309,7 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     from edm_sym.core.result import matrix_to_json
 
     search = comp
+    scorer.guard(comp)
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
     origin = "search" if start_step is None else f"search (step {start_step} best)"
     start = origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")

@@ -555,10 +555,10 @@ def abstract(
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
     start_step = steps[-1].step
     if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
-        # The step best the held-out data likes most (a later step on a tie): Step 4's eq. 16
-        # weighting, say, may buy large torques with reversals and the cold start
-        # (docs/abstraction.md#seed-robustness).
-        scored = [(scorer.criterion(replace(comp, matrix=s.matrix)), -q)
+        # The step best with the lowest plain RMSE over the whole log (a later step on a tie):
+        # Step 4's eq. 16 weighting, say, may buy large torques with reversals and the cold
+        # start, which only the whole log holds (docs/abstraction.md, "Parsimony").
+        scored = [(scorer.whole_rmse(replace(comp, matrix=s.matrix)), -q)
                   for q, s in enumerate(steps)]
         q = -min(scored)[1]
         comp, start_step = replace(comp, matrix=steps[q].matrix), steps[q].step

@@ -30,8 +30,8 @@ _KEYS = ("prune", "tolerance", "select", "criterion", "start")
 #: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
 #: final step's weighting.
 CRITERIA = ("rmse", "fitness")
-#: Which model the pruning starts from: the step best with the lowest criterion, or the
-#: last step's best.
+#: Which model the pruning starts from: the step best with the lowest plain RMSE over the
+#: whole abstraction log, or the last step's best.
 STARTS = ("best-step", "last-step")
 _SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+))$")
 
@@ -59,8 +59,9 @@ class ParsimonySettings:
         ``"rmse"`` (default): the plain RMSE on the held-out part;
         ``"fitness"``: eq. 8 there with the final step's weighting.
     start : str
-        ``"best-step"`` (default): prune the step best with the lowest
-        criterion; ``"last-step"``: the last step's best (the paper's model).
+        ``"best-step"`` (default): prune the step best with the lowest plain
+        RMSE over the whole abstraction log; ``"last-step"``: the last step's
+        best (the paper's model).
     """
 
     prune: bool = True

@@ -3,14 +3,14 @@
 Two layouts hold out ``share`` (default 20 %) of the abstraction log:
 
 * ``blocks`` (the default): ``blocks`` (default 10) contiguous blocks of
-  equal length, one at the start of each of ``blocks`` equal sections of the
-  log, so the held-out data samples every regime of a log made of several
-  experiments (a staircase and a chirp, say). The GA simulates the whole log
-  (its rows need the inputs of every sample to carry their state) but its
-  weighting Lambda is 0 on the held-out samples: their **target** is never
-  fitted. The first block is the cold start of the log, which the firmware
-  goes through after every power-up (a relay that starts at 0 and switches
-  late shows there); every other block is scored after the samples before it.
+  equal length, one in the middle of each of ``blocks`` equal sections of
+  the log, so the held-out data samples every regime of a log made of
+  several experiments (a staircase and a chirp, say). The GA simulates the
+  whole log (its rows need the inputs of every sample to carry their state)
+  but its weighting Lambda is 0 on the held-out samples: their **target** is
+  never fitted. Each block is scored after the samples before it. The cold
+  start of the log is not held out: it happens once, and the GA must see it
+  to learn a compensator that starts well from rest.
 * ``end``: the last ``share`` of the log as one segment. The compensator is
   causal, so the GA runs on the first part alone and provably never sees the
   held-out samples. On a log whose end is one regime (the fast end of a
@@ -68,7 +68,7 @@ class ValidationSettings:
         Share of the abstraction log held out, in [0, 0.9] (0: nothing held
         out; ignored when a second log is given).
     layout : str
-        ``"blocks"``: ``blocks`` blocks spread over the log (one at the start
+        ``"blocks"``: ``blocks`` blocks spread over the log (one in the middle
         of each of ``blocks`` equal sections); ``"end"``: one segment at the end.
     blocks : int
         Number of held-out blocks of the ``blocks`` layout (>= 1).
@@ -253,7 +253,7 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
 
 def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSettings,
             unit: str | None) -> Holdout:
-    """The ``blocks`` layout: one held-out block at the start of each of k equal sections."""
+    """The ``blocks`` layout: one held-out block in the middle of each of k equal sections."""
     n, k = len(y), settings.blocks
     length = int(round(n * settings.share / k))
     if not (1 <= length and k * length < n and n // k >= length):
@@ -264,7 +264,7 @@ def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSet
     held = np.zeros(n, dtype=bool)
     spans = []
     for j in range(k):
-        start = j * n // k
+        start = (j * n // k + (j + 1) * n // k - length) // 2
         held[start:start + length] = True
         spans.append([start, start + length])
     record = {"kind": "blocks", "share": settings.share, "count": k, "blocks": spans,
@@ -299,6 +299,7 @@ class Scorer:
 
     def __init__(self, holdout: Holdout, weighting: Weighting, measure: str = "fitness"):
         self.holdout, self.weighting, self.measure = holdout, weighting, measure
+        self._reference: tuple[float, float] | None = None
         self.parts = {"training": holdout.training}
         if holdout.validation is not None:
             self.parts["validation"] = holdout.validation
@@ -358,15 +359,52 @@ class Scorer:
         """The number a simpler model must not worsen, on the held-out part.
 
         The plain RMSE there (``measure="rmse"``) or eq. 8 (``"fitness"``, its
-        RMSE where Lambda is 0 on every held-out sample); without held-out
-        data, the same on the training part. Non-finite: ``inf``.
+        RMSE where Lambda is 0 on every held-out sample), guarded by the
+        training part after :meth:`guard`; without held-out data, the same on
+        the training part. Non-finite: ``inf``.
         """
-        part = "validation" if "validation" in self.parts else "training"
+        if "validation" not in self.parts:
+            return self._measured(comp, "training")
+        value = self._measured(comp, "validation")
+        if self._reference is not None and math.isfinite(value):
+            # Guarded: the training part may not worsen more than the held-out part.
+            v0, t0 = self._reference
+            value = v0 * max(value / v0, self._measured(comp, "training") / t0)
+        return value
+
+    def _measured(self, comp: Compensator, part: str) -> float:
         s = self.score(comp, part)
         value = s["rmse"][0]
         if self.measure == "fitness" and s["fitness"][0] is not None:
             value = s["fitness"][0]
         return float("inf") if value is None else float(value)
+
+    def guard(self, comp: Compensator) -> None:
+        """Guard :meth:`criterion` by ``comp``'s scores (the search's model).
+
+        From then on, with held-out data, the criterion is the held-out value
+        or the training value scaled to it, whichever worsened more against
+        ``comp``'s: ``v0 * max(v / v0, t / t0)``. A simplification must then
+        keep **both** parts within the tolerance: the held-out blocks are a
+        fifth of the log, and a change they do not see (a reversal's relay,
+        say) is not free because of that.
+        """
+        self._reference = None
+        if "validation" in self.parts:
+            v0, t0 = self._measured(comp, "validation"), self._measured(comp, "training")
+            if all(math.isfinite(v) and v > 0 for v in (v0, t0)):
+                self._reference = (v0, t0)
+
+    def whole_rmse(self, comp: Compensator) -> float:
+        """The plain RMSE over every sample of the abstraction log, fitted and held out.
+
+        Non-finite: ``inf``.
+        """
+        p = self.holdout.training
+        e = p.y - self.outputs(comp, "training")
+        with np.errstate(all="ignore"):
+            value = float(np.sqrt(np.mean(e * e)))
+        return value if math.isfinite(value) else float("inf")
 
     @property
     def criterion_name(self) -> str:
@@ -374,7 +412,7 @@ class Scorer:
         part = "validation" if "validation" in self.parts else "training"
         lam = self.weights(part)
         kind = "fitness" if self.measure == "fitness" and np.any(np.asarray(lam) > 0) else "rmse"
-        return f"{part}.{kind}"
+        return f"{part}.{kind}" + ("+training" if self._reference is not None else "")
 
     def report(self, comp: Compensator) -> dict[str, Any]:
         """The ``validation`` entry of result.json for the exported model."""

@@ -33,7 +33,7 @@ def _held_out(p: EdmLatexPrinter, held: Mapping[str, Any]) -> str:
     if held["kind"] == "blocks":
         (a0, a1), (b0, b1) = held["times"][0], held["times"][-1]
         return p.text(f"{100 * held['share']:g} % of the log in {held['count']} blocks spread "
-                      f"over it, one at the start of each {100 / held['count']:g} % of it "
+                      f"over it, one in the middle of each {100 / held['count']:g} % of it "
                       f"(the first {a0:g} s to {a1:g} s, the last {b0:g} s to {b1:g} s)")
     if held["kind"] == "file":
         return p.mono(str(held["file"])) + p.text(f" ({held['samples']} samples)")
