@@ -287,11 +287,14 @@ def test_a_batch_gives_each_row_the_numbers_it_gets_alone(seed: int) -> None:
     store = np.full((count + 3, N), np.nan)
     dest = np.arange(count, dtype=np.int64)[::-1] + 3  # any rows of the store
     slots = np.cumsum([0, *(p.stores for p in programs)])
-    inter = np.full((slots[-1], N), np.nan)
+    inter = np.full((slots[-1] + 3, N), np.nan)
+    inter[slots[-1]:] = x  # as if stored prefixes
     row_slots = [range(slots[r], slots[r + 1]) for r in range(count)]
-    # Half the rows read their input in place of a copy, half get it as an array.
-    starts = [i if r % 2 else x[i].copy() for r, i in enumerate(inputs)]
+    # A third of the rows get their input as an array (copied), the others read it in
+    # place: a row of the sources or a stored prefix (inter row -1 - k for start k < 0).
+    starts = [(x[i].copy(), i, -1 - (slots[-1] + i))[r % 3] for r, i in enumerate(inputs)]
     kernel.run_rows(programs, starts, store, dest, inter, row_slots, sources=x)
+    _same_bits(inter[slots[-1]:], x)
     for r, prog in enumerate(programs):
         alone_inter = np.empty((prog.stores, N))
         alone = kernel.run_program(prog, x[inputs[r]], inter=alone_inter)
@@ -309,10 +312,12 @@ def test_a_row_that_changes_nothing_gives_its_input() -> None:
     x = np.vstack([_signal(1), _signal(2)])
     through = REGISTRY[next(c for c, e in REGISTRY.items() if e.name == "through")]
     prog, _ = kernel.compile_row([through.realise(None, TS)] * 3)
-    store = np.zeros((2, N))
-    kernel.run_rows([prog, prog], [1, x[0]], store, np.array([0, 1]), sources=x)
+    store = np.zeros((3, N))
+    kernel.run_rows([prog] * 3, [1, x[0], -2], store, np.array([0, 1, 2]), x[::-1].copy(),
+                    sources=x)
     _same_bits(store[0], x[1])
     _same_bits(store[1], x[0])
+    _same_bits(store[2], x[0])  # inter row 1
 
 
 def _table_rows(names: list[list[str]], inputs: list[int]) -> np.ndarray:

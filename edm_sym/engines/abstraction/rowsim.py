@@ -361,7 +361,7 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
     cap = max(1, min(BATCH_ROWS, pool.slots // (2 * max(1, n - 1))))
     todo = list(range(len(table)))
     while todo:
-        batch, later, produced = [], [], set()
+        batch, later, produced, used = [], [], set(), set()
         for r in todo:
             line = table[r]
             if len(batch) >= cap:
@@ -375,14 +375,15 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
                     break
                 slot = pool.lookup(key)
                 if slot is not None:
-                    start, begin = k, pool.rows[slot]
+                    start, begin = k, -1 - slot  # the prefix, read in place
+                    used.add(key)
                     break
             if wait:
                 later.append(r)
                 continue
             found, keep, stages = start, None, []
             if begin is None:
-                begin = int(line[0])  # the input, read by the row's first instruction
+                begin = int(line[0])  # the input, read in place
             for i in range(start, n):
                 code, p = int(line[1 + i]), float(line[1 + n + i])
                 cls, rng = decoder[code]
@@ -396,15 +397,17 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
             program, stored = kernel.compile_steps(stages, store=True)
             batch.append((r, line, program, stored, start, begin, keep))
             produced.update(prefix_key(line, n, k) for k in range(found + 1, n))
-        _run_batch(worker, pool, batch, n, store, dest, sources)
+        _run_batch(worker, pool, batch, n, store, dest, sources, used)
         todo = later
 
 
 def _run_batch(worker: Worker, pool: SlotStore, batch: list, n: int, store: np.ndarray,
-               dest: np.ndarray, sources: np.ndarray) -> None:
-    """Run a batch of rows in the kernel; record their prefixes."""
-    # Starts that are prefixes are copied before any slot is written, so evicting one is safe.
-    slots = pool.allocate(sum(len(b[3]) for b in batch), ())
+               dest: np.ndarray, sources: np.ndarray, used: set[bytes]) -> None:
+    """Run a batch of rows in the kernel; record their prefixes.
+
+    The prefixes rows start from (``used``) keep their slots during the batch.
+    """
+    slots = pool.allocate(sum(len(b[3]) for b in batch), used)
     row_slots, at = [], 0
     for b in batch:
         row_slots.append(slots[at:at + len(b[3])])

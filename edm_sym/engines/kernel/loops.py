@@ -2,8 +2,8 @@
 
 A batch of rows is run as a list of lines ``[op, row, i1, i2, r1, r2, src]``:
 instruction ``op`` over the whole signal of row ``row`` (``store[dest[row]]``),
-in place (or, for a row's first line, from its input ``sources[src]``: no
-separate copy), with its integers ``i1``, ``i2`` (a length, an offset into
+in place (or, for a row's first line, from its input, a row of ``sources``
+or a stored prefix: no separate copy), with its integers ``i1``, ``i2`` (a length, an offset into
 ``coef``, an ``inter`` row) and reals ``r1``, ``r2`` (a constant, limits).
 Each instruction is one tight loop over the signal, which a signal of 20 000
 samples runs from the L2 cache.
@@ -151,47 +151,53 @@ def _row(code, s, store, dest):  # noqa: ANN001, ANN202
 
 
 @_jit
-def _input(code, s, store, dest, sources):  # noqa: ANN001, ANN202
-    # A line reads its row in place, or (a row's first line) its input from ``sources``.
+def _input(code, s, store, dest, sources, inter):  # noqa: ANN001, ANN202
+    # A line reads its row in place, or (a row's first line) its input: a row of
+    # ``sources`` (src >= 0) or a stored prefix, ``inter[-2 - src]`` (src <= -2).
     i = int(code[s, 6])
-    return sources[i] if i >= 0 else store[dest[int(code[s, 1])]]
+    if i >= 0:
+        return sources[i]
+    return inter[-2 - i] if i <= -2 else store[dest[int(code[s, 1])]]
 
 
 @_jit
-def _group(code, s, m, order, coef, store, dest, sources):  # noqa: ANN001, ANN202
+def _group(code, s, m, order, coef, store, dest, sources, inter):  # noqa: ANN001, ANN202
     # The filters of order 1 or 2 of lines s .. s + m - 1 (distinct rows), several at a time.
     j = 0
     if order == 2:
         while j + 2 <= m:
             a, b = s + j, s + j + 1
             _lfilter2_x2(_row(code, a, store, dest), _row(code, b, store, dest),
-                         _input(code, a, store, dest, sources),
-                         _input(code, b, store, dest, sources),
+                         _input(code, a, store, dest, sources, inter),
+                         _input(code, b, store, dest, sources, inter),
                          int(code[a, 3]), int(code[b, 3]), coef)
             j += 2
         if j < m:
             a = s + j
-            _lfilter2(_row(code, a, store, dest), _input(code, a, store, dest, sources),
+            _lfilter2(_row(code, a, store, dest), _input(code, a, store, dest, sources, inter),
                       int(code[a, 3]), coef)
         return
     while j + 4 <= m:
         a, b, c, d = s + j, s + j + 1, s + j + 2, s + j + 3
         _lfilter1_x4(_row(code, a, store, dest), _row(code, b, store, dest),
                      _row(code, c, store, dest), _row(code, d, store, dest),
-                     _input(code, a, store, dest, sources), _input(code, b, store, dest, sources),
-                     _input(code, c, store, dest, sources), _input(code, d, store, dest, sources),
+                     _input(code, a, store, dest, sources, inter),
+                     _input(code, b, store, dest, sources, inter),
+                     _input(code, c, store, dest, sources, inter),
+                     _input(code, d, store, dest, sources, inter),
                      int(code[a, 3]), int(code[b, 3]), int(code[c, 3]), int(code[d, 3]), coef)
         j += 4
     if j + 2 <= m:
         a, b = s + j, s + j + 1
         _lfilter1_x2(_row(code, a, store, dest), _row(code, b, store, dest),
-                     _input(code, a, store, dest, sources), _input(code, b, store, dest, sources),
+                     _input(code, a, store, dest, sources, inter),
+                     _input(code, b, store, dest, sources, inter),
                      int(code[a, 3]), int(code[b, 3]), coef)
         j += 2
     if j < m:
         a = s + j
         c = int(code[a, 3])
-        _lfilter1(_row(code, a, store, dest), _input(code, a, store, dest, sources),
+        _lfilter1(_row(code, a, store, dest), _input(code, a, store, dest, sources, inter),
                   coef[c], coef[c + 1], coef[c + 2])
 
 
@@ -290,8 +296,9 @@ def _apply(op, i1, i2, r1, r2, coef, v, x, inter):  # noqa: ANN001, ANN202, C901
 def run_lines(code, coef, store, dest, inter, sources):  # noqa: ANN001, ANN201
     """Run lines ``[op, row, i1, i2, r1, r2, src]`` on the rows ``store[dest[row]]``, in order.
 
-    A line reads its row in place, or from ``sources[src]`` when ``src >= 0``
-    (a row's first line: its input). STORE copies its row into ``inter[i1]``;
+    A line reads its row in place (``src == -1``), or (a row's first line) its
+    input: ``sources[src]`` when ``src >= 0``, the stored prefix
+    ``inter[-2 - src]`` when ``src <= -2``. STORE copies its row into ``inter[i1]``;
     a GROUP line runs the filters of the ``i1`` lines that follow (all of
     order ``i2``) together.
     """
@@ -300,11 +307,11 @@ def run_lines(code, coef, store, dest, inter, sources):  # noqa: ANN001, ANN201
         op = int(code[s, 0])
         if op == GROUP:
             m = int(code[s, 2])
-            _group(code, s + 1, m, int(code[s, 3]), coef, store, dest, sources)
+            _group(code, s + 1, m, int(code[s, 3]), coef, store, dest, sources, inter)
             s += 1 + m
             continue
         _apply(op, int(code[s, 2]), int(code[s, 3]), code[s, 4], code[s, 5], coef,
-               _row(code, s, store, dest), _input(code, s, store, dest, sources), inter)
+               _row(code, s, store, dest), _input(code, s, store, dest, sources, inter), inter)
         s += 1
 
 

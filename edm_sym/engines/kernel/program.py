@@ -192,7 +192,8 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
     A part is an array of lines ``[op, row, i1, i2, r1, r2, src]`` (for
     :func:`~edm_sym.engines.kernel.loops.run_lines`) or ``(row, src, method,
     numbers)``, a numpy step of one row. Row r's first line reads ``first[r]``
-    (a row of the sources; -1: the row itself), the others the row.
+    (>= 0: a row of the sources; <= -2: the prefix ``inter[-2 - first[r]]``; -1: the
+    row itself), the others the row.
     """
     offsets, total = [], 0
     for prog in programs:
@@ -208,7 +209,7 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
     for r, prog in enumerate(programs):
         if prog.lines:
             active.append(r)
-        elif src[r] >= 0:  # nothing to compute: the output is the input
+        elif src[r] != -1:  # nothing to compute: the output is the input
             lines.append((COPY, r, 0, 0, 0.0, 0.0, src[r]))
     while active:
         # Each row as far as it goes (its numpy steps too, while its signal is in the cache).
@@ -280,9 +281,10 @@ def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], st
     programs : sequence of Program
         From :func:`compile_steps`, one per row.
     starts : sequence of numpy.ndarray or int
-        Each row's input: a signal of shape (N,), or a row of ``sources``
-        (read by the row's first instruction, no copy). Inputs are read
-        before anything is written.
+        Each row's input: a signal of shape (N,) (copied first), or read in
+        place by the row's first instruction: ``k >= 0`` the row k of
+        ``sources``, ``k < 0`` the row ``-1 - k`` of ``inter`` (a stored
+        prefix, which no prefix of this batch may overwrite).
     store : numpy.ndarray
         Shape (S, N): row ``dest[r]`` gets row r's output (distinct rows).
     dest : numpy.ndarray
@@ -306,7 +308,7 @@ def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], st
             np.copyto(store[dest[r]], x)
             first.append(-1)
         else:
-            first.append(int(x))
+            first.append(int(x) if x >= 0 else int(x) - 1)  # -1 - k: inter row k -> -2 - k
     if row_slots is None:
         row_slots = [()] * len(programs)
     if inter is None:
@@ -326,7 +328,8 @@ def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], st
             else:
                 r, i, name, args = part
                 v = store[dest[r]]
-                _call(name, args, v, sources[i] if i >= 0 else v, scratch)
+                x = sources[i] if i >= 0 else (inter[-2 - i] if i <= -2 else v)
+                _call(name, args, v, x, scratch)
 
 
 _ONE = np.zeros(1, dtype=np.int64)
