@@ -94,20 +94,29 @@ def best_time(fn, repeat: int) -> float:  # noqa: ANN001
     return best
 
 
+def build_c(result, log: dict[str, np.ndarray], d: Path, *, cc: str = "gcc") -> Path:  # noqa: ANN001
+    """Export ``result`` as double C into ``d``, compile it with -O2 and the harness; the binary."""
+    export(result, "c", d, real="double")
+    (d / "harness.c").write_text(HARNESS)
+    np.column_stack([log[k] for k in result.inputs]).astype(np.float64).tofile(d / "in.bin")
+    subprocess.run([cc, "-std=c99", "-O2", "-o", str(d / "bench"), str(d / "harness.c"),
+                    str(d / "edm_comp.c"), "-lm"], check=True, cwd=d)
+    return d / "bench"
+
+
+def run_c(binary: Path, n: int, repeat: int) -> float:
+    """Best CPU time of ``repeat`` runs of ``step`` over the log, per sample [ns]."""
+    out = subprocess.run([str(binary), str(binary.with_name("in.bin")), str(n), str(repeat)],
+                         check=True, capture_output=True, text=True).stdout
+    return float(out.split()[0])
+
+
 def c_ns_per_sample(result, log: dict[str, np.ndarray], *, cc: str = "gcc",  # noqa: ANN001
                     repeat: int = 20) -> float:
     """Export ``result`` as double C, compile it with -O2 and time ``step`` over ``log`` [ns]."""
     with tempfile.TemporaryDirectory() as tmp:
-        d = Path(tmp)
-        export(result, "c", d, real="double")
-        (d / "harness.c").write_text(HARNESS)
-        n = len(next(iter(log.values())))
-        np.column_stack([log[k] for k in result.inputs]).astype(np.float64).tofile(d / "in.bin")
-        subprocess.run([cc, "-std=c99", "-O2", "-o", str(d / "bench"), str(d / "harness.c"),
-                        str(d / "edm_comp.c"), "-lm"], check=True, cwd=d)
-        out = subprocess.run([str(d / "bench"), str(d / "in.bin"), str(n), str(repeat)],
-                             check=True, capture_output=True, text=True).stdout
-    return float(out.split()[0])
+        binary = build_c(result, log, Path(tmp), cc=cc)
+        return run_c(binary, len(next(iter(log.values()))), repeat)
 
 
 def _ga_rows(result, log: dict[str, np.ndarray]):  # noqa: ANN001, ANN202

@@ -584,13 +584,13 @@ def warm_up() -> None:
 
     by_name = {cls.name: cls for cls in REGISTRY.values()}
     x = np.linspace(-30.0, 30.0, 8)
-    rows = [[("lpf", 10.0), ("tanh", 1.0), ("tan_amp", 1.0)],
+    rows = [[("lpf", 10.0), ("tanh", 1.0), ("tan_amp", 1.0), ("asin", None)],
             [("lpf", 20.0), ("log", 0.5), ("power", 1.5)]]
     programs = [kernel.compile_row([by_name[name].realise(a, 1e-3) for name, a in row],
                                    store=True)[0] for row in rows]
     inter = np.empty((sum(p.stores for p in programs), x.shape[0]))
     kernel.run_rows(programs, [0, x], np.empty((2, x.shape[0])), np.arange(2, dtype=np.int64),
-                    inter, [range(0, 2), range(2, 4)], sources=x.reshape(1, -1).copy())
+                    inter, [range(0, 3), range(3, 5)], sources=x.reshape(1, -1).copy())
     kernel.score(np.zeros((1, 8)), np.zeros(1, dtype=np.int64), x, np.ones(1))
     kernel.dot(x, x, np.ones(1))
 

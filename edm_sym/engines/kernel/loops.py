@@ -17,7 +17,7 @@ are independent, so the processor overlaps them, as it overlaps the rows of a
 compensator in the generated C. Each row's operations and their order stay
 those of its own filter, so a row's numbers do not depend on its group.
 
-The numpy steps' guards (:func:`tan_guard`, :func:`quotient`,
+The numpy steps' guards (:func:`clip`, :func:`tan_guard`, :func:`quotient`,
 :func:`sign_times`, :func:`saturated`) are compiled here too: exact
 arithmetic only, so they give numpy's bits; the transcendental functions
 themselves stay numpy's. The limits and signs are selects, not branches: a
@@ -39,7 +39,7 @@ except ImportError:  # pragma: no cover
 
 import numpy as np
 
-__all__ = ["NUMBA", "dot_product", "quotient", "run_lines", "saturated", "scatter", "score_rows",
+__all__ = ["NUMBA", "clip", "dot_product", "quotient", "run_lines", "saturated", "scatter", "score_rows",
            "sign_times", "tan_guard"]
 
 
@@ -352,6 +352,14 @@ def scatter(v, rest, where, m):  # noqa: ANN001, ANN201
     """``v[where[i]] = rest[i]`` for ``i < m``."""
     for i in range(m):
         v[where[i]] = rest[i]
+
+
+@_jit
+def clip(x, v, lo, hi):  # noqa: ANN001, ANN201
+    """``v = clip(x, lo, hi)`` as np.clip computes it (NaN stays NaN); ``x`` may be ``v``."""
+    for k in range(v.shape[0]):
+        u = x[k]
+        v[k] = lo if u < lo else (hi if u > hi else u)
 
 
 @_jit

@@ -36,6 +36,7 @@ from edm_sym.engines.kernel.loops import (
     GROUP,
     LFILTER,
     STORE,
+    clip,
     quotient,
     run_lines,
     saturated,
@@ -122,7 +123,7 @@ def _ufunc(fn: Any) -> Callable[..., None]:
 
 def _clipped(fn: Any) -> Callable[..., None]:
     def call(v: np.ndarray, x: np.ndarray, scratch: np.ndarray) -> None:
-        np.clip(x, -1.0, 1.0, out=v)
+        clip(x, v, -1.0, 1.0)
         fn(v, out=v)
 
     return call
@@ -201,8 +202,9 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
         total += prog.coef.shape[0]
     coef = (programs[0].coef if len(programs) == 1
             else np.concatenate([p.coef for p in programs]))
-    parts: list = []
-    lines: list[tuple] = []
+    # All lines in one flat list (one array at the end); a numpy step cuts it into parts.
+    flat: list[float] = []
+    steps: list[tuple[int, tuple]] = []  # (lines before it, the step)
     pcs = [0] * len(programs)
     src = list(first)
     active = []
@@ -210,12 +212,12 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
         if prog.lines:
             active.append(r)
         elif src[r] != -1:  # nothing to compute: the output is the input
-            lines.append((COPY, r, 0, 0, 0.0, 0.0, src[r]))
+            flat.extend((COPY, r, 0, 0, 0.0, 0.0, src[r]))
     while active:
         # Each row as far as it goes (its numpy steps too, while its signal is in the cache).
         waiting: dict[int, list[int]] = {}
         for r in active:
-            prog, pc, off = programs[r], pcs[r], offsets[r]
+            prog, pc, off, s = programs[r], pcs[r], offsets[r], src[r]
             code = prog.lines
             while pc < len(code):
                 op, i1, i2, r1, r2 = code[pc]
@@ -223,29 +225,34 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
                     waiting.setdefault(i1, []).append(r)
                     break
                 if op == CALL:
-                    if lines:
-                        parts.append(np.array(lines, dtype=np.float64))
-                        lines = []
-                    parts.append((r, src[r], *prog.calls[i1]))
+                    steps.append((len(flat), (r, s, *prog.calls[i1])))
                 else:
-                    lines.append((op, r, row_slots[r][i1] if op == STORE else i1, i2 + off,
-                                  r1, r2, src[r]))
-                src[r] = -1
+                    flat.extend((op, r, row_slots[r][i1] if op == STORE else i1, i2 + off,
+                                 r1, r2, s))
+                s = -1
                 pc += 1
-            pcs[r] = pc
+            pcs[r], src[r] = pc, s
         # Then the filters they all wait at, together (by order).
         active = []
         for order, rows in sorted(waiting.items()):
             if len(rows) > 1:
-                lines.append((GROUP, 0, len(rows), order, 0.0, 0.0, -1))
+                flat.extend((GROUP, 0, len(rows), order, 0.0, 0.0, -1))
             for r in rows:
-                lines.append((LFILTER, r, order, programs[r].lines[pcs[r]][2] + offsets[r],
-                              0.0, 0.0, src[r]))
+                flat.extend((LFILTER, r, order, programs[r].lines[pcs[r]][2] + offsets[r],
+                             0.0, 0.0, src[r]))
                 src[r] = -1
                 pcs[r] += 1
             active.extend(rows)
-    if lines:
-        parts.append(np.array(lines, dtype=np.float64))
+    code = np.array(flat, dtype=np.float64).reshape(-1, 7)
+    parts: list = []
+    done = 0
+    for at, step in steps:
+        if at > done:
+            parts.append(code[done // 7:at // 7])
+            done = at
+        parts.append(step)
+    if len(flat) > done:
+        parts.append(code[done // 7:])
     return parts, coef
 
 
