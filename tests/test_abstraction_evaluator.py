@@ -13,7 +13,7 @@ from scipy.signal import cont2discrete
 
 from edm_sym.core.elements import LinearElement, all_elements, default_ranges, element
 from edm_sym.core.matrix import Compensator
-from edm_sym.engines.abstraction import Evaluator, RowCache
+from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
@@ -83,18 +83,6 @@ def test_a_parameter_free_gene_keeps_its_row_key(signals) -> None:
         a = ev.evaluate(pop.inputs, pop.codes, pop.ps)
         b = ev.evaluate(other.inputs, other.codes, other.ps)
         assert a[0] == b[0] and ev.stats.rows_simulated == 1
-
-
-def test_the_row_cache_is_bounded_by_memory() -> None:
-    cache = RowCache(max_bytes=3 * 800)
-    for k in range(10):
-        cache.put(bytes([k]), np.zeros(100))
-        assert cache.nbytes <= 3 * 800
-    assert len(cache) == 3
-    assert cache.get(bytes([9])) is not None and cache.get(bytes([0])) is None
-    cache.get(bytes([7]))
-    cache.put(b"new", np.zeros(100))
-    assert cache.get(bytes([7])) is not None and cache.get(bytes([8])) is None
 
 
 def test_the_slot_store_evicts_least_recent_rows_but_never_kept_ones() -> None:
@@ -219,19 +207,6 @@ def test_a_sine_reading_an_input_uses_cached_sines_to_rounding(signals, name: st
     comp = Compensator(pop.matrix(0, NAMES), TS, {}, N * TS)
     want = simulate_row(comp, comp.matrix.rows[0], x[pop.inputs[0, 0]])
     assert np.allclose(got, want, rtol=0, atol=1e-12 * np.max(np.abs(want)))
-
-
-def test_a_cached_view_counts_with_its_whole_array() -> None:
-    cache = RowCache(max_bytes=10 * 800)
-    block = np.zeros((4, 100))  # 3200 bytes, four views of 800
-    for k in range(4):
-        cache.put(bytes([k]), block[k])
-    assert cache.nbytes == block.nbytes  # once, whole
-    cache.put(b"other", np.zeros(100))
-    assert cache.nbytes == block.nbytes + 800
-    for k in range(4):  # evicting the views one by one frees the block with the last
-        cache.put(bytes([10 + k]), np.zeros(600))
-    assert cache.nbytes <= 10 * 800 and cache.get(bytes([0])) is None
 
 
 @pytest.mark.parametrize("cache_mb", [0.5, 4.0])

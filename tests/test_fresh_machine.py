@@ -10,9 +10,11 @@ without recommends.
 
 from __future__ import annotations
 
+import importlib.metadata
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -131,6 +133,68 @@ def test_doctor_json_lists_every_check(tmp_path: Path, monkeypatch: pytest.Monke
     assert main(["doctor", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert {(d["kind"], d["name"]) for d in doc} == (
-        {("tool", cmd) for cmd, _, _ in TOOLS} | {("latex", n) for n in LATEX_PACKAGES})
-    assert all(d["found"] is False and d["location"] is None for d in doc)
+        {("tool", cmd) for cmd, _, _ in TOOLS} | {("latex", n) for n in LATEX_PACKAGES}
+        | {("python", "numba")})
+    assert all(d["found"] is False and d["location"] is None for d in doc if d["kind"] != "python")
     assert {d["name"]: d["apt"] for d in doc if d["kind"] == "latex"} == LATEX_PACKAGES
+
+
+def _numba_line(out: list[str]) -> str:
+    return next(ln for ln in out if re.match(r"\S+\s+python\s+numba\s", ln))
+
+
+def test_doctor_reports_numba_its_version_and_the_row_kernel(capsys: pytest.CaptureFixture
+                                                              ) -> None:
+    import json
+
+    from edm_sym.engines import kernel
+
+    assert main(["doctor"]) == 0
+    line = _numba_line(capsys.readouterr().out.splitlines())
+    assert main(["doctor", "--json"]) == 0
+    numba = next(d for d in json.loads(capsys.readouterr().out) if d["kind"] == "python")
+    assert numba["pip"] == "edm_sym[fast]" and numba["apt"] == ""
+    if kernel.NUMBA:
+        assert line.startswith("found") and line.endswith("row kernel in use")
+        assert f"{kernel.numba.__version__} at " in line
+        assert numba["found"] and numba["version"] == kernel.numba.__version__
+    else:
+        assert line.startswith("missing") and 'pip install "edm_sym[fast]"' in line
+        assert line.endswith("row kernel not in use: the GA runs the reference realisations "
+                             "(numpy, slower)")
+        assert not numba["found"] and numba["location"] is None
+
+
+def test_doctor_without_numba_names_the_extra_and_the_fallback(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    from edm_sym.application import doctor
+    from edm_sym.engines import kernel
+
+    monkeypatch.setattr(kernel, "NUMBA", False)
+    monkeypatch.setattr(doctor, "_distribution_version", lambda name: None)  # not installed
+    assert main(["doctor"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    line = _numba_line(out)
+    assert line.startswith("missing") and 'pip install "edm_sym[fast]"' in line
+    assert "row kernel not in use" in line and "installed" not in line
+    assert 'for the missing Python packages: pip install "edm_sym[fast]"' in out
+    assert out[-1] != "everything found"
+
+
+def test_doctor_reports_a_numba_that_does_not_import_and_the_ga_falls_back() -> None:
+    pytest.importorskip("numba")  # installed, then made unimportable in a fresh process
+    code = ("import sys; sys.modules['numba'] = None\n"
+            "from edm_sym.application.cli import main\n"
+            "from edm_sym.engines.abstraction.evaluator import kernel_in_use\n"
+            "print('kernel in use:', kernel_in_use())\n"
+            "main(['doctor'])\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True, cwd=ROOT, timeout=300)
+    out = proc.stdout.splitlines()
+    assert out[0] == "kernel in use: False"
+    line = _numba_line(out)
+    version = importlib.metadata.version("numba")
+    assert line.startswith("missing") and 'pip install "edm_sym[fast]"' in line
+    assert f"numba {version} is installed but does not import (" in line
+    assert "row kernel not in use" in line

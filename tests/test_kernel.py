@@ -19,6 +19,7 @@ from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
 from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.kernel import program
 from edm_sym.engines.simulate import simulate_row
 
 N = 2000
@@ -62,7 +63,7 @@ def test_non_finite_inputs_go_through_as_in_numpy(el) -> None:  # noqa: ANN001
 
 
 def test_every_realisation_type_has_an_encoder() -> None:
-    enc = kernel._Encoder()
+    enc = kernel.trace._Encoder()
     for cls in REALISATIONS:
         assert callable(getattr(enc, f"_encode_{cls.__name__}"))
 
@@ -190,3 +191,179 @@ def test_the_gene_encoder_gives_the_steps_of_the_realisation(el) -> None:  # noq
     for p in (0.0, 0.31, 1.0):
         a = rng.decode(p) if rng else None
         assert make(a) == kernel.encode(el.realise(a, TS))
+
+
+# -- the numpy steps, bit for bit --------------------------------------------------------
+
+def _special(seed: int) -> np.ndarray:
+    """Smooth signals of several scales and the values where guards switch."""
+    x = np.concatenate([_signal(seed, a) for a in (1.0, 30.0, 1e3)])
+    edges = [0.0, -0.0, np.nan, np.inf, -np.inf, 1.0, -1.0, 1.0000000000000002, 21.999999999999996,
+             22.0, -22.0, 19.0, 1e300, -1e300, np.pi / 2, -np.pi / 2, 3 * np.pi / 2, 1e-310,
+             np.nextafter(np.pi / 2, 0.0), np.nextafter(np.pi / 2, 4.0), 1e6, -1e6 - 1.0]
+    return np.concatenate([x, edges, x[:7]])  # the edges in the middle, a short tail
+
+
+def _same_bits(got: np.ndarray, want: np.ndarray) -> None:
+    """Equal to the bit (signed zeros too), NaN where the reference has NaN."""
+    nan = np.isnan(want)
+    assert np.array_equal(np.isnan(got), nan)
+    assert np.array_equal(got[~nan].view(np.uint64), want[~nan].view(np.uint64))
+
+
+_STEP_ARGS = {"sym_log": [(0.1,), (1e-3,), (7.0,)],
+              "sym_pow": [(0.1,), (0.5,), (1.0,), (1.55,), (2.0,), (3.0,)]}
+
+
+@pytest.mark.parametrize("name", sorted(program.CALLS))
+@pytest.mark.parametrize("in_place", [True, False])
+def test_each_numpy_step_gives_the_math_interfaces_bits(name: str, in_place: bool) -> None:
+    from edm_sym.core.elements.ops import NUMPY
+
+    for seed in range(3):
+        x = _special(seed)
+        for args in _STEP_ARGS.get(name, [()]):
+            with np.errstate(all="ignore"):
+                want = getattr(NUMPY, name)(x.copy(), *args)
+                v = x.copy() if in_place else np.full_like(x, 5.0)
+                program._call(name, args, v, v if in_place else x.copy(), np.empty_like(x))
+            _same_bits(v, want)
+
+
+def test_a_numpy_step_without_a_kernel_form_runs_the_math_interfaces_own(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    x = _special(4)
+    el = next(e for e in all_elements() if e.name == "sin_amp")
+    stage = el.realise(0.7, TS)
+    want = kernel.run_program(kernel.compile_row([stage])[0], x)
+    monkeypatch.delitem(program.CALLS, "sin")
+    _same_bits(kernel.run_program(kernel.compile_row([stage])[0], x), want)
+
+
+def test_numpy_tanh_is_exactly_one_beyond_the_kernels_bound() -> None:
+    # The kernel writes +-1 there without calling numpy (program.TANH_ONE).
+    rng = np.random.default_rng(0)
+    x = np.concatenate([[program.TANH_ONE, np.nextafter(program.TANH_ONE, 30.0), np.inf, 1e308],
+                        program.TANH_ONE + rng.uniform(0, 10, 200_000),
+                        np.exp(rng.uniform(np.log(program.TANH_ONE), 709.0, 200_000))])
+    assert np.all(np.tanh(x) == 1.0) and np.all(np.tanh(-x) == -1.0)
+
+
+@pytest.mark.parametrize("el", [e for e in all_elements() if issubclass(e, StaticElement)],
+                         ids=lambda e: e.name)
+def test_a_static_element_gives_the_reference_bits(el) -> None:  # noqa: ANN001
+    # Limits and signs compiled, transcendental functions numpy's: the same numbers.
+    x = _special(el.code)
+    for p in (0.0, 0.37, 1.0):
+        a = RANGES[el.name].decode(p) if el.param is not None else None
+        stage = el.realise(a, TS)
+        program_, _ = kernel.compile_row([stage])
+        with np.errstate(all="ignore"):
+            want = stage.run(x.copy())
+        _same_bits(kernel.run_program(program_, x), want)
+
+
+# -- batches -----------------------------------------------------------------------------
+
+_FILTERS = [["lpf", "notch", "gain"], ["notch", "lpf"], ["lpf"], ["hpf", "notch", "tanh"],
+            ["lead", "sign", "lag"], ["notch"], ["tan_amp", "lpf"], ["through", "through"],
+            ["integral", "atan", "notch"], ["phase"], ["lag", "notch", "log"]]
+
+
+def _batch(seed: int) -> tuple[list, list[int]]:
+    """Rows rich in filters (so groups of both orders form) and random rows of all elements."""
+    rng = np.random.default_rng(seed)
+    by_name = {e.name: e for e in all_elements()}
+    rows = [[by_name[nm] for nm in names] for names in _FILTERS]
+    _, codes, _ = _random_rows(seed, 14, 4)
+    rows += [[REGISTRY[int(c)] for c in line] for line in codes]
+    stages = [[el.realise(RANGES[el.name].decode(rng.random()) if el.param else None, TS)
+               for el in row] for row in rows]
+    return stages, [int(i) for i in rng.integers(0, 3, len(stages))]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_batch_gives_each_row_the_numbers_it_gets_alone(seed: int) -> None:
+    from edm_sym.engines.kernel.loops import GROUP
+
+    stages, inputs = _batch(seed)
+    x = np.vstack([_signal(30 * seed + k) for k in range(3)])
+    programs, stored = zip(*(kernel.compile_row(s, store=True) for s in stages), strict=True)
+    parts, _ = program._schedule(programs, [range(p.stores) for p in programs], inputs)
+    groups = {(int(line[3]), int(line[2])) for part in parts if isinstance(part, np.ndarray)
+              for line in part if line[0] == GROUP}
+    assert {order for order, _ in groups} == {1, 2} and max(m for _, m in groups) >= 4
+    count = len(programs)
+    store = np.full((count + 3, N), np.nan)
+    dest = np.arange(count, dtype=np.int64)[::-1] + 3  # any rows of the store
+    slots = np.cumsum([0, *(p.stores for p in programs)])
+    inter = np.full((slots[-1] + 3, N), np.nan)
+    inter[slots[-1]:] = x  # as if stored prefixes
+    row_slots = [range(slots[r], slots[r + 1]) for r in range(count)]
+    # A third of the rows get their input as an array (copied), the others read it in
+    # place: a row of the sources or a stored prefix (inter row -1 - k for start k < 0).
+    starts = [(x[i].copy(), i, -1 - (slots[-1] + i))[r % 3] for r, i in enumerate(inputs)]
+    kernel.run_rows(programs, starts, store, dest, inter, row_slots, sources=x)
+    _same_bits(inter[slots[-1]:], x)
+    for r, prog in enumerate(programs):
+        alone_inter = np.empty((prog.stores, N))
+        alone = kernel.run_program(prog, x[inputs[r]], inter=alone_inter)
+        _same_bits(store[dest[r]], alone)
+        _same_bits(inter[slots[r]:slots[r + 1]], alone_inter)
+        y = x[inputs[r]]
+        with np.errstate(all="ignore"):
+            for stage in stages[r]:
+                y = stage.run(y)
+        _close(store[dest[r]], y)
+    assert [len(s) for s in stored] == [p.stores for p in programs]
+
+
+def test_a_row_that_changes_nothing_gives_its_input() -> None:
+    x = np.vstack([_signal(1), _signal(2)])
+    through = REGISTRY[next(c for c, e in REGISTRY.items() if e.name == "through")]
+    prog, _ = kernel.compile_row([through.realise(None, TS)] * 3)
+    store = np.zeros((3, N))
+    kernel.run_rows([prog] * 3, [1, x[0], -2], store, np.array([0, 1, 2]), x[::-1].copy(),
+                    sources=x)
+    _same_bits(store[0], x[1])
+    _same_bits(store[1], x[0])
+    _same_bits(store[2], x[0])  # inter row 1
+
+
+def _table_rows(names: list[list[str]], inputs: list[int]) -> np.ndarray:
+    by_name = {e.name: c for c, e in REGISTRY.items()}
+    codes = np.array([[by_name[nm] for nm in row] for row in names])
+    ps = np.tile([0.3, 0.6, 0.2, 0.8][: codes.shape[1]], (len(names), 1))
+    return row_table(np.array(inputs), codes, ps)
+
+
+@pytest.mark.parametrize("prefix_mb", [64.0, 0.05])
+def test_a_row_whose_prefix_a_row_of_its_batch_computes_starts_from_it(
+        prefix_mb: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    x = np.vstack([_signal(k + 40) for k in range(3)])
+    ctx = SimContext(x, TS, RANGES, prefix_bytes=int(prefix_mb * 2**20))
+    worker = Worker(ctx, ctx.decoder(), use_kernel=True)
+    # Rows 1 and 2 share row 0's first three elements; row 3 is new.
+    table = _table_rows([["lpf", "tanh", "notch", "gain"], ["lpf", "tanh", "notch", "sign"],
+                         ["lpf", "tanh", "notch", "atan"], ["hpf", "sin_amp", "lag", "offset"]],
+                        [1, 1, 1, 2])
+    runs: list[list[int]] = []
+    real = kernel.run_rows
+
+    def spy(programs, *args, **kw):  # noqa: ANN001, ANN002, ANN003, ANN202
+        runs.append([len(p.lines) for p in programs])
+        return real(programs, *args, **kw)
+
+    monkeypatch.setattr(kernel, "run_rows", spy)
+    got = simulate_table(worker, table)
+    if prefix_mb > 1:
+        # Rows 0 and 3 together, then 1 and 2 from row 0's prefix: only their last element
+        # (sign: one line; atan: a gain and numpy's arctan).
+        assert len(runs) == 2 and len(runs[0]) == 2 and runs[1] == [1, 2]
+    else:  # a prefix store of a few slots: a row at a time
+        assert all(len(r) == 1 for r in runs)
+    reference = Worker(ctx, ctx.decoder(), use_kernel=False)
+    outs = [np.empty(N) for _ in table]  # outputs given as separate arrays
+    assert all(a is b for a, b in zip(simulate_table(reference, table, outs), outs, strict=True))
+    for got_row, want in zip(got, outs, strict=True):
+        _close(got_row, want)

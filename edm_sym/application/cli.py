@@ -283,9 +283,11 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
 
-    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) found or missing")
+    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) and numba "
+                                      "(the GA's row kernel) found or missing")
     p.add_argument("--json", action="store_true",
-                   help="print a JSON list of {kind, name, apt, purpose, found, location} instead")
+                   help="print a JSON list of {kind, name, apt, purpose, found, location, version, "
+                        "pip, status} instead")
     p.set_defaults(func=_cmd_doctor)
     return parser
 

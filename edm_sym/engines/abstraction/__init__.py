@@ -12,7 +12,7 @@ speed design.
 
 from __future__ import annotations
 
-from edm_sym.engines.abstraction.evaluator import Evaluator, RowCache
+from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.run import GenerationInfo, abstract
 from edm_sym.engines.abstraction.schedule import (
     AbstractionConfig,
@@ -34,7 +34,6 @@ __all__ = [
     "GenerationInfo",
     "InitialRow",
     "ParsimonySettings",
-    "RowCache",
     "StepConfig",
     "ValidationSettings",
     "Weighting",

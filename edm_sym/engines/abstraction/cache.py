@@ -1,95 +1,20 @@
-"""Row-output caches: an LRU of arrays, and an LRU of slots in one block of memory.
+"""The row store: least-recently-used row outputs in one block of fixed-size slots.
 
-:class:`RowCache` holds arrays and is bounded by the memory they keep alive
-(a view counts with the whole array it belongs to, once). :class:`SlotStore`
-holds rows in one anonymous memory map of fixed-size slots, shared with
-worker processes forked after it was made: they write simulated rows straight
-into their slots and read any row from it, so no row output is ever pickled
-between processes. A worker without a shared store keeps a private one.
+:class:`SlotStore` holds rows in one anonymous memory map of fixed-size slots,
+shared with worker processes forked after it was made: they write simulated
+rows straight into their slots and read any row from it, so no row output is
+ever pickled between processes. A worker without a shared store keeps a
+private one, and every process keeps its row prefixes in another. Its size is
+fixed when it is made (``cache_mb``), so it bounds the memory by construction.
 """
 
 from __future__ import annotations
 
 import mmap
-import threading
 from collections import OrderedDict
 from collections.abc import Collection
 
 import numpy as np
-
-
-def _owner(arr: np.ndarray) -> np.ndarray:
-    """The array whose memory ``arr`` uses (itself, or the base of a view)."""
-    while isinstance(arr.base, np.ndarray):
-        arr = arr.base
-    return arr
-
-
-class RowCache:
-    """Least-recently-used row outputs, bounded by memory (safe to share between threads).
-
-    Views are welcome: ``nbytes`` counts each underlying array once, whole,
-    as long as any of its views is cached, so it is the memory the cache
-    really keeps alive.
-
-    Parameters
-    ----------
-    max_bytes : int
-        Upper bound on ``nbytes`` (at least one entry is kept).
-    """
-
-    def __init__(self, max_bytes: int):
-        self.max_bytes = int(max_bytes)
-        self.nbytes = 0
-        self._data: OrderedDict[bytes, np.ndarray] = OrderedDict()
-        self._refs: dict[int, int] = {}
-        self._lock = threading.Lock()
-
-    def _hold(self, arr: np.ndarray) -> None:
-        base = _owner(arr)
-        count = self._refs.get(id(base), 0)
-        if count == 0:
-            self.nbytes += base.nbytes
-        self._refs[id(base)] = count + 1
-
-    def _drop(self, arr: np.ndarray) -> None:
-        base = _owner(arr)
-        count = self._refs[id(base)] - 1
-        if count == 0:
-            del self._refs[id(base)]
-            self.nbytes -= base.nbytes
-        else:
-            self._refs[id(base)] = count
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def get(self, key: bytes) -> np.ndarray | None:
-        """The cached output of ``key`` (refreshing it), or None."""
-        with self._lock:
-            arr = self._data.get(key)
-            if arr is not None:
-                self._data.move_to_end(key)
-            return arr
-
-    def put(self, key: bytes, arr: np.ndarray) -> None:
-        """Store ``arr`` under ``key``, evicting the least recently used rows."""
-        with self._lock:
-            if key in self._data:
-                self._data.move_to_end(key)
-                return
-            self._data[key] = arr
-            self._hold(arr)
-            while self.nbytes > self.max_bytes and len(self._data) > 1:
-                _, old = self._data.popitem(last=False)
-                self._drop(old)
-
-    def clear(self) -> None:
-        """Drop every row."""
-        with self._lock:
-            self._data.clear()
-            self._refs.clear()
-            self.nbytes = 0
 
 
 class SlotStore:
@@ -174,7 +99,3 @@ class SlotStore:
         """Forget every row (the memory stays)."""
         self._lru.clear()
         self._free = list(range(self.slots - 1, -1, -1))
-
-    def release(self, slots: list[int]) -> None:
-        """Give back allocated slots that were not committed."""
-        self._free.extend(slots)

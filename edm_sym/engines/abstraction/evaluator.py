@@ -51,7 +51,7 @@ import numpy as np
 
 from edm_sym.core.elements import ParamRange
 from edm_sym.engines import kernel
-from edm_sym.engines.abstraction.cache import RowCache, SlotStore
+from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
     ExecutorLane,
@@ -76,7 +76,7 @@ from edm_sym.engines.abstraction.rowsim import (
     worker_init,
 )
 
-__all__ = ["EvalStats", "Evaluator", "RowCache", "row_table"]
+__all__ = ["EvalStats", "Evaluator", "row_table"]
 
 
 @dataclass

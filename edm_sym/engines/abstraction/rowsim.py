@@ -291,13 +291,7 @@ def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
 
 def simulate_table(worker: Worker, table: np.ndarray,
                    outs: list[np.ndarray] | np.ndarray | None = None) -> list[np.ndarray]:
-    """Simulate the rows of a canonical gene table.
-
-    Each row starts from the longest prefix found in the worker's prefix
-    store; each prefix it computes goes into that store. With numba the row
-    kernel runs the rest of the row in one call (writing the prefixes
-    straight into their slots), else the realisations do, one numpy call per
-    element.
+    """Simulate the rows of a canonical gene table (see :func:`simulate_into`).
 
     Parameters
     ----------
@@ -306,54 +300,154 @@ def simulate_table(worker: Worker, table: np.ndarray,
     table : numpy.ndarray
         Shape (R, 1 + 2 n).
     outs : sequence of numpy.ndarray, optional
-        Where each row's output goes (shape (N,) each); new arrays when None.
+        Where each row's output goes (shape (N,) each, or one (R, N) array);
+        new arrays when None.
 
     Returns
     -------
     list of numpy.ndarray
         The R row outputs (``outs`` when given).
     """
+    count, length = len(table), worker.ctx.inputs.shape[1]
+    order = np.arange(count, dtype=np.int64)
+    if outs is None or (isinstance(outs, np.ndarray) and outs.ndim == 2):
+        store = np.empty((count, length)) if outs is None else outs
+        simulate_into(worker, table, store, order)
+        return list(store)
+    store = np.empty((count, length))
+    simulate_into(worker, table, store, order)
+    for out, row in zip(outs, store, strict=True):
+        out[:] = row
+    return list(outs)
+
+
+#: The most rows the row kernel runs together (one schedule, their filters overlapped).
+BATCH_ROWS = 64
+
+
+def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np.ndarray) -> None:
+    """Simulate the rows of a canonical gene table into ``store[dest[r]]``.
+
+    Each row starts from the longest prefix found in the worker's prefix
+    store; each prefix it computes goes into that store. With numba the row
+    kernel runs the rows in batches (:func:`edm_sym.engines.kernel.run_rows`,
+    writing the prefixes straight into their slots); a row whose longest
+    prefix another row of the batch computes waits for the next batch, so it
+    starts there as it would have one after the other. Without numba the
+    realisations run, one numpy call per element, row after row.
+
+    Parameters
+    ----------
+    worker : Worker
+        Context, decoder and prefix store of this process.
+    table : numpy.ndarray
+        Shape (R, 1 + 2 n).
+    store : numpy.ndarray
+        Shape (S, N): row r's output goes to ``store[dest[r]]``.
+    dest : numpy.ndarray
+        int64, shape (R,), distinct.
+    """
+    if not worker.use_kernel:
+        for r, line in enumerate(table):
+            _simulate_reference(worker, line, store[dest[r]])
+        return
     ctx, decoder = worker.ctx, worker.decoder
     pool = worker.prefix_store()
     n = (table.shape[1] - 1) // 2
-    length = ctx.inputs.shape[1]
-    result = []
-    for r, line in enumerate(table):
-        y, start = None, 0
-        for k in range(n - 1, 0, -1):
-            y = pool.get(prefix_key(line, n, k))
-            if y is not None:
-                start = k
-                break
-        if y is None:
-            y = ctx.inputs[int(line[0])]
-        stages = []
-        for i in range(start, n):
-            code, p = int(line[1 + i]), float(line[1 + n + i])
-            cls, rng = decoder[code]
-            if i == 0 and cls.from_sin_cos is not None:
-                a = rng.decode(p) if rng is not None else None
-                y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
-                start = 1
-                if n > 1:
-                    _keep(pool, prefix_key(line, n, 1), y)
+    sources = ctx.inputs
+    if not (sources.flags.c_contiguous and sources.dtype == np.float64):
+        sources = np.ascontiguousarray(sources, dtype=np.float64)
+    # A batch's prefixes all need a slot at once: at most half the prefix store.
+    cap = max(1, min(BATCH_ROWS, pool.slots // (2 * max(1, n - 1))))
+    todo = list(range(len(table)))
+    while todo:
+        batch, later, produced, used = [], [], set(), set()
+        for r in todo:
+            line = table[r]
+            if len(batch) >= cap:
+                later.append(r)
                 continue
-            stages.append(worker.stage(code, p))
-        out = outs[r] if outs is not None else np.empty(length)
-        if worker.use_kernel:
+            start, begin, wait = 0, None, False
+            for k in range(n - 1, 0, -1):
+                key = prefix_key(line, n, k)
+                if key in produced:  # a row of this batch computes it: start there next time
+                    wait = True
+                    break
+                slot = pool.lookup(key)
+                if slot is not None:
+                    start, begin = k, -1 - slot  # the prefix, read in place
+                    used.add(key)
+                    break
+            if wait:
+                later.append(r)
+                continue
+            found, keep, stages = start, None, []
+            if begin is None:
+                begin = int(line[0])  # the input, read in place
+            for i in range(start, n):
+                code, p = int(line[1 + i]), float(line[1 + n + i])
+                cls, rng = decoder[code]
+                if i == 0 and cls.from_sin_cos is not None:
+                    a = rng.decode(p) if rng is not None else None
+                    begin = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
+                    start = 1
+                    keep = begin if n > 1 else None
+                    continue
+                stages.append(worker.stage(code, p))
             program, stored = kernel.compile_steps(stages, store=True)
-            slots = pool.allocate(len(stored), ())
-            kernel.run_program(program, y, out, pool.rows, np.array(slots, dtype=np.int64))
-            for slot, count in zip(slots, stored, strict=True):
-                pool.commit(prefix_key(line, n, start + count), slot)
+            batch.append((r, line, program, stored, start, begin, keep))
+            produced.update(prefix_key(line, n, k) for k in range(found + 1, n))
+        _run_batch(worker, pool, batch, n, store, dest, sources, used)
+        todo = later
+
+
+def _run_batch(worker: Worker, pool: SlotStore, batch: list, n: int, store: np.ndarray,
+               dest: np.ndarray, sources: np.ndarray, used: set[bytes]) -> None:
+    """Run a batch of rows in the kernel; record their prefixes.
+
+    The prefixes rows start from (``used``) keep their slots during the batch.
+    """
+    slots = pool.allocate(sum(len(b[3]) for b in batch), used)
+    row_slots, at = [], 0
+    for b in batch:
+        row_slots.append(slots[at:at + len(b[3])])
+        at += len(b[3])
+    kernel.run_rows([b[2] for b in batch], [b[5] for b in batch], store,
+                    np.array([dest[b[0]] for b in batch], dtype=np.int64), pool.rows, row_slots,
+                    sources=sources)
+    for (_, line, _, stored, start, _, keep), mine in zip(batch, row_slots, strict=True):
+        for slot, count in zip(mine, stored, strict=True):
+            pool.commit(prefix_key(line, n, start + count), slot)
+        if keep is not None:
+            _keep(pool, prefix_key(line, n, 1), keep)
+
+
+def _simulate_reference(worker: Worker, line: np.ndarray, out: np.ndarray) -> None:
+    """One row with the realisations, from its longest stored prefix (storing the others)."""
+    ctx, decoder = worker.ctx, worker.decoder
+    pool = worker.prefix_store()
+    n = (line.shape[0] - 1) // 2
+    y, start = None, 0
+    for k in range(n - 1, 0, -1):
+        y = pool.get(prefix_key(line, n, k))
+        if y is not None:
+            start = k
+            break
+    if y is None:
+        y = ctx.inputs[int(line[0])]
+    for i in range(start, n):
+        code, p = int(line[1 + i]), float(line[1 + n + i])
+        cls, rng = decoder[code]
+        if i == 0 and cls.from_sin_cos is not None:
+            a = rng.decode(p) if rng is not None else None
+            y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
         else:
-            for i, stage in enumerate(stages):
-                prev, y = y, stage.run(y)
-                if start + i + 1 < n and y is not prev:
-                    _keep(pool, prefix_key(line, n, start + i + 1), y)
-            out[:] = y
-        result.append(out)
-    return result
+            prev, y = y, worker.stage(code, p).run(y)
+            if y is prev:
+                continue
+        if i + 1 < n:
+            _keep(pool, prefix_key(line, n, i + 1), y)
+    out[:] = y
 
 
 def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
@@ -415,7 +509,7 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
         store_rows, todo = store.rows, np.array(todo_list, dtype=np.intp)
     if len(todo):
         s0 = time.perf_counter()
-        simulate_table(worker, table[todo], [store_rows[slots[r]] for r in todo])
+        simulate_into(worker, table[todo], store_rows, slots[todo])
         sim_seconds, simulated = time.perf_counter() - s0, len(todo)
         if chunk.slots is None:
             for r in todo:
@@ -479,15 +573,25 @@ def peak_rss() -> int:
 
 
 def warm_up() -> None:
-    """Load (or compile, the first time on a machine) the row kernel before any fork."""
+    """Load (or compile, the first time on a machine) the row kernel before any fork.
+
+    A small batch runs every compiled function the GA calls: a group of
+    filters, stored prefixes, inputs read in place and the numpy steps' guards.
+    """
     if not kernel.NUMBA:
         return
-    from edm_sym.core.elements.realisation import Relay
+    from edm_sym.core.elements import REGISTRY
 
-    x = np.zeros(4)
-    program, _ = kernel.compile_row([Relay(1.0)], store=True)
-    kernel.run_program(program, x, np.empty(4), np.empty((program.stores, 4)))
-    kernel.score(np.zeros((1, 4)), np.zeros(1, dtype=np.int64), x, np.ones(1))
+    by_name = {cls.name: cls for cls in REGISTRY.values()}
+    x = np.linspace(-30.0, 30.0, 8)
+    rows = [[("lpf", 10.0), ("tanh", 1.0), ("tan_amp", 1.0), ("asin", None)],
+            [("lpf", 20.0), ("log", 0.5), ("power", 1.5)]]
+    programs = [kernel.compile_row([by_name[name].realise(a, 1e-3) for name, a in row],
+                                   store=True)[0] for row in rows]
+    inter = np.empty((sum(p.stores for p in programs), x.shape[0]))
+    kernel.run_rows(programs, [0, x], np.empty((2, x.shape[0])), np.arange(2, dtype=np.int64),
+                    inter, [range(0, 3), range(3, 5)], sources=x.reshape(1, -1).copy())
+    kernel.score(np.zeros((1, 8)), np.zeros(1, dtype=np.int64), x, np.ones(1))
     kernel.dot(x, x, np.ones(1))
 
 
