@@ -271,3 +271,22 @@ def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Pa
                      config=other, select="best")
     assert dumps(resumed) == dumps(fresh)
     assert not ckpt.exists()
+
+
+@pytest.mark.parametrize(("rows", "fragile"), [
+    # 600 * sat(omega, 0.01) sweeps +-6 rad through tan's poles at +-pi/2 as omega
+    # crosses zero: the data's samples may miss them, the next log will not.
+    ([("omega", [("saturation", 0.01), ("power_gain", 600.0), ("tan_amp", 1.0)])], [0]),
+    # The same row with its argument kept inside (-pi/2, pi/2): sound.
+    ([("omega", [("saturation", 0.01), ("power_gain", 100.0), ("tan_amp", 1.0)])], []),
+    # A pole behind a filter is not looked for (the prefix ends at the first state).
+    ([("omega", [("lpf", 100.0), ("power_gain", 600.0), ("tan_amp", 1.0)])], []),
+    ([("omega", [("sign", None), ("gain", 1.0)]),
+      ("omega", [("tan_phase", 1.5), ("gain", 1.0)])], [1]),
+])
+def test_rows_with_a_tangent_pole_inside_their_input_range_are_fragile(
+        log: DataLog, rows: list, fragile: list) -> None:
+    from edm_sym.engines.abstraction.validation import fragile_rows
+
+    comp = compensator(rows, len(log))
+    assert fragile_rows(comp, log.stack(INPUTS)) == fragile

@@ -46,7 +46,13 @@ from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
-from edm_sym.engines.abstraction.validation import Scorer, mask_weights, plan_holdout
+from edm_sym.engines.abstraction.validation import (
+    Holdout,
+    Scorer,
+    fragile_rows,
+    mask_weights,
+    plan_holdout,
+)
 from edm_sym.engines.simulate import fitness, simulate_rows
 
 #: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
@@ -551,19 +557,8 @@ def abstract(
                                                            r.fitness, r.step),
                                 history=tuple(r.history), generations=r.generations,
                                 evaluations=r.evaluations, weighting=r.weighting))
-    comp = Compensator(steps[-1].matrix, ts, ranges, n * ts)
-    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
-    start_step = steps[-1].step
-    if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
-        # The step best with the lowest plain RMSE over the whole log (a later step on a tie):
-        # Step 4's eq. 16 weighting, say, may buy large torques with reversals and the cold
-        # start, which only the whole log holds (docs/abstraction.md, "Parsimony").
-        scored = [(scorer.whole_rmse(replace(comp, matrix=s.matrix)), -q)
-                  for q, s in enumerate(steps)]
-        q = -min(scored)[1]
-        comp, start_step = replace(comp, matrix=steps[q].matrix), steps[q].step
-    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step)
-    final = scorer.report(comp)
+    comp, parsimony, final = finish(steps, Compensator(steps[-1].matrix, ts, ranges, n * ts),
+                                     hold, cfg, select)
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance = {"seed": int(seed), "package_version": __version__,
                   "data_sha256": data.sha256, "stop_reason": reason}
@@ -572,6 +567,46 @@ def abstract(
     logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=logs)
+
+
+def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
+           cfg: AbstractionConfig, select: str | None = None
+           ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
+    """After the search: choose the search's model, prune it, score the exported one.
+
+    Parameters
+    ----------
+    steps : sequence of StepRecord
+        The steps' bests.
+    comp : Compensator
+        The last step's best (its ranges and sample time serve every model).
+    hold : Holdout
+        What was held out (:func:`plan_holdout`).
+    cfg : AbstractionConfig
+    select : str, optional
+        A selection rule overriding the config's.
+
+    Returns
+    -------
+    comp, parsimony, validation
+        The exported model, result.json's ``parsimony`` and ``validation`` entries.
+    """
+    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
+    start_step = steps[-1].step
+    if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
+        # The step best with the lowest plain RMSE over the whole log (a later step on a tie):
+        # Step 4's eq. 16 weighting, say, may buy large torques with reversals and the cold
+        # start, which only the whole log holds (docs/abstraction.md, "Parsimony").
+        # A step best with a tangent pole inside its input's range is passed over while
+        # another is sound (validation.fragile_rows).
+        sound = [q for q, s in enumerate(steps)
+                 if not fragile_rows(replace(comp, matrix=s.matrix), hold.training.x)]
+        scored = [(scorer.whole_rmse(replace(comp, matrix=steps[q].matrix)), -q)
+                  for q in (sound or range(len(steps)))]
+        q = -min(scored)[1]
+        comp, start_step = replace(comp, matrix=steps[q].matrix), steps[q].step
+    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step)
+    return comp, parsimony, scorer.report(comp)
 
 
 def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> None:

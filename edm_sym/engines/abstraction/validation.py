@@ -53,6 +53,10 @@ from edm_sym.engines.simulate import simulate_row
 MAX_SHARE = 0.9
 #: Memory bound of the row outputs a :class:`Scorer` keeps [bytes].
 CACHE_BYTES = 128 * 2**20
+#: Points of the grid :func:`fragile_rows` evaluates a row's static prefix on.
+FRAGILE_GRID = 200_001
+#: The elements with poles: tan(x + a) and a tan(x).
+TANGENTS = ("tan_phase", "tan_amp")
 #: How the held-out share is laid out over the log.
 LAYOUTS = ("blocks", "end")
 _KEYS = ("share", "layout", "blocks", "unit")
@@ -423,6 +427,46 @@ class Scorer:
             "validation": (self.score(comp, "validation") if "validation" in self.parts
                            else None),
         }
+
+
+def fragile_rows(comp: Compensator, x: np.ndarray) -> list[int]:
+    """Rows with a tangent pole inside the range their input takes in the data (0-based).
+
+    A row's **static prefix** (its elements up to the first one with state) is
+    continuous but for the poles of its tangents (``tan_phase``, ``tan_amp``).
+    Evaluated on a dense grid over the range the row's input takes in the
+    data, a tangent whose argument there crosses pi/2 + k pi has a pole the
+    samples happened to miss: as the velocity goes through zero, say. Such a
+    model fits the log it was found on and fails on the next one, where one
+    sample of a zero crossing lands near the pole (an output up to the guard's
+    1e6: docs/elements.md).
+
+    Parameters
+    ----------
+    comp : Compensator
+    x : numpy.ndarray
+        The inputs (n_inputs, N) of the data.
+    """
+    out = []
+    for j, row in enumerate(comp.matrix.rows):
+        sig = np.asarray(x[row.input], dtype=float)
+        sig = sig[np.isfinite(sig)]
+        if sig.size < 2 or not sig.min() < sig.max():
+            continue
+        y = np.linspace(sig.min(), sig.max(), FRAGILE_GRID)
+        with np.errstate(all="ignore"):
+            for gene in row.genes:
+                if gene.element.kind != "static":
+                    break
+                a = comp.value(gene) if gene.element.has_param() else None
+                if gene.element.name in TANGENTS:
+                    arg = y + a if gene.element.name == "tan_phase" else y
+                    branch = np.floor(arg[np.isfinite(arg)] / math.pi + 0.5)
+                    if branch.size and branch.min() != branch.max():
+                        out.append(j)
+                        break
+                y = gene.element.realise(a, comp.sample_time).run(y)
+    return out
 
 
 def _finite(v: float | None) -> float | None:
