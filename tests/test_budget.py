@@ -202,6 +202,6 @@ def test_simulate_refuses_rows_that_do_not_fit(monkeypatch, tmp_path: Path, caps
     out = tmp_path / "sim.csv"
     assert main(["simulate", str(EXAMPLE), "plant:auger/evaluation", "-o", str(out)]) == 2
     err = _err(capsys)
-    assert re.search(r"plant:auger/evaluation: needs about [\d.]+ MiB of memory \(5 rows x \d+ "
+    assert re.search(r"plant:auger/evaluation: needs about [\d.]+ MiB of memory \(3 rows x \d+ "
                      r"samples\), more than the 4 KiB", err), err
     assert not out.exists()

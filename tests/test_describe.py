@@ -260,21 +260,22 @@ def test_cli_json_on_the_shipped_example(tmp_path: Path) -> None:
     desc = json.loads(proc.stdout)
     jsonschema.validate(desc, _describe_schema())
     assert desc["fitness"]["data"]["source"] == "plant:auger/abstraction"
-    assert desc["fitness"]["training"] == {"fitness": [pytest.approx(2.7153467842454564), "N m"]}
-    # Row 1's phase-lead corner sits on its lower bound: flagged, not named as physics.
-    assert any(f["code"] == "at_bound" for f in desc["rows"][0]["flags"])
-    assert desc["rows"][0]["terms"][0]["kind"] == "unclassified"
-    # Rows 3 (a relay of omega) and 4 (a dead zone of omega) are the plant's friction
-    # (Coulomb 0.95 N m, viscous 0.005 N m s/rad, docs/plant.md): each row names its part.
-    # (On branch truth2 they were named jointly on row 3, under a Coulomb threshold of
-    # 0.1 rad/s that a merge regression had put in decode; with the documented 0.25 rad/s
-    # the one-by-one names add up and no joint fit replaces them.)
-    assert [t["kind"] for t in desc["rows"][2]["terms"]] == ["coulomb"]
-    assert desc["rows"][2]["terms"][0]["parameters"]["level"] == [pytest.approx(0.95, rel=0.02),
+    res = load_result(example)
+    assert desc["fitness"]["training"]["rmse"] == [pytest.approx(
+        res.validation["training"]["rmse"][0]), "N m"]
+    # Judged on the abstraction log the search was fitted to: its held-out blocks alone.
+    assert desc["fitness"]["data"]["rows"] == res.validation["held_out"]["blocks"]
+    # The plant's friction and ripple (docs/plant.md: Coulomb 0.95 N m, viscous
+    # 0.005 N m s/rad, 0.06 N m at 1 cycle/rev), one row each.
+    kinds = [[t["kind"] for t in row["terms"]] for row in desc["rows"]]
+    assert kinds == [["coulomb"], ["viscous"], ["spatial"]]
+    assert desc["rows"][0]["terms"][0]["parameters"]["level"] == [pytest.approx(0.95, rel=0.02),
                                                                    "N m"]
-    assert [t["kind"] for t in desc["rows"][3]["terms"]] == ["viscous"]
-    assert desc["rows"][3]["terms"][0]["parameters"]["coefficient"] == [
+    assert desc["rows"][1]["terms"][0]["parameters"]["coefficient"] == [
         pytest.approx(0.005, rel=0.05), "N m s/rad"]
+    spatial = desc["rows"][2]["terms"][0]["parameters"]
+    assert spatial["cycles_per_revolution"][0] == pytest.approx(1.0)
+    assert spatial["amplitude"] == [pytest.approx(0.06, rel=0.1), "N m"]
     assert list(tmp_path.iterdir()) == []
 
 
@@ -398,7 +399,17 @@ def test_report_and_describe_name_the_shipped_example_alike() -> None:
         assert [(t.term.kind, t.term.parameters) for t in j.terms] == [
             (t.term.kind, t.term.parameters) for t in row.terms], f"row {row.index}"
         assert j.contribution == pytest.approx(row.contribution)
-    # The plant's friction (docs/plant.md), named alike in both: Coulomb on row 3, viscous on 4.
+    # The plant's friction (docs/plant.md), named alike in both: Coulomb on row 1, viscous on 2.
+    assert [t.term.kind for t in desc.rows[0].terms] == ["coulomb"]
+    assert [t.term.kind for t in desc.rows[1].terms] == ["viscous"]
+    # The older example (rows 3 and 4 its friction) is named alike too.
+    legacy = load_result(ROOT / "tests" / "golden" / "legacy_auger_result.json")
+    run = run_log(legacy, load_log("plant:auger/evaluation", legacy), label="evaluation")
+    classify = report_classify(legacy, [run])
+    judged = judge_report_rows(decode(legacy, classify=classify), [run], classify)
+    desc = describe(legacy, "plant:auger/evaluation")
+    assert [[t.term.kind for t in j.terms] for j in judged] == [
+        [t.term.kind for t in row.terms] for row in desc.rows]
     assert [t.term.kind for t in desc.rows[2].terms] == ["coulomb"]
     assert [t.term.kind for t in desc.rows[3].terms] == ["viscous"]
 

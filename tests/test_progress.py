@@ -111,7 +111,8 @@ def test_export_summary_names_the_files_the_fitness_and_the_bound(
     from edm_sym.application.cli import export_main
     from edm_sym.core.result import load_result
 
-    example = ROOT / "examples" / "auger" / "result.json"
+    # An older result: no held-out validation, one parameter at a range bound.
+    example = ROOT / "tests" / "golden" / "legacy_auger_result.json"
     assert export_main([str(example), "--target", "c", "-o", str(tmp_path)]) == 0
     captured = capsys.readouterr()
     assert captured.out.split() == [str(tmp_path / "edm_comp.h"), str(tmp_path / "edm_comp.c")]

@@ -34,7 +34,13 @@ def test_the_shipped_result_fits_on_a_screen() -> None:
     res = edm_sym.load_result(ROOT / "examples" / "auger" / "result.json")
     lines = repr(res).splitlines()
     assert len(lines) == 1 + len(res.matrix.rows) and max(map(len, lines)) < 120
-    assert "through" not in repr(res) and "shift(5.879 samples)" in lines[5]
+    # Four inputs by name would make the header too wide: their number (rows name theirs).
+    assert lines[0].startswith("EdmResult(target 'tau_ext', 4 inputs, 4x3 matrix")
+    assert "through" not in repr(res) and lines[3].startswith("  row 3: theta_uw -> sin_phase(")
+    legacy = edm_sym.load_result(ROOT / "tests" / "golden" / "legacy_auger_result.json")
+    legacy_lines = repr(legacy).splitlines()
+    assert max(map(len, legacy_lines)) < 120 and "shift(5.879 samples)" in legacy_lines[5]
+    assert "inputs theta_w, theta_uw, omega, alpha" in legacy_lines[0]
 
 
 def test_a_decoded_model_shows_each_row_expression() -> None:

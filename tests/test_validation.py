@@ -172,7 +172,7 @@ def test_results_round_trip_and_old_files_still_load(log: DataLog, tmp_path: Pat
     res = run(log)
     back = load_result(save_result(res, tmp_path / "r.json"))
     assert back.validation == res.validation
-    old = load_result(ROOT / "examples/auger/result.json")
+    old = load_result(ROOT / "tests/golden/legacy_auger_result.json")
     assert old.validation == {}
     assert "validation" not in json.loads(dumps(old))
 

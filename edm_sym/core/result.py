@@ -45,6 +45,10 @@ class StepRecord:
     weighting: Mapping[str, Any] = field(default_factory=dict)
 
 
+#: The widest header line of an EdmResult's repr.
+HEADER_WIDTH = 119
+
+
 @dataclass(frozen=True)
 class EdmResult:
     """A loaded (or freshly found) abstraction result.
@@ -133,7 +137,11 @@ class EdmResult:
         return axis_units(self.axis)
 
     def __repr__(self) -> str:
-        """A header line and one line per row (the dataclass dump would fill the screen)."""
+        """A header line and one line per row (the dataclass dump would fill the screen).
+
+        The header lists the inputs by name when it stays within ``HEADER_WIDTH``
+        characters, else their number (each row line names its input).
+        """
         from edm_sym.core.display import matrix_lines
 
         m = self.compensator.matrix
@@ -144,9 +152,11 @@ class EdmResult:
         fit = "inf" if self.fitness is None else f"{self.fitness:.4g} {unit}"
         if isinstance(val, Mapping) and val.get("fitness") and val["fitness"][0] is not None:
             fit += f", validation {val['fitness'][0]:.4g} {unit}"
-        head = (f"EdmResult(target {self.target!r}, inputs {', '.join(m.inputs)}, "
-                f"{m.n_elements}x{len(m.rows)} matrix, Ts = {self.sample_time:g} s, "
+        tail = (f"{m.n_elements}x{len(m.rows)} matrix, Ts = {self.sample_time:g} s, "
                 f"fitness {fit})")
+        head = f"EdmResult(target {self.target!r}, inputs {', '.join(m.inputs)}, {tail}"
+        if len(head) > HEADER_WIDTH:  # the rows name the inputs they read
+            head = f"EdmResult(target {self.target!r}, {len(m.inputs)} inputs, {tail}"
         return "\n".join([head] + [f"  {line}" for line in matrix_lines(self.compensator)])
 
     def _repr_latex_(self) -> str | None:
