@@ -253,7 +253,8 @@ def test_linear_thresholds_are_the_axis_defaults() -> None:
     ("export", ["--role", "dqm=velocity"], "--target: expected the target column"),
     ("export", ["--target", "F"], "--inputs: expected the input columns"),
     ("short", ["--target", "F", "--inputs", "dqm"],
-     "drive.csv: samples 1-16 (the training part): expected at least 21 samples to fit"),
+     "drive.csv: the 16 samples fitted (the held-out blocks aside): expected at least 21 "
+     "samples to fit"),
 ])
 def test_bad_logs_exit_2_with_one_line_and_write_nothing(
         tmp_path: Path, capsys: pytest.CaptureFixture, make: str, extra: list,

@@ -70,7 +70,8 @@ def check_truth(preset: str, doc: dict) -> None:
     got = summary(doc)
     rows = [(r["index"], r["input"], [t["kind"] for t in r["terms"]]) for r in doc["rows"]]
     assert got["kinds"] == sorted(p.true_terms), rows
-    assert doc["fitness"]["data"]["rows"] == doc["fitness"]["held_out"]["rows"]
+    held = doc["fitness"]["held_out"]
+    assert doc["fitness"]["data"]["rows"] == held.get("blocks", held.get("rows"))
     scale = p.torque_constant_nominal / p.torque_constant  # what tau_ext sees
     if "coulomb" in p.true_terms:
         assert abs(got["coulomb"] / (scale * p.coulomb) - 1) <= TOLERANCE, got
@@ -154,14 +155,15 @@ def test_describe_judges_on_the_held_out_rows_of_the_fitted_log(tmp_path: Path) 
     res = abstract(log, target="tau_ext", inputs=["omega"], config=cfg, seed=1, workers=1)
     path = tmp_path / "r.json"
     save_result(res, path)
-    held = res.validation["held_out"]["rows"]
-    assert held == [1600, 2000]
+    held = res.validation["held_out"]["blocks"]
+    assert held == [[80 + 200 * j, 120 + 200 * j] for j in range(10)]
     doc = describe(path, data=log).to_json()
     assert doc["fitness"]["data"]["rows"] == held
     assert doc["fitness"]["data"]["samples"] == 400
     comp = res.compensator
-    out = simulate_rows(comp, comp.matrix.rows, log.stack(comp.matrix.inputs))[:, 1600:]
-    ref = np.sqrt(np.mean(tau[1600:] ** 2))
+    idx = np.concatenate([np.arange(a, b) for a, b in held])
+    out = simulate_rows(comp, comp.matrix.rows, log.stack(comp.matrix.inputs))[:, idx]
+    ref = np.sqrt(np.mean(tau[idx] ** 2))
     for row, y in zip(doc["rows"], out, strict=True):
         assert row["contribution"] == pytest.approx(np.sqrt(np.mean(y ** 2)) / ref, rel=1e-9)
     # Another log (here the same samples under another digest) is measured whole.

@@ -501,7 +501,8 @@ def abstract(
                         validate=validate)
     # The sizes first (config alone), then whether the log can support them.
     check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
-    _require_samples(data, hold.n_train, cfg)
+    _require_samples(data, hold.n_train if hold.mask is None
+                     else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
     data.require_varying(inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
@@ -609,7 +610,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     return comp, parsimony, scorer.report(comp)
 
 
-def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> None:
+def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig, *,
+                     blocks: bool = False) -> None:
     """Refuse a training part too short to fit the schedule's largest matrix.
 
     Its parameters (one per element) must not outnumber the samples fitted,
@@ -620,7 +622,8 @@ def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig) -> Non
     need = max(3, largest.n_rows * largest.n_elements + 1)
     if n_train < need:
         raise DataFormatError(
-            f"{data.source}: samples 1-{n_train} (the training part)",
+            (f"{data.source}: the {n_train} samples fitted (the held-out blocks aside)" if blocks
+             else f"{data.source}: samples 1-{n_train} (the training part)"),
             f"expected at least {need} samples to fit (more than the {largest.n_rows}x"
             f"{largest.n_elements} matrix's parameters), found {n_train}; use a longer log, a "
             "smaller schedule or a smaller held-out share")

@@ -258,7 +258,9 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
 def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSettings,
             unit: str | None) -> Holdout:
     """The ``blocks`` layout: one held-out block in the middle of each of k equal sections."""
-    n, k = len(y), settings.blocks
+    n = len(y)
+    # A short log gets fewer blocks, each of at least one sample (the count is recorded).
+    k = min(settings.blocks, max(1, int(round(n * settings.share))))
     length = int(round(n * settings.share / k))
     if not (1 <= length and k * length < n and n // k >= length):
         raise ConfigError("validation.share",
