@@ -140,12 +140,28 @@ def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None
     assert (tmp_path / "x.log").is_file() and not (tmp_path / "x.pdf").exists()
 
 
-def test_shipped_example_report_compiles_and_names_the_four_terms(tmp_path: Path) -> None:
+def test_shipped_example_report_compiles_and_names_its_three_terms(tmp_path: Path) -> None:
     """examples/auger/result.json with the logs and LuGre file it records (report_inputs)."""
     from edm_sym.application.exporting import report_inputs
 
     result = edm_sym.load_result(REPO / "examples" / "auger" / "result.json")
-    files = write_report(result, tmp_path, **report_inputs(result))
+    pdf, log = compile_pdf(write_report(result, tmp_path, **report_inputs(result))[0])
+    text = _pdftext(pdf)
+    described = edm_sym.describe(result, "plant:auger/evaluation").to_json()
+    kinds = {t["kind"] for row in described["rows"] for t in row["terms"]}
+    assert kinds == {"coulomb", "viscous", "spatial"}
+    for kind in kinds:
+        assert KIND_TITLES[kind] in text, kind
+    assert "LuGre" in text
+
+
+def test_earlier_example_report_compiles_and_names_the_four_terms(tmp_path: Path) -> None:
+    """The shipped example of the release before (5 rows: the paper's four laws)."""
+    from edm_sym.application.exporting import report_inputs
+
+    result = edm_sym.load_result(REPO / "tests" / "golden" / "legacy_auger_result.json")
+    inputs = {**report_inputs(result), "lugre": REPO / "examples" / "auger" / "lugre.json"}
+    files = write_report(result, tmp_path, **inputs)
     pdf, log = compile_pdf(files[0], keep_aux=True)
     _check_log(log)
     assert pdf.stat().st_size < PDF_LIMIT
