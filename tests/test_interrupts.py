@@ -44,12 +44,19 @@ n_elements = 3
 """
 
 
+def _sigint_default() -> None:
+    # A child of a background job inherits SIGINT ignored (a shell sets that for `cmd &`,
+    # as when CI is started in the background); a user's Ctrl-C meets the default.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args: list[str], cwd: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     env.pop("EDM_DEBUG", None)
     env["PYTHONPATH"] = os.pathsep.join([str(REPO), env.get("PYTHONPATH", "")])
     return subprocess.Popen([sys.executable, "-m", "edm_sym", *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_sigint_default)
 
 
 def _loaded(proc: subprocess.Popen, name: str) -> bool:
@@ -126,7 +133,7 @@ def test_start_up_of_edm_export(tmp_path: Path) -> None:
     proc = subprocess.Popen([sys.executable, "-c", "import sys; from edm_sym.application.cli import "
                              "export_main; sys.exit(export_main())", str(EXAMPLE), "--target",
                              "python", "-o", "gen"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_sigint_default)
     _wait(proc, lambda: _loaded(proc, "numpy"), "numpy loading")
     assert _interrupt(proc, signal.SIGTERM).strip().endswith("edm-export: interrupted")
 
