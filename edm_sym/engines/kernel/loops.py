@@ -380,32 +380,6 @@ def sign_times(x, q, v):  # noqa: ANN001, ANN201
 
 
 @_jit
-def _sum_sq(e, w):  # noqa: ANN001, ANN202
-    # sum(w e^2) with four running sums (a fixed order: the same bits every time).
-    n = e.shape[0]
-    uniform = w.shape[0] == 1
-    a0 = a1 = a2 = a3 = 0.0
-    k = 0
-    while k + 4 <= n:
-        if uniform:
-            a0 += e[k] * e[k]
-            a1 += e[k + 1] * e[k + 1]
-            a2 += e[k + 2] * e[k + 2]
-            a3 += e[k + 3] * e[k + 3]
-        else:
-            a0 += w[k] * e[k] * e[k]
-            a1 += w[k + 1] * e[k + 1] * e[k + 1]
-            a2 += w[k + 2] * e[k + 2] * e[k + 2]
-            a3 += w[k + 3] * e[k + 3] * e[k + 3]
-        k += 4
-    while k < n:
-        a0 += (1.0 if uniform else w[k]) * e[k] * e[k]
-        k += 1
-    acc = (a0 + a1) + (a2 + a3)
-    return acc * w[0] if uniform else acc
-
-
-@_jit
 def score_rows(store, slots, y, w, e):  # noqa: ANN001, ANN201
     """The weighted sum of squares of ``e = y - sum(store[slots])`` (``e``: scratch)."""
     for k in range(e.shape[0]):
@@ -414,7 +388,7 @@ def score_rows(store, slots, y, w, e):  # noqa: ANN001, ANN201
         r = store[slots[i]]
         for k in range(e.shape[0]):
             e[k] -= r[k]
-    return _sum_sq(e, w)
+    return dot_product(e, e, w)  # sum(w e^2) in dot_product's fixed order
 
 
 @_jit
