@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.elements import ParamRange
+from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
@@ -59,6 +59,7 @@ from edm_sym.engines.abstraction.lanes import (
     PoolLane,
     dask_lanes,
 )
+from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
 from edm_sym.engines.abstraction.rowsim import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
@@ -139,6 +140,11 @@ class Evaluator:
     client : distributed.Client, optional
         A dask client: one lane per worker of its cluster (``workers`` is
         then ignored).
+    reject_poles : bool
+        Give an individual an infinite fitness when one of its rows has a
+        tangent pole inside its input's range in the data (see
+        :mod:`edm_sym.engines.abstraction.poles`); settable per step
+        (:meth:`set_reject_poles`).
     """
 
     #: Batches with fewer individuals to evaluate than this run in this process.
@@ -147,8 +153,16 @@ class Evaluator:
     def __init__(self, inputs: np.ndarray, target: np.ndarray, ts: float,
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
                  workers: int | None = None, cache_bytes: int = 256 * 2**20,
-                 max_batch_rows: int = 1024, client: Any = None):
+                 max_batch_rows: int = 1024, client: Any = None, reject_poles: bool = False):
         self.inputs = np.ascontiguousarray(inputs, dtype=float)
+        self.ranges = dict(ranges)
+        self.ts = float(ts)
+        with np.errstate(all="ignore"):
+            finite = np.where(np.isfinite(self.inputs), self.inputs, np.nan)
+            self._span = [(float(np.nanmin(r)), float(np.nanmax(r))) if np.isfinite(r).any()
+                          else (math.nan, math.nan) for r in finite]
+        self.reject_poles = bool(reject_poles)
+        self._poles: dict[bytes, bool] = {}
         self.target = np.ascontiguousarray(target, dtype=float)
         n = self.target.shape[0]
         self.n_samples = n
@@ -254,6 +268,30 @@ class Evaluator:
         self._memo.clear()
         self._dots.clear()
 
+    def set_reject_poles(self, reject: bool) -> None:
+        """Reject individuals with a tangent pole in the data's range from now on, or not."""
+        if bool(reject) != self.reject_poles:
+            self.reject_poles = bool(reject)
+            self._memo.clear()
+
+    def has_pole(self, key: bytes, line: np.ndarray) -> bool:
+        """Whether the row of a table line has a tangent pole in its input's range (cached)."""
+        hit = self._poles.get(key)
+        if hit is None:
+            n = (line.shape[0] - 1) // 2
+            codes = line[1:1 + n].astype(np.int64).tolist()
+            hit = False
+            if may_have_pole(codes):
+                lo, hi = self._span[int(line[0])]
+                els = [(REGISTRY[c], self.ranges[REGISTRY[c].name].decode(float(p))
+                        if REGISTRY[c].param is not None else None)
+                       for c, p in zip(codes, line[1 + n:], strict=True)]
+                hit = prefix_has_pole(lo, hi, els, self.ts, SEARCH_GRID)
+            if len(self._poles) > 200_000:
+                self._poles.clear()
+            self._poles[key] = hit
+        return hit
+
     def gram(self, keys: Sequence[bytes], rows: Sequence[np.ndarray]
              ) -> tuple[np.ndarray, np.ndarray]:
         """Weighted inner products of rows (as the workers compute them for the gain fit).
@@ -309,7 +347,8 @@ class Evaluator:
         Returns
         -------
         numpy.ndarray
-            Shape (P,) eq. 8 values (inf for non-finite outputs).
+            Shape (P,) eq. 8 values (inf for non-finite outputs, and with
+            ``reject_poles`` for a row with a tangent pole in the data's range).
         """
         t0 = time.perf_counter()
         if not self._started:
@@ -350,6 +389,9 @@ class Evaluator:
             ukeys = [keys[i] for i in first]
             sub_free = free[send] if want_scales else None
             fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
+            if self.reject_poles:
+                pole = np.array([self.has_pole(key, line) for key, line in zip(ukeys, utab, strict=True)])
+                fit = np.where(pole[members].any(axis=1), np.inf, fit)
             if len(self._memo) > 50_000:
                 self._memo.clear()
             for a, k in enumerate(send):

@@ -310,13 +310,14 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
 
     search = comp
     scorer.guard(comp)
+    reference = scorer.criterion(comp)
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
     origin = "search" if start_step is None else f"search (step {start_step} best)"
     start = origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
     front = prune(comp, scorer, start=start)
     if not front:  # no model with a finite criterion: nothing to choose from
         return comp, {}
-    k = select(front, rule)
+    k = select(front, rule, reference)
     unit = scorer.holdout.unit
     members = []
     for q, mb in enumerate(front, start=1):
@@ -330,7 +331,9 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         })
     record = {"complexity": COMPLEXITY, "criterion": scorer.criterion_name,
               "tolerance": settings.tolerance, "select": rule, "selected": k + 1,
-              "search_complexity": complexity(search, search.matrix), "front": members}
+              "search_complexity": complexity(search, search.matrix),
+              "search_criterion": [reference if math.isfinite(reference) else None, unit],
+              "front": members}
     if start_step is not None:
         record["start_step"] = start_step
     return _with(comp, front[k].matrix), record

@@ -240,6 +240,7 @@ class _Runner:
                                   "expected a positive weight for some sample of the data, "
                                   "found all zero")
             self.evaluator.set_weights(lam)
+            self.evaluator.set_reject_poles(step.ga.reject_poles)
             ops = Operators(step.ga, self.x.shape[0])
             cur = self.state.current
             if cur is None or cur.step != k:

@@ -57,6 +57,7 @@ _GA_FIELDS: dict[str, tuple[str, float | None, float | None]] = {
     "local_search": ("int", 0, None),
     "local_search_evaluations": ("int", 1, None),
     "restarts": ("int", 0, None),
+    "reject_poles": ("bool", None, None),
     "elements": ("names", None, None),
 }
 
@@ -121,6 +122,11 @@ class GaSettings:
         When the step would end, restart it this many times from its elite:
         the elites stay, a share ``inherit_fraction`` of the population gets
         the best individual with one row drawn anew, the rest is random.
+    reject_poles : bool
+        Give an individual an infinite fitness when a tangent of one of its
+        rows has a pole inside the range the row's input takes in the data
+        (:mod:`edm_sym.engines.abstraction.poles`). Such a row fits the log
+        it was found on and fails on the next; False keeps them (the paper's GA).
     elements : tuple of str or None
         Element names the GA may use; None: every registered element.
     """
@@ -146,6 +152,7 @@ class GaSettings:
     local_search: int = 20
     local_search_evaluations: int = 300
     restarts: int = 0
+    reject_poles: bool = True
     elements: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:

@@ -9,7 +9,9 @@ front sorted by complexity (see :mod:`edm_sym.engines.abstraction.prune`):
   against the next simpler member, among members within 1.5 times the best
   criterion (PySR's choice of its "best" equation);
 * ``simplest-within=PCT``: the simplest member whose criterion is within
-  PCT % of the best.
+  PCT % of the best, and of the search's own model when it is given
+  (``reference``): moving parameters off their bounds before pruning may
+  cost up to the tolerance already, and the two must not add up.
 
 The default is ``simplest-within=`` the tolerance in percent (1 %).
 """
@@ -127,8 +129,12 @@ def parse_parsimony(where: str, doc: Any) -> ParsimonySettings:
     return settings_from_table(ParsimonySettings, _KEYS, where, doc)
 
 
-def select(front: Sequence[_Member], rule: str) -> int:
+def select(front: Sequence[_Member], rule: str, reference: float | None = None) -> int:
     """Index of the front member chosen by ``rule`` (see the module docstring).
+
+    ``reference``: the criterion of the search's model, before any change
+    (``simplest-within`` stays within PCT % of it as well; when no member
+    does, the best member is chosen).
 
     Raises
     ------
@@ -147,4 +153,6 @@ def select(front: Sequence[_Member], rule: str) -> int:
         ok = [k for k in range(len(front)) if crit[k] <= KNEE_WITHIN * best]
         return max(ok, key=lambda k: (score[k], -k))
     pct = float(rule.split("=", 1)[1])
-    return next(k for k in range(len(front)) if crit[k] <= best * (1 + pct / 100) + 1e-300)
+    base = best if reference is None or not math.isfinite(reference) else min(best, reference)
+    return next((k for k in range(len(front)) if crit[k] <= base * (1 + pct / 100) + 1e-300),
+                crit.index(best))

@@ -45,6 +45,7 @@ import numpy as np
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.matrix import Compensator, Row
+from edm_sym.engines.abstraction.poles import prefix_has_pole
 from edm_sym.engines.abstraction.tables import settings_from_table
 from edm_sym.engines.abstraction.weighting import Weighting
 from edm_sym.engines.simulate import simulate_row
@@ -53,10 +54,6 @@ from edm_sym.engines.simulate import simulate_row
 MAX_SHARE = 0.9
 #: Memory bound of the row outputs a :class:`Scorer` keeps [bytes].
 CACHE_BYTES = 128 * 2**20
-#: Points of the grid :func:`fragile_rows` evaluates a row's static prefix on.
-FRAGILE_GRID = 200_001
-#: The elements with poles: tan(x + a) and a tan(x).
-TANGENTS = ("tan_phase", "tan_amp")
 #: How the held-out share is laid out over the log.
 LAYOUTS = ("blocks", "end")
 _KEYS = ("share", "layout", "blocks", "unit")
@@ -434,14 +431,9 @@ class Scorer:
 def fragile_rows(comp: Compensator, x: np.ndarray) -> list[int]:
     """Rows with a tangent pole inside the range their input takes in the data (0-based).
 
-    A row's **static prefix** (its elements up to the first one with state) is
-    continuous but for the poles of its tangents (``tan_phase``, ``tan_amp``).
-    Evaluated on a dense grid over the range the row's input takes in the
-    data, a tangent whose argument there crosses pi/2 + k pi has a pole the
-    samples happened to miss: as the velocity goes through zero, say. Such a
-    model fits the log it was found on and fails on the next one, where one
-    sample of a zero crossing lands near the pole (an output up to the guard's
-    1e6: docs/elements.md).
+    See :mod:`edm_sym.engines.abstraction.poles`: a tangent of the row's static
+    prefix whose argument crosses pi/2 + k pi for an input inside the data's
+    range, on a grid of :data:`~edm_sym.engines.abstraction.poles.FINAL_GRID` points.
 
     Parameters
     ----------
@@ -453,21 +445,9 @@ def fragile_rows(comp: Compensator, x: np.ndarray) -> list[int]:
     for j, row in enumerate(comp.matrix.rows):
         sig = np.asarray(x[row.input], dtype=float)
         sig = sig[np.isfinite(sig)]
-        if sig.size < 2 or not sig.min() < sig.max():
-            continue
-        y = np.linspace(sig.min(), sig.max(), FRAGILE_GRID)
-        with np.errstate(all="ignore"):
-            for gene in row.genes:
-                if gene.element.kind != "static":
-                    break
-                a = comp.value(gene) if gene.element.has_param() else None
-                if gene.element.name in TANGENTS:
-                    arg = y + a if gene.element.name == "tan_phase" else y
-                    branch = np.floor(arg[np.isfinite(arg)] / math.pi + 0.5)
-                    if branch.size and branch.min() != branch.max():
-                        out.append(j)
-                        break
-                y = gene.element.realise(a, comp.sample_time).run(y)
+        if sig.size >= 2 and prefix_has_pole(float(sig.min()), float(sig.max()),
+                                             comp.row_elements(j), comp.sample_time):
+            out.append(j)
     return out
 
 
