@@ -108,6 +108,9 @@ def test_each_input_has_its_unit_range_and_rows_in_the_header_and_docstring(tmp_
     # The linear axis's force unit names the output; no rotary unit appears.
     assert "a model of F [N]" in c_text and "a model of F [N]" in py_text
     assert "rad" not in c_text and "N m" not in c_text
+    assert "the compensation force, a model of F [N]" in c_text
+    assert "the compensation force, a model of F [N]" in py_text
+    assert "torque" not in header and "torque" not in mod.__doc__
     # The index macros carry the unit and say which slot is not read.
     assert re.search(r"#define EDM_COMP_INPUT_Q 0 +/\* q \[m\], read by no row \*/", header)
     assert re.search(r"#define EDM_COMP_INPUT_ENC_SPEED 1 +/\* enc_speed \[m/s\] \*/", header)

@@ -96,6 +96,9 @@ def test_a_linear_axis_report_reads_n_m_s_and_kg_everywhere(tmp_path, monkeypatc
 
     assert r"N\,m" not in tex and "kg m" not in tex and r"kg\,m" not in tex
     assert "angular" not in tex  # roles: "velocity", "position"
+    # The prose names the axis's quantity: a force, a reaction force observer.
+    assert "torque" not in tex.replace("Reaction Torque Observer", "")  # the paper's title only
+    assert "reaction force observer (RFOB)" in tex and "compensation force" in tex
     assert "Forces are in N, positions in m, velocities in m/s." in tex
     assert r"\shortstack[r]{RMS [N]\\ abstraction log}" in tex
     assert r"Row & RMS of the row [N] & RMSE with rows up to it [N] & Drop [N] \\" in tex

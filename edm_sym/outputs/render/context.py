@@ -342,6 +342,7 @@ def _common(model: SymbolicModel, source: Source, rows: tuple[RowPlan, ...]) -> 
     return {
         "source": source,
         "force_unit": axis_units(source.axis).force,
+        "effort": axis_units(source.axis).effort,
         "input_docs": docs,
         "input_notes": [d.text() for d in docs],
         "used_inputs": [d.name for d in docs if d.used],
@@ -508,10 +509,10 @@ def _check_docstring_text(ctx: Mapping[str, Any]) -> None:
 
 C_KEYS = ("prefix", "macro", "real", "real_t", "state_t", "header_file", "source_file", "guard",
           "sample_time", "inputs", "members", "init_lines", "rows", "helpers", "source",
-          "summary", "dynamics", "input_notes", "outside_range", "guards", "force_unit")
+          "summary", "dynamics", "input_notes", "outside_range", "guards", "force_unit", "effort")
 PY_KEYS = ("prefix", "module_file", "imports", "inputs_literal", "used_inputs_literal",
            "sample_time", "helpers", "reset_lines", "rows", "source", "summary", "dynamics",
-           "input_notes", "outside_range", "guards", "force_unit")
+           "input_notes", "outside_range", "guards", "force_unit", "effort")
 
 
 def check_context(ctx: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:

@@ -350,7 +350,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
     facts = [
         ("Result file", p.mono(inp.source_name)),
         ("sha256 of the result", p.digest(inp.source_sha256)),
-        ("Target (estimated torque)", p.mono(result.target)),
+        (f"Target (estimated {units.effort})", p.mono(result.target)),
         ("Inputs", ", ".join(roles)),
         ("Sample time", p.math(f"T_s = {p.number(model.sample_time)}") + r"~s"),
         ("Element matrix", p.math(f"{mat.n_elements} \\times {mat.n_rows}")
@@ -422,6 +422,9 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "commands": _commands(p, inp),
         "sample_time": p.math(f"T_s = {p.number(model.sample_time)}") + r"~s",
         "force_unit": p.unit(units.force),
+        "effort": p.text(units.effort),
+        "observer": p.text("reaction torque observer (RTOB)" if units.axis == "rotary"
+                           else "reaction force observer (RFOB)"),
         "viscous_unit": p.unit(units.viscous),
         "units": _units_context(p, units),
         "paper": _citation(p),
@@ -433,7 +436,8 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
 #: Keys every report context holds.
 REPORT_KEYS = ("title", "facts", "equation", "overview", "matrix", "rows", "friction", "param_chunks",
                "contributions",
-               "fitness", "units", "steps", "time", "lugre", "provenance", "versions", "commands")
+               "fitness", "units", "steps", "time", "lugre", "provenance", "versions", "commands",
+               "effort", "observer")
 
 
 def check_report_context(ctx: dict[str, Any]) -> dict[str, Any]:
