@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
@@ -603,6 +604,9 @@ def worker_init(parent: int) -> None:
     worker too instead of leaving it orphaned.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # One BLAS thread per lane: N lanes then use N cores, not N times BLAS's own
+    # threads spinning on the same cores (docs/abstraction.md#speed).
+    threadpool_limits(1)
 
     def watch() -> None:
         while os.getppid() == parent:

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
@@ -538,7 +539,9 @@ def abstract(
                      time_limit=time_limit, callback=callback, mask=hold.mask)
     reason = "completed"
     try:
-        runner.run()
+        # One BLAS thread in this process's lane too (see rowsim.worker_init).
+        with threadpool_limits(1):
+            runner.run()
     except _Stop as stop:
         reason = stop.reason
     except KeyboardInterrupt:
