@@ -605,7 +605,7 @@ def worker_init(parent: int) -> None:
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # One BLAS thread per lane: N lanes then use N cores, not N times BLAS's own
-    # threads spinning on the same cores (docs/abstraction.md#speed).
+    # threads spinning on the same cores (docs/abstraction.md#speed-design).
     threadpool_limits(1)
 
     def watch() -> None:
