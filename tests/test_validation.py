@@ -41,6 +41,15 @@ def corrupted(log: DataLog, start: int) -> DataLog:
     return DataLog(cols, log.ts, "corrupted")
 
 
+def corrupted_blocks(log: DataLog) -> DataLog:
+    """The same log with its target replaced by a large unrelated signal in the held-out blocks."""
+    cols = dict(log.columns)
+    tau = cols["tau_ext"].copy()
+    tau[HELD] = 50.0 * np.cos(HELD * 0.37) + 20.0
+    cols["tau_ext"] = tau
+    return DataLog(cols, log.ts, "corrupted")
+
+
 @pytest.fixture(scope="module")
 def log() -> DataLog:
     return friction_log(1.5)[0]
@@ -294,15 +303,61 @@ def _whole_rmse(res: object, log: DataLog, matrix: object) -> float:
     return float(np.sqrt(np.mean(e ** 2)))
 
 
+NO_REFIT = {**TINY, "parsimony": {"refit": 0}}
+
+
 def test_pruning_starts_from_the_step_best_of_the_lowest_whole_log_rmse(log: DataLog) -> None:
-    res = run(log)
+    res = run(log, NO_REFIT)
     rmse = [_whole_rmse(res, log, s.matrix) for s in res.steps]
     best = min(range(len(rmse)), key=lambda q: (rmse[q], -q))
     assert res.parsimony["start_step"] == res.steps[best].step
     assert res.parsimony["criterion"] == "validation.rmse+training"
     first = res.parsimony["front"][-1]
     assert first["change"].startswith(f"search (step {res.steps[best].step} best)")
+    assert res.parsimony["refit"] == 0 and res.parsimony["refitted"] is False
+    assert _start_matrix(res) == res.steps[best].matrix
     _guarded_criterion(res, log, "rmse")
+
+
+def _start_matrix(res: object) -> object:
+    """The search's model, which pruning started from."""
+    from edm_sym.core.result import _matrix_from_json
+
+    return _matrix_from_json("result", "search_matrix", res.parsimony["search_matrix"], res.inputs)
+
+
+def test_step_bests_refitted_on_the_whole_training_part_are_candidates(log: DataLog) -> None:
+    res = run(log, NARROW_LAST)
+    rec = res.parsimony
+    assert rec["refit"] == 600
+    # The last step fitted the first 0.15 s only: refitted on the whole training part, its
+    # best is the search's model, better over the whole log than every step best as the GA
+    # left it.
+    assert rec["refitted"] is True
+    start = _start_matrix(res)
+    assert start not in [s.matrix for s in res.steps]
+    assert [(r.input, [g.code for g in r.genes]) for r in start.rows] == [
+        (r.input, [g.code for g in r.genes]) for r in res.steps[rec["start_step"] - 1].matrix.rows]
+    assert _whole_rmse(res, log, start) < min(_whole_rmse(res, log, s.matrix) for s in res.steps)
+
+
+def test_the_refit_never_sees_the_held_out_blocks(log: DataLog) -> None:
+    from edm_sym.engines.abstraction.local_search import refit_on_training
+
+    res = run(log, NO_REFIT)
+    comp = res.compensator
+    x = np.stack([log.columns["omega"], log.columns["alpha"]])
+    lam = np.ones(len(log))
+    lam[HELD] = 0.0
+    mats = [s.matrix for s in res.steps]
+
+    def refit(y: np.ndarray) -> list:
+        return refit_on_training(mats, x, y, lam, comp.sample_time, comp.ranges,
+                                 max_evaluations=200)
+
+    clean = refit(log.columns["tau_ext"])
+    assert any(m is not None for m in clean)
+    assert refit(corrupted_blocks(log).columns["tau_ext"]) == clean
 
 
 def _guarded_criterion(res: object, log: DataLog, kind: str) -> None:
@@ -330,7 +385,7 @@ NARROW_LAST = {**TINY, "step": [TINY["step"][0], {
 
 def test_an_earlier_step_best_is_exported_when_the_last_one_fits_a_narrow_window(
         log: DataLog) -> None:
-    res = run(log, NARROW_LAST)
+    res = run(log, {**NARROW_LAST, "parsimony": {"refit": 0}})
     assert res.parsimony["start_step"] == 1
     last = run(log, {**NARROW_LAST, "parsimony": {"start": "last-step"}})
     assert last.parsimony["start_step"] == 2
@@ -347,6 +402,8 @@ def test_the_paper_s_last_step_and_eq8_criterion_on_request(log: DataLog) -> Non
 @pytest.mark.parametrize(("doc", "message"), [
     ({"criterion": "mse"}, "parsimony.criterion: expected one of rmse, fitness, found 'mse'"),
     ({"start": "first"}, "parsimony.start: expected one of best-step, last-step, found 'first'"),
+    ({"refit": -1}, "parsimony.refit: expected an integer >= 0, found -1"),
+    ({"refit": 2.5}, "parsimony.refit: expected an integer >= 0, found 2.5"),
 ])
 def test_parsimony_criterion_and_start_are_checked(doc: dict, message: str) -> None:
     from edm_sym.engines.abstraction.selection import parse_parsimony

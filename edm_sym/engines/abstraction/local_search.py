@@ -130,3 +130,47 @@ def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
     out = best.take([0])
     out.ps[0, jj, ii] = state["best_p"]
     return out, state["best_f"], state["evals"]
+
+
+def refit_on_training(matrices: list, x: np.ndarray, y: np.ndarray, weights: np.ndarray | float,
+                      comp_ts: float, ranges: dict, *, max_evaluations: int,
+                      reject_poles: bool = True) -> list:
+    """Each matrix's parameters tuned by least squares on the whole training part.
+
+    The steps of the schedule optimise different weightings (eq. 15's windows,
+    eq. 16's large torques); a step best is fitted to its own. After the
+    search, :func:`tune_parameters` refits each with ``weights`` (Lambda = 1 on
+    the fitted samples, 0 on the held-out ones), the measure the search's model
+    is chosen by (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
+
+    Parameters
+    ----------
+    matrices : list of ElementMatrix
+        The step bests.
+    x, y : numpy.ndarray
+        The inputs (n_inputs, N) and target (N,) the GA simulated.
+    weights : numpy.ndarray or float
+        Lambda over those samples.
+    comp_ts : float
+        Sample time [s].
+    ranges : mapping of element name to ParamRange
+    max_evaluations : int
+        Budget of each refit (individuals evaluated).
+    reject_poles : bool
+        A tangent pole inside an input's range is an infinite fitness (as in the GA).
+
+    Returns
+    -------
+    list of ElementMatrix or None
+        Each refitted matrix, or None where no better parameters were found.
+    """
+    out: list = []
+    with Evaluator(x, y, comp_ts, ranges, workers=1, cache_bytes=64 * 2**20,
+                   reject_poles=reject_poles) as ev:
+        ev.set_weights(weights)
+        for matrix in matrices:
+            pop = Population.from_matrix(matrix)
+            f0 = float(ev.evaluate(pop.inputs, pop.codes, pop.ps)[0])
+            tuned, f1, _ = tune_parameters(ev, pop, f0, max_evaluations=max_evaluations)
+            out.append(tuned.matrix(0, matrix.inputs) if f1 < f0 else None)
+    return out

@@ -278,8 +278,8 @@ def _key(v: float) -> float:
 
 
 def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettings,
-                    rule: str | None = None, *, start_step: int | None = None
-                    ) -> tuple[Compensator, dict[str, Any]]:
+                    rule: str | None = None, *, start_step: int | None = None,
+                    refitted: bool = False) -> tuple[Compensator, dict[str, Any]]:
     """Prune ``comp``, choose the exported member and describe the front for result.json.
 
     Parameters
@@ -294,6 +294,9 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         A selection rule overriding the settings' (``--select``).
     start_step : int, optional
         The step whose best ``comp`` is (recorded as ``start_step``).
+    refitted : bool
+        Whether ``comp`` is that step best refitted on the whole training part
+        (recorded as ``refitted`` with ``refit``, the settings' budget).
 
     Returns
     -------
@@ -312,7 +315,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     scorer.guard(comp)
     reference = scorer.criterion(comp)
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
-    origin = "search" if start_step is None else f"search (step {start_step} best)"
+    origin = ("search" if start_step is None else
+              f"search (step {start_step} best{', refitted' if refitted else ''})")
     start = origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
     front = prune(comp, scorer, start=start)
     if not front:  # no model with a finite criterion: nothing to choose from
@@ -333,7 +337,9 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
               "tolerance": settings.tolerance, "select": rule, "selected": k + 1,
               "search_complexity": complexity(search, search.matrix),
               "search_criterion": [reference if math.isfinite(reference) else None, unit],
-              "front": members}
+              "search_matrix": matrix_to_json(search.matrix), "front": members}
     if start_step is not None:
         record["start_step"] = start_step
+        record["refit"] = settings.refit
+        record["refitted"] = bool(refitted)
     return _with(comp, front[k].matrix), record

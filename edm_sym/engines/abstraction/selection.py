@@ -28,7 +28,7 @@ from edm_sym.core.errors import ConfigError
 from edm_sym.engines.abstraction.tables import settings_from_table
 
 KNEE_WITHIN = 1.5
-_KEYS = ("prune", "tolerance", "select", "criterion", "start")
+_KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit")
 #: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
 #: final step's weighting.
 CRITERIA = ("rmse", "fitness")
@@ -64,6 +64,11 @@ class ParsimonySettings:
         ``"best-step"`` (default): prune the step best with the lowest plain
         RMSE over the whole abstraction log; ``"last-step"``: the last step's
         best (the paper's model).
+    refit : int
+        With ``start = "best-step"``: before choosing, each step best's
+        parameters are refitted by least squares on the whole training part
+        (Lambda = 1), at most this many evaluations each (default 600; 0: no
+        refit); the refitted and the original step bests are the candidates.
     """
 
     prune: bool = True
@@ -71,6 +76,7 @@ class ParsimonySettings:
     select: str | None = None
     criterion: str = "rmse"
     start: str = "best-step"
+    refit: int = 600
 
     def __post_init__(self) -> None:
         if not isinstance(self.prune, bool):
@@ -85,6 +91,9 @@ class ParsimonySettings:
         if self.criterion not in CRITERIA:
             raise ConfigError("parsimony.criterion",
                               f"expected one of {', '.join(CRITERIA)}, found {self.criterion!r}")
+        r = self.refit
+        if isinstance(r, bool) or not isinstance(r, int) or r < 0:
+            raise ConfigError("parsimony.refit", f"expected an integer >= 0, found {r!r}")
         if self.start not in STARTS:
             raise ConfigError("parsimony.start",
                               f"expected one of {', '.join(STARTS)}, found {self.start!r}")
@@ -97,7 +106,7 @@ class ParsimonySettings:
     def to_json(self) -> dict[str, Any]:
         """The settings as a config table."""
         return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection,
-                "criterion": self.criterion, "start": self.start}
+                "criterion": self.criterion, "start": self.start, "refit": self.refit}
 
 
 def check_select(text: Any, where: str) -> str:
