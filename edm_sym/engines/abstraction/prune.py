@@ -1,7 +1,9 @@
 """Parsimony: prune the search's model and keep the complexity-vs-fitness front.
 
 After the search, a deterministic greedy backward elimination starts from the
-last step's best matrix. At every stage it tries each simplification:
+search's model (by default the step best, refitted or as the GA left it, of
+the lowest plain RMSE over the whole log: ``abstraction.run.finish``). At
+every stage it tries each simplification:
 
 * replace one element by ``through``;
 * drop one row, or two rows on the same input together (rows that cancel);
