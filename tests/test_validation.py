@@ -342,22 +342,21 @@ def test_step_bests_refitted_on_the_whole_training_part_are_candidates(log: Data
 
 
 def test_the_refit_never_sees_the_held_out_blocks(log: DataLog) -> None:
-    from edm_sym.engines.abstraction.local_search import refit_on_training
+    from edm_sym.engines.abstraction.local_search import step_candidates
+    from edm_sym.engines.abstraction.validation import plan_holdout
 
     res = run(log, NO_REFIT)
-    comp = res.compensator
-    x = np.stack([log.columns["omega"], log.columns["alpha"]])
-    lam = np.ones(len(log))
-    lam[HELD] = 0.0
-    mats = [s.matrix for s in res.steps]
+    settings = ValidationSettings()
 
-    def refit(y: np.ndarray) -> list:
-        return refit_on_training(mats, x, y, lam, comp.sample_time, comp.ranges,
-                                 max_evaluations=200)
+    def refit(data: DataLog) -> list:
+        hold = plan_holdout(data, target="tau_ext", inputs=["omega", "alpha"], settings=settings)
+        assert np.array_equal(np.flatnonzero(hold.mask == 0), HELD)
+        return step_candidates(res.steps, res.compensator, hold, max_evaluations=200)
 
-    clean = refit(log.columns["tau_ext"])
-    assert any(m is not None for m in clean)
-    assert refit(corrupted_blocks(log).columns["tau_ext"]) == clean
+    clean = refit(log)
+    assert any(is_refit for _, _, is_refit in clean)
+    assert [(m, k) for m, k, r in clean if not r] == [(s.matrix, s.step) for s in res.steps]
+    assert refit(corrupted_blocks(log)) == clean
 
 
 def _guarded_criterion(res: object, log: DataLog, kind: str) -> None:

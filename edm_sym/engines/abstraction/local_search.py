@@ -19,12 +19,17 @@ a crude derivative and are left where they are, which is the GA's job.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.optimize import least_squares
 
 from edm_sym.core.elements import REGISTRY
+from edm_sym.core.matrix import Compensator, ElementMatrix
+from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Population
+from edm_sym.engines.abstraction.validation import Holdout, mask_weights
 
 #: Element codes with a continuous parameter.
 PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not None)
@@ -132,45 +137,48 @@ def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
     return out, state["best_f"], state["evals"]
 
 
-def refit_on_training(matrices: list, x: np.ndarray, y: np.ndarray, weights: np.ndarray | float,
-                      comp_ts: float, ranges: dict, *, max_evaluations: int,
-                      reject_poles: bool = True) -> list:
-    """Each matrix's parameters tuned by least squares on the whole training part.
+def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout, *,
+                    max_evaluations: int, reject_poles: bool = True
+                    ) -> list[tuple[ElementMatrix, int, bool]]:
+    """The step bests, each followed by its refit on the whole training part where that helps.
 
     The steps of the schedule optimise different weightings (eq. 15's windows,
     eq. 16's large torques); a step best is fitted to its own. After the
-    search, :func:`tune_parameters` refits each with ``weights`` (Lambda = 1 on
-    the fitted samples, 0 on the held-out ones), the measure the search's model
-    is chosen by (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
+    search, :func:`tune_parameters` refits each with Lambda = 1 on the fitted
+    samples and 0 on the held-out ones, closer to the measure the search's
+    model is chosen by (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
 
     Parameters
     ----------
-    matrices : list of ElementMatrix
+    steps : sequence of StepRecord
         The step bests.
-    x, y : numpy.ndarray
-        The inputs (n_inputs, N) and target (N,) the GA simulated.
-    weights : numpy.ndarray or float
-        Lambda over those samples.
-    comp_ts : float
-        Sample time [s].
-    ranges : mapping of element name to ParamRange
+    comp : Compensator
+        Sample time and parameter ranges.
+    hold : Holdout
+        The training part and its mask.
     max_evaluations : int
-        Budget of each refit (individuals evaluated).
+        Budget of each refit (individuals evaluated); 0: no refit.
     reject_poles : bool
         A tangent pole inside an input's range is an infinite fitness (as in the GA).
 
     Returns
     -------
-    list of ElementMatrix or None
-        Each refitted matrix, or None where no better parameters were found.
+    list of (ElementMatrix, int, bool)
+        Each candidate's matrix, step and whether it is a refit.
     """
-    out: list = []
-    with Evaluator(x, y, comp_ts, ranges, workers=1, cache_bytes=64 * 2**20,
-                   reject_poles=reject_poles) as ev:
-        ev.set_weights(weights)
-        for matrix in matrices:
-            pop = Population.from_matrix(matrix)
+    out = []
+    if not max_evaluations:
+        return [(s.matrix, s.step, False) for s in steps]
+    n = hold.n_train
+    x = np.ascontiguousarray(hold.training.x[:, :n])
+    with Evaluator(x, hold.training.y[:n], comp.sample_time, comp.ranges, workers=1,
+                   cache_bytes=64 * 2**20, reject_poles=reject_poles) as ev:
+        ev.set_weights(mask_weights(np.ones(n), hold.mask))
+        for s in steps:
+            out.append((s.matrix, s.step, False))
+            pop = Population.from_matrix(s.matrix)
             f0 = float(ev.evaluate(pop.inputs, pop.codes, pop.ps)[0])
             tuned, f1, _ = tune_parameters(ev, pop, f0, max_evaluations=max_evaluations)
-            out.append(tuned.matrix(0, matrix.inputs) if f1 < f0 else None)
+            if f1 < f0:
+                out.append((tuned.matrix(0, s.matrix.inputs), s.step, True))
     return out

@@ -281,7 +281,7 @@ def _key(v: float) -> float:
 
 def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettings,
                     rule: str | None = None, *, start_step: int | None = None,
-                    refitted: bool = False) -> tuple[Compensator, dict[str, Any]]:
+                    refit: int = 0, refitted: bool = False) -> tuple[Compensator, dict[str, Any]]:
     """Prune ``comp``, choose the exported member and describe the front for result.json.
 
     Parameters
@@ -296,9 +296,11 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         A selection rule overriding the settings' (``--select``).
     start_step : int, optional
         The step whose best ``comp`` is (recorded as ``start_step``).
+    refit : int
+        The refit budget the step bests had (recorded as ``refit``; 0: none).
     refitted : bool
         Whether ``comp`` is that step best refitted on the whole training part
-        (recorded as ``refitted`` with ``refit``, the settings' budget).
+        (recorded as ``refitted``).
 
     Returns
     -------
@@ -342,6 +344,6 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
               "search_matrix": matrix_to_json(search.matrix), "front": members}
     if start_step is not None:
         record["start_step"] = start_step
-        record["refit"] = settings.refit
+        record["refit"] = int(refit)
         record["refitted"] = bool(refitted)
     return _with(comp, front[k].matrix), record

@@ -43,7 +43,7 @@ from edm_sym.engines.abstraction.checkpoint import (
 )
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
-from edm_sym.engines.abstraction.local_search import refit_on_training, tune_parameters
+from edm_sym.engines.abstraction.local_search import step_candidates, tune_parameters
 from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
@@ -597,27 +597,18 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         The exported model, result.json's ``parsimony`` and ``validation`` entries.
     """
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
-    start_step, refitted = steps[-1].step, False
+    start_step, refitted, refit = steps[-1].step, False, 0
     if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
         # The step best with the lowest plain RMSE over the whole log (a later step on a tie):
         # Step 4's eq. 16 weighting, say, may buy large torques with reversals and the cold
         # start, which only the whole log holds (docs/abstraction.md, "Parsimony").
         # A step best with a tangent pole inside its input's range is passed over while
         # another is sound (validation.fragile_rows).
-        # Each step best is fitted to its own step's weighting; refitted on the whole training
-        # part (Lambda = 1 there), a step best that learnt a law on eq. 15's windows often
-        # beats the others over the whole log (docs/abstraction.md#seed-robustness).
-        cands = [(s.matrix, s.step, False) for s in steps]
-        if cfg.parsimony.refit:
-            n_train = hold.n_train
-            x = np.ascontiguousarray(hold.training.x[:, :n_train])
-            lam = mask_weights(np.ones(n_train), hold.mask)
-            refits = refit_on_training([s.matrix for s in steps], x, hold.training.y[:n_train],
-                                       lam, comp.sample_time, comp.ranges,
-                                       max_evaluations=cfg.parsimony.refit,
-                                       reject_poles=cfg.steps[-1].ga.reject_poles)
-            cands = [c for s, m in zip(steps, refits, strict=True)
-                     for c in ((s.matrix, s.step, False),) + (((m, s.step, True),) if m else ())]
+        # Each step best is also refitted on the whole training part: one that learnt a law
+        # on eq. 15's windows often beats the others there (docs/abstraction.md#seed-robustness).
+        refit = cfg.parsimony.refit
+        cands = step_candidates(steps, comp, hold, max_evaluations=refit,
+                                reject_poles=cfg.steps[-1].ga.reject_poles)
         sound = [q for q, c in enumerate(cands)
                  if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
         scored = [(scorer.whole_rmse(replace(comp, matrix=cands[q][0])), -q)
@@ -625,7 +616,7 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         q = -min(scored)[1]
         comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
-                                      refitted=refitted)
+                                      refit=refit, refitted=refitted)
     return comp, parsimony, scorer.report(comp)
 
 
