@@ -493,3 +493,19 @@ def test_any_valid_matrix_describes_to_the_documented_shape(random_log: DataLog)
                 assert row["flags"][0]["code"] == "negligible"
 
     check()
+
+
+def test_acceleration_term_is_named_as_far_as_the_data_shows_an_inertia(tmp_path: Path,
+                                                                          log: DataLog) -> None:
+    # Row 3 is d(omega)/dt through a low-pass: an inertia, named (the test above).
+    # Through a high-pass at 300 rad/s it is mostly the derivative of the acceleration
+    # on this log: 5 % of the target, but J a fitted to it explains almost nothing.
+    doc = _set(_set(_doc(), 2, 1, "hpf", 300.0), 2, 2, "gain", 0.003)
+    row = edm_sym.describe(_write(doc, tmp_path / "jerk.json"), log).to_json()["rows"][2]
+    assert row["contribution"] > 0.02
+    assert row["terms"] == []
+    (flag,) = [f for f in row["flags"] if f["code"] == "unsupported"]
+    assert "acceleration" in flag["message"] and "as an inertia" in flag["message"]
+    # The same shape scaled up 10 times is still no inertia; a low-pass is.
+    named = edm_sym.describe(HANDWRITTEN, log).to_json()["rows"][2]
+    assert [t["kind"] for t in named["terms"]] == ["acceleration"]

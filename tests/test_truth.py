@@ -261,3 +261,40 @@ def test_relieve_bounds_moves_a_bound_the_data_does_not_need() -> None:
     comp, scorer = _relief_case(1.0, "gain", 10.0)
     new, moved = relieve_bounds(comp, scorer, 0.01)
     assert moved == 0 and new.matrix == comp.matrix and len(bound_flags(new)) == 1
+
+
+def test_relieve_bounds_moves_a_gain_whose_factor_another_gene_can_take() -> None:
+    import numpy as np
+
+    from edm_sym.core.bounds import bound_flags
+    from edm_sym.core.data import DataLog
+    from edm_sym.core.elements import default_ranges
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.engines.abstraction.prune import relieve_bounds
+    from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
+    from edm_sym.engines.abstraction.weighting import Weighting
+    from edm_sym.engines.simulate import simulate_rows
+
+    # 20 * integral(omega) as integral(2) then gain 10, the gain at its bound. The
+    # least-squares refit of the row's gain puts it back there; the integral's
+    # constant can take the factor instead, leaving the output as it was.
+    n, ts = 4000, 1e-3
+    t = np.arange(n) * ts
+    omega = 20 * np.sin(2 * np.pi * 0.7 * t)
+    log = DataLog({"t": t, "omega": omega, "tau_ext": 20 * np.cumsum(omega) * ts}, ts, "v",
+                  "0" * 64)
+    ranges = default_ranges(ts, n * ts)
+    m = make_matrix(["omega"], [("omega", [("integral", ranges["integral"].encode(2.0)),
+                                           ("gain", 1.0)])])
+    comp = Compensator(m, ts, ranges, n * ts)
+    scorer = Scorer(plan_holdout(log, target="tau_ext", inputs=["omega"],
+                                 settings=ValidationSettings()), Weighting())
+    assert [(b.row, b.col) for b in bound_flags(comp)] == [(0, 1)]
+    new, moved = relieve_bounds(comp, scorer, 0.01)
+    assert moved == 1 and not bound_flags(new)
+    x = log.stack(["omega"])
+    before = simulate_rows(comp, comp.matrix.rows, x)
+    after = simulate_rows(new, new.matrix.rows, x)
+    np.testing.assert_allclose(after, before, rtol=1e-9, atol=1e-12)
+    g0, g1 = new.matrix.rows[0].genes
+    assert new.value(g0) * new.value(g1) == pytest.approx(20.0, rel=1e-9)

@@ -389,7 +389,7 @@ def describe(
     """
     from edm_sym.engines.simulate import simulate_rows
     from edm_sym.engines.symbolic import decode
-    from edm_sym.engines.symbolic.significance import judge_rows
+    from edm_sym.engines.symbolic.significance import acceleration_of, judge_rows
 
     if not isinstance(result, EdmResult):
         result = load_result(result)
@@ -426,6 +426,7 @@ def describe(
         # On the log the search was fitted to, judge on its held-out rows alone
         # (simulated after the training rows, as the search scored them).
         held = held_out_rows(result, log)
+        full_inputs = inputs
         if held is not None:
             sl = held_out_selector(held)
             outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
@@ -441,7 +442,16 @@ def describe(
                             part=held_out_selector(held) if held is not None else slice(None))
                 if inputs is not None else ClassifyOptions.for_axis(result.axis))
     model = decode(result, roles=roles, systems=False, classify=classify)
-    judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify)
+    accelerations = None
+    if inputs is not None:
+        # Differentiated on the whole log, then cut like the rest: held-out blocks
+        # joined end to end would give a spike at every join.
+        accelerations = [acceleration_of(v, row.role, log.ts)
+                         for v, row in zip(full_inputs, model.rows, strict=True)]
+        if held is not None:
+            accelerations = [a if a is None else a[sl] for a in accelerations]
+    judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify,
+                        accelerations=accelerations)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)
                  for row, j in zip(model.rows, judged, strict=True))

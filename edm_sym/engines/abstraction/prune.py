@@ -48,11 +48,13 @@ import numpy as np
 from edm_sym.core.bounds import BOUND_MARGIN, bound_flags, complexity
 from edm_sym.core.elements import BY_NAME
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.engines.abstraction.polish import scale_position
+from edm_sym.engines.abstraction.polish import HOMOGENEOUS, SCALABLE, scale_position
 from edm_sym.engines.abstraction.selection import ParsimonySettings, check_select, select
 from edm_sym.engines.abstraction.validation import Scorer
 
 THROUGH = BY_NAME["through"].code
+#: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
+MULTIPLYING = SCALABLE | {BY_NAME["derivative"].code, BY_NAME["integral"].code}
 COMPLEXITY = ("rows + active elements (all but through) + state size (values kept between "
               "samples; a delay's length in samples)")
 
@@ -175,6 +177,39 @@ def _refit(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix
 RELIEF = 2 * BOUND_MARGIN
 
 
+def _rescaled(comp: Compensator, m: ElementMatrix, j: int, col: int) -> ElementMatrix | None:
+    """``m`` with the move of row ``j``'s gene ``col`` undone by another gene's scale.
+
+    When the moved gene multiplies the row's output (a gain, an integral's
+    constant: :data:`MULTIPLYING`) and so does another one, both past the row's last element that
+    is not homogeneous, the row's output is unchanged when the other one takes
+    the factor the move took away: the bound was a choice between equivalent
+    parameters, not a limit. None when there is no such gene, or the factor
+    would put it outside its range or on a bound.
+    """
+    old, new = comp.matrix.rows[j].genes[col], m.rows[j].genes[col]
+    if old.code not in MULTIPLYING:
+        return None
+    before, after = comp.value(old), comp.value(new)
+    if not (before and after):
+        return None
+    genes = list(m.rows[j].genes)
+    for i in range(len(genes) - 1, -1, -1):
+        g = genes[i]
+        if g.code not in HOMOGENEOUS:
+            return None
+        if i == col or g.code not in MULTIPLYING:
+            continue
+        moved = _set_value(comp, g, comp.value(g) * before / after)
+        if moved is None or not BOUND_MARGIN < moved.p < 1 - BOUND_MARGIN:
+            continue
+        genes[i] = moved
+        rows = list(m.rows)
+        rows[j] = Row(m.rows[j].input, genes)
+        return ElementMatrix(m.inputs, rows)
+    return None
+
+
 def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
                    ) -> tuple[Compensator, int]:
     """Move parameters off their range bounds where the data does not need the bound.
@@ -182,7 +217,8 @@ def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
     A parameter at (or within the margin of) a bound (:func:`edm_sym.core.bounds.bound_flags`)
     is a limit of the search, not an estimate, and keeps its row from being named
     as physics. Each one in turn is moved ``RELIEF`` inside its range (the row
-    gains refitted on the training part when that helps); the move is kept when
+    gains refitted on the training part when that helps, or the move taken up
+    exactly by another gene that scales the row, :func:`_rescaled`); the move is kept when
     the criterion stays within ``tolerance`` of ``comp``'s, the same tolerance
     that lets pruning drop an element: the data then does not ask for the bound.
 
@@ -203,7 +239,8 @@ def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
         rows = list(comp.matrix.rows)
         rows[flag.row] = Row(row.input, genes)
         m = ElementMatrix(comp.matrix.inputs, rows)
-        options = [m] + [r for r in (_refit(comp, m, scorer),) if r is not None]
+        options = [m] + [r for r in (_refit(comp, m, scorer),
+                                     _rescaled(comp, m, flag.row, flag.col)) if r is not None]
         # A refit may put the parameter (a gain) back on its bound: that is no move.
         options = [c for c in options if not any(
             (b.row, b.col) == (flag.row, flag.col) for b in bound_flags(_with(comp, c)))]

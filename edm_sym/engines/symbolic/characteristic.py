@@ -443,8 +443,8 @@ PERIOD_SAMPLES = 1024
 RANGE_SAMPLES = 401
 
 
-def _dc_gain(f: Filter) -> float:
-    # A derivative's DC gain is 0 and an integral's infinite: no static stand-in.
+def dc_gain(f: Filter) -> float:
+    """A filter's DC gain; NaN for a derivative or integral (they have no static stand-in)."""
     return float(response(f.tf, 0.0).real) if f.k == 0 else math.nan
 
 
@@ -510,7 +510,7 @@ def measure_periodic(term: sp.Expr, u: sp.Symbol, wrapped: bool,
         None when the term is not periodic in the angle, a filter differentiates
         or integrates, or the characteristic is constant.
     """
-    form = static_form(term, u, 0, _dc_gain)
+    form = static_form(term, u, 0, dc_gain)
     if form is None:
         return None
     if wrapped:
@@ -668,7 +668,7 @@ def measure_velocity(term: sp.Expr, u: sp.Symbol, v_range: float,
         None unless the input stays a velocity along every path (no derivative
         or integral), or when the characteristic is constant or not finite.
     """
-    form = static_form(term, u, 1, _dc_gain)
+    form = static_form(term, u, 1, dc_gain)
     if form is None or form.index != 1:
         return None
     v = np.linspace(-v_range, v_range, RANGE_SAMPLES)

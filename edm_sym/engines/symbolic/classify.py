@@ -495,14 +495,14 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
         mag = np.abs(np.fft.rfft(y))[1:] if np.all(np.isfinite(y)) else np.zeros(1)
         top = int(np.argmax(mag)) + 1
         if top > 1:
-            _, strongest, per_unit = _cycles(top * k, U)
+            _, strongest, per_unit = spatial_frequency(top * k, U)
             dominant = {"dominant_cycles": strongest,
                         "dominant_amplitude": (float(2 * mag[top - 1] / y.size), U.force)}
             shape += f", strongest harmonic {strongest[0]:.6g} {per_unit}"
     else:
         return None
     phi = _wrap(phi)
-    key, cycles, per = _cycles(k, U)
+    key, cycles, per = spatial_frequency(k, U)
     params = {"amplitude": (amp, U.force), "period": (2 * math.pi / k, U.position),
               key: cycles, "phase": (phi, "rad"), **dominant, **extra}
     wrap_note = ""
@@ -520,7 +520,7 @@ def _moved(U: AxisUnits) -> str:  # noqa: N803
     return "angle" if U.axis == "rotary" else "position"
 
 
-def _cycles(k: float, U: AxisUnits) -> tuple[str, tuple[float, str], str]:  # noqa: N803
+def spatial_frequency(k: float, U: AxisUnits) -> tuple[str, tuple[float, str], str]:  # noqa: N803
     """The spatial frequency of ``sin(k q)``: k cycles per revolution (rotary, q in rad),
     k / 2 pi cycles per metre (linear, q in m). -> (parameter, (value, unit), text unit)."""
     if U.axis == "linear":
@@ -644,10 +644,10 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
         if p is not None:
             params, note = describe_operators(p.form, "DC gains")
             period = 2 * math.pi / p.cycles
-            key, cycles, per = _cycles(p.cycles, U)
+            key, cycles, per = spatial_frequency(p.cycles, U)
             more = ""
             if abs(p.dominant_cycles - p.cycles) > 1e-9:
-                dominant = _cycles(p.dominant_cycles, U)[1]
+                dominant = spatial_frequency(p.dominant_cycles, U)[1]
                 params["dominant_cycles"] = dominant
                 params["dominant_amplitude"] = (p.dominant_amplitude, F)
                 more = (f"; strongest harmonic {dominant[0]:.6g} {per}, "

@@ -12,6 +12,11 @@ the target, and decides per row what may be said about it:
   the threshold;
 * a term that is a static function of the input (an offset, ``c sign(v)``, ...)
   is measured on its own, and left out as negligible below the threshold;
+* an acceleration or spatial term is measured as what it names: ``J a``, or
+  its static characteristic along the data's angle, fitted to the row's
+  output by least squares. Below the threshold it is **unsupported** and left
+  out: the row does something else on the data (a derivative of the
+  acceleration, a ripple its filters smooth away at the data's speeds);
 * a row with a parameter at (or within ``bound_margin`` of) its range bound
   (:mod:`edm_sym.core.bounds`) keeps its parameters, but its terms are
   ``unclassified``: the value is a limit of the search, not an estimate;
@@ -22,7 +27,10 @@ the target, and decides per row what may be said about it:
   they get one by one do not add up to what their sum is (a term left
   unclassified, other kinds, Coulomb or viscous values more than 5 % apart),
   the sum's Coulomb, viscous and Stribeck parts replace them, listed on the row
-  that contributes most, and every row of the group is flagged ``joint``.
+  that contributes most, and every row of the group is flagged ``joint``;
+* so are the terms of the angle (:mod:`edm_sym.engines.symbolic.joint_spatial`),
+  when one ripple is written as several rows: their sum over one revolution
+  is named as one ``spatial`` term.
 
 Flags are ``(code, message)`` pairs; the codes are :data:`ROW_FLAGS` and
 :data:`TERM_FLAGS`. See ``docs/describe.md``.
@@ -53,7 +61,10 @@ ROW_FLAGS = {
     "long_delay": "the row's delays hold at least long_delay samples",
     "no_output": "the row's output is identically zero",
     "unmeasured": "no data: the contribution was not measured",
-    "joint": "its velocity terms are named together with other rows' (their summed characteristic)",
+    "unsupported": ("a term its expression has (an inertia, a ripple) is not what the row does "
+                    "on the data: fitted to the row's output, it explains less than the threshold"),
+    "joint": ("its velocity (or position-dependent) terms are named together with other rows' "
+              "(their summed characteristic)"),
 }
 #: Flags of a term, and what they mean.
 TERM_FLAGS = {
@@ -180,6 +191,47 @@ def _term_rms(term: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None) -> float |
     return _rms(y) if np.all(np.isfinite(y)) else None
 
 
+#: The role index of an input (the times it is differentiated to reach the acceleration).
+_ROLE_INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}
+
+
+def acceleration_of(x: np.ndarray, role: str | None, ts: float) -> np.ndarray | None:
+    """The acceleration a row's input gives on a contiguous log (None for other roles).
+
+    The acceleration itself, or the velocity or unwrapped angle differentiated
+    once or twice (central differences, :func:`numpy.gradient`).
+    """
+    if role not in _ROLE_INDEX:
+        return None
+    a = np.asarray(x, dtype=float)
+    for _ in range(2 - _ROLE_INDEX[role]):
+        if a.size < 2:
+            return None
+        a = np.gradient(a, ts)
+    return a
+
+
+def _fitted(y: np.ndarray, a: np.ndarray) -> tuple[float, float, float] | None:
+    """(c, RMS of c a, R^2): the row's output ``y`` fitted by ``c a`` (least squares)."""
+    aa = float(a @ a)
+    if not aa > 0 or not (np.all(np.isfinite(y)) and np.all(np.isfinite(a))):
+        return None
+    c = float(y @ a) / aa
+    dev = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(np.sum((y - c * a) ** 2)) / dev if dev > 0 else 0.0
+    return c, abs(c) * _rms(a), r2
+
+
+def _position_shape(term: PhysicalTerm, u: sp.Symbol, x: np.ndarray) -> np.ndarray | None:
+    """A spatial term's static characteristic (filters at DC) along the angle ``x``."""
+    from edm_sym.engines.symbolic.characteristic import dc_gain, evaluate, static_form
+
+    if term.expr is None:
+        return None
+    form = static_form(term.expr, u, 0, dc_gain)
+    return None if form is None else evaluate(form.expr, u, x)
+
+
 def _term_flags(term: PhysicalTerm) -> list[Flag]:
     p = term.parameters
     out = []
@@ -211,6 +263,7 @@ def judge_rows(
     *,
     options: SignificanceOptions | None = None,
     classify: ClassifyOptions | None = None,
+    accelerations: Sequence[np.ndarray | None] | None = None,
 ) -> tuple[JudgedRow, ...]:
     """Judge every row of a decoded model: contribution, flags, the terms it may name.
 
@@ -229,6 +282,12 @@ def judge_rows(
         The thresholds and velocity range of the joint judgement of the
         velocity terms (default: ``ClassifyOptions.for_axis(model.axis)``;
         :func:`edm_sym.engines.description.describe` passes the data's range).
+    accelerations : sequence of numpy.ndarray or None, optional
+        Per row, the acceleration its input gives on the same samples as
+        ``outputs`` (:func:`acceleration_of`; None for a wrapped angle), to
+        measure an acceleration term as an inertia (``unsupported``).
+        Default: differentiated from ``inputs``, which must then be one
+        contiguous stretch of a log.
 
     Returns
     -------
@@ -279,12 +338,17 @@ def judge_rows(
             flags.insert(0, Flag("negligible", f"{how} (threshold {_pct(opts.threshold)}); "
                                                f"would be named {would}"))
         else:
-            x = None
+            x = a = None
             if inputs is not None:
                 x = np.asarray(inputs[j], dtype=float)
-            terms = _judge_terms(row, x, ref if measured else None, row_bounds, opts, flags)
+                a = (accelerations[j] if accelerations is not None
+                     else acceleration_of(x, row.role, model.sample_time))
+            terms = _judge_terms(row, x, ref if measured else None, row_bounds, opts, flags,
+                                 (outputs[j], a) if measured else None,
+                                 axis_units(model.axis).inertia)
         out.append(JudgedRow(j, share, tuple(terms), tuple(flags), rms[j], row_bounds))
-    return _joint(model, out, classify or ClassifyOptions.for_axis(model.axis))
+    options = classify or ClassifyOptions.for_axis(model.axis)
+    return _joint_spatial(model, _joint(model, out, options), options)
 
 
 #: Coulomb or viscous values named one by one may differ this much from the sum's.
@@ -341,9 +405,74 @@ def _joint(model: SymbolicModel, judged: list[JudgedRow],
     return tuple(out)
 
 
+def _joint_spatial(model: SymbolicModel, judged: Sequence[JudgedRow],
+                   options: ClassifyOptions) -> tuple[JudgedRow, ...]:
+    """Replace the angle terms of several rows by the ripple of their sum, where they disagree."""
+    from edm_sym.engines.symbolic.joint_spatial import joint_spatial_term, overlapping, spatial_part
+
+    parts, where = [], {}
+    for row, jr in zip(model.rows, judged, strict=True):
+        if jr.bounds:
+            continue
+        for q, jt in enumerate(jr.terms):
+            p = spatial_part(jt.term, row.input_symbol, row.role)
+            if p is not None:
+                parts.append(p)
+                where.setdefault(row.index, []).append(q)
+    if len(parts) < 2 or not overlapping(parts):
+        return tuple(judged)
+    idx = sorted(where)
+    names = "rows " + ", ".join(str(j + 1) for j in idx) if len(idx) > 1 else f"row {idx[0] + 1}"
+    joint = joint_spatial_term(parts, options, names)
+    if joint is None:
+        return tuple(judged)
+    lead = max(idx, key=lambda j: (judged[j].rms or 0.0, -j))
+    out = list(judged)
+    for j in idx:
+        jr = judged[j]
+        keep = [jt for q, jt in enumerate(jr.terms) if q not in where[j]]
+        if j == lead:
+            keep.append(JudgedTerm(joint, tuple(_term_flags(joint))))
+        msg = (f"its position-dependent terms are named with those of {names}, as the ripple "
+               f"of their sum over one revolution: {term_summary(joint)}"
+               + (" (here)" if j == lead else f" (listed in row {lead + 1})"))
+        out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
+    return tuple(out)
+
+
+def _unsupported(t: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None,
+                 data: tuple[np.ndarray, np.ndarray | None] | None,
+                 inertia_unit: str) -> tuple[float, str] | None:
+    """What an acceleration or spatial term explains of the row's output on the data.
+
+    The term names a signal: ``J a`` for an inertia, its static characteristic
+    along the angle for a ripple. Fitted to the row's output by least squares,
+    that signal is what the data shows of the term; what the row does beyond
+    it (a derivative of the acceleration, a filter that smooths a ripple away at
+    the data's speeds) is not that term. -> (RMS of the fit, how it was fitted).
+    """
+    if data is None:
+        return None
+    y, a = data
+    if t.kind == "acceleration" and a is not None:
+        fit = _fitted(y, a)
+        what = "as an inertia (the row's output fitted by J a: J = {c:.4g} " + inertia_unit
+    elif t.kind == "spatial" and x is not None:
+        shape = _position_shape(t, u, x)
+        fit = None if shape is None else _fitted(y, shape)
+        what = ("as a function of the position (the row's output fitted by c times the "
+                "term's static characteristic along the data's angle: c = {c:.4g}")
+    else:
+        return None
+    if fit is None:
+        return None
+    return fit[1], what.format(c=fit[0]) + f", R^2 {fit[2]:.3g})"
+
+
 def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,
                  row_bounds: tuple[BoundFlag, ...], opts: SignificanceOptions,
-                 flags: list[Flag]) -> list[JudgedTerm]:
+                 flags: list[Flag], data: tuple[np.ndarray, np.ndarray | None] | None = None,
+                 inertia_unit: str = "kg m^2") -> list[JudgedTerm]:
     terms = []
     for t in row.terms:
         if ref is not None:
@@ -352,6 +481,12 @@ def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,
                 flags.append(Flag("negligible", f"term {term_summary(t)} contributes "
                                   f"{_pct(trms / ref)} of the target's RMS (threshold "
                                   f"{_pct(opts.threshold)}): not listed"))
+                continue
+            why = _unsupported(t, row.input_symbol, x, data, inertia_unit)
+            if why is not None and why[0] / ref < opts.threshold:
+                flags.append(Flag("unsupported", f"term {term_summary(t)} explains "
+                                  f"{_pct(why[0] / ref)} of the target's RMS on the data "
+                                  f"{why[1]} (threshold {_pct(opts.threshold)}): not listed"))
                 continue
         tflags = _term_flags(t)
         if row_bounds and t.kind != "unclassified":
