@@ -81,8 +81,9 @@ def check_truth(preset: str, doc: dict) -> None:
     if "acceleration" in p.true_terms:
         # Not in the check: the inertia error's sign, and its size within a
         # factor of 2. The observer's low-pass makes tau_ext lag, which on these logs
-        # looks like about -7e-5 kg m^2 of inertia, and the search splits that
-        # between filters and the acceleration rows; a wrong sign is no estimate.
+        # looks like -6e-5 to -7e-5 kg m^2 of inertia (docs/abstraction.md), and the
+        # search splits that between filters and acceleration rows; a wrong sign is
+        # no estimate.
         assert 0.5 <= got["acceleration"] / p.inertia_error <= 2.0, got
     want = sorted(h.cycles for h in p.ripple)
     assert sorted(round(k) for k in got["orders"]) == want, got
