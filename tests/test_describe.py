@@ -266,9 +266,13 @@ def test_cli_json_on_the_shipped_example(tmp_path: Path) -> None:
     # Judged on the abstraction log the search was fitted to: its held-out blocks alone.
     assert desc["fitness"]["data"]["rows"] == res.validation["held_out"]["blocks"]
     # The plant's friction and ripple (docs/plant.md: Coulomb 0.95 N m, viscous
-    # 0.005 N m s/rad, 0.06 N m at 1 cycle/rev), one row each.
+    # 0.005 N m s/rad, 0.06 N m at 1 cycle/rev), one row each; and its inertia error
+    # (2e-4 kg m^2), which the viscous row's filters hold: a plant: log records the
+    # observer's bandwidth, so the description takes its lag out and names it.
     kinds = [[t["kind"] for t in row["terms"]] for row in desc["rows"]]
-    assert kinds == [["coulomb"], ["viscous"], ["spatial"]]
+    assert kinds == [["coulomb"], ["viscous", "acceleration"], ["spatial"]]
+    assert desc["rows"][1]["terms"][1]["parameters"]["inertia"] == [
+        pytest.approx(2e-4, rel=0.05), "kg m^2"]
     assert desc["rows"][0]["terms"][0]["parameters"]["level"] == [pytest.approx(0.95, rel=0.02),
                                                                    "N m"]
     assert desc["rows"][1]["terms"][0]["parameters"]["coefficient"] == [
@@ -399,9 +403,11 @@ def test_report_and_describe_name_the_shipped_example_alike() -> None:
         assert [(t.term.kind, t.term.parameters) for t in j.terms] == [
             (t.term.kind, t.term.parameters) for t in row.terms], f"row {row.index}"
         assert j.contribution == pytest.approx(row.contribution)
-    # The plant's friction (docs/plant.md), named alike in both: Coulomb on row 1, viscous on 2.
+    # The plant's friction (docs/plant.md), named alike in both: Coulomb on row 1, viscous on 2,
+    # and the inertia error (2e-4 kg m^2) that row 2's filters hold.
     assert [t.term.kind for t in desc.rows[0].terms] == ["coulomb"]
-    assert [t.term.kind for t in desc.rows[1].terms] == ["viscous"]
+    assert [t.term.kind for t in desc.rows[1].terms] == ["viscous", "acceleration"]
+    assert desc.rows[1].terms[1].term.parameters["inertia"][0] == pytest.approx(2e-4, rel=0.1)
     # The older example (rows 3 and 4 its friction) is named alike too.
     legacy = load_result(ROOT / "tests" / "golden" / "legacy_auger_result.json")
     run = run_log(legacy, load_log("plant:auger/evaluation", legacy), label="evaluation")

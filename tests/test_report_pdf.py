@@ -140,8 +140,12 @@ def test_latex_failure_names_the_error_and_keeps_the_log(tmp_path: Path) -> None
     assert (tmp_path / "x.log").is_file() and not (tmp_path / "x.pdf").exists()
 
 
-def test_shipped_example_report_compiles_and_names_its_three_terms(tmp_path: Path) -> None:
-    """examples/auger/result.json with the logs and LuGre file it records (report_inputs)."""
+def test_shipped_example_report_compiles_and_names_its_four_terms(tmp_path: Path) -> None:
+    """examples/auger/result.json with the logs and LuGre file it records (report_inputs).
+
+    Three rows: Coulomb, viscous (whose filters also hold the inertia error, named
+    with the observer's lag taken out) and the ripple.
+    """
     from edm_sym.application.exporting import report_inputs
 
     result = edm_sym.load_result(REPO / "examples" / "auger" / "result.json")
@@ -149,7 +153,7 @@ def test_shipped_example_report_compiles_and_names_its_three_terms(tmp_path: Pat
     text = _pdftext(pdf)
     described = edm_sym.describe(result, "plant:auger/evaluation").to_json()
     kinds = {t["kind"] for row in described["rows"] for t in row["terms"]}
-    assert kinds == {"coulomb", "viscous", "spatial"}
+    assert kinds == {"coulomb", "viscous", "acceleration", "spatial"}
     for kind in kinds:
         assert KIND_TITLES[kind] in text, kind
     assert "LuGre" in text

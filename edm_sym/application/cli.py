@@ -139,6 +139,10 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resample", action="store_true",
                    help="resample a log whose sample time differs from the result's by more than "
                         "0.1 %% onto its grid (default: refuse it)")
+    p.add_argument("--observer-bandwidth", type=_positive_float, metavar="RAD_PER_S",
+                   help="bandwidth g of the observer that estimated the target, g/(s+g), to name "
+                        "the inertia the rows hold with its lag taken out (default: the log's "
+                        "scalar observer_bandwidth; plant: logs record it)")
     _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_describe)
 
@@ -149,7 +153,8 @@ def _cmd_describe(args: argparse.Namespace) -> int:
 
     desc = describe(args.result, data=args.data, ts=args.ts,
                     options=SignificanceOptions(threshold=args.threshold / 100), axis=args.axis,
-                    columns=_columns(args), resample=args.resample)
+                    columns=_columns(args), resample=args.resample,
+                    observer_bandwidth=args.observer_bandwidth)
     print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
     return 0
 

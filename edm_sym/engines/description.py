@@ -347,6 +347,7 @@ def describe(
     axis: str | None = None,
     columns: ColumnRoles | None = None,
     resample: bool = False,
+    observer_bandwidth: float | None = None,
 ) -> Description:
     """Describe what a model found: per row its terms, contribution and flags.
 
@@ -377,6 +378,12 @@ def describe(
     resample : bool
         Resample a log whose sample time differs from the result's by more
         than the tolerance (docs/data.md#sample-time) instead of refusing it.
+    observer_bandwidth : float, optional
+        The bandwidth ``g`` [rad/s] of the observer that estimated the target
+        (``g / (s + g)``), to name the inertia the rows hold with its lag taken
+        out (:mod:`edm_sym.engines.symbolic.inertia`). Default: the log's
+        scalar ``observer_bandwidth`` (a ``plant:`` log records its preset's);
+        without either the inertia is named row by row only.
 
     Returns
     -------
@@ -389,6 +396,7 @@ def describe(
     """
     from edm_sym.engines.simulate import simulate_rows
     from edm_sym.engines.symbolic import decode
+    from edm_sym.engines.symbolic.inertia import rows_inertia
     from edm_sym.engines.symbolic.significance import acceleration_of, judge_rows
 
     if not isinstance(result, EdmResult):
@@ -426,7 +434,7 @@ def describe(
         # On the log the search was fitted to, judge on its held-out rows alone
         # (simulated after the training rows, as the search scored them).
         held = held_out_rows(result, log)
-        full_inputs = inputs
+        full_inputs, full_outputs = inputs, outputs
         if held is not None:
             sl = held_out_selector(held)
             outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
@@ -450,8 +458,15 @@ def describe(
                          for v, row in zip(full_inputs, model.rows, strict=True)]
         if held is not None:
             accelerations = [a if a is None else a[sl] for a in accelerations]
+    inertia = None
+    if inputs is not None:
+        g = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
+            "observer_bandwidth")
+        inertia = rows_inertia([row.role for row in model.rows], full_outputs, full_inputs,
+                               log.ts, g, held_out_selector(held) if held is not None
+                               else slice(None))
     judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify,
-                        accelerations=accelerations)
+                        accelerations=accelerations, inertia=inertia)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)
                  for row, j in zip(model.rows, judged, strict=True))

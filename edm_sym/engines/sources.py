@@ -59,4 +59,6 @@ def plant_log(spec: str) -> DataLog:
     for key, col in cols.items():
         digest.update(key.encode() + np.ascontiguousarray(col, dtype="<f8").tobytes())
     ts = float(cols["t"][1] - cols["t"][0])
-    return DataLog(cols, ts, spec, digest.hexdigest())
+    # The observer's bandwidth: what `edm describe` needs to take its lag out of tau_ext.
+    return DataLog(cols, ts, spec, digest.hexdigest(),
+                   {"observer_bandwidth": float(PRESETS[preset].g_rtob)})

@@ -30,7 +30,12 @@ the target, and decides per row what may be said about it:
   that contributes most, and every row of the group is flagged ``joint``;
 * so are the terms of the angle (:mod:`edm_sym.engines.symbolic.joint_spatial`),
   when one ripple is written as several rows: their sum over one revolution
-  is named as one ``spatial`` term.
+  is named as one ``spatial`` term;
+* with the observer's bandwidth known, the inertia the rows hold together
+  (:mod:`edm_sym.engines.symbolic.inertia`: their outputs with the observer's
+  lag taken out, regressed on the data) is named as one ``acceleration``
+  term where the row-by-row names miss it (an inertia error written into the
+  lead filters of velocity rows).
 
 Flags are ``(code, message)`` pairs; the codes are :data:`ROW_FLAGS` and
 :data:`TERM_FLAGS`. See ``docs/describe.md``.
@@ -50,6 +55,7 @@ from edm_sym.core.bounds import BOUND_MARGIN, BoundFlag, bound_flags
 from edm_sym.core.units import axis_units
 from edm_sym.engines.symbolic.classify import ClassifyOptions, PhysicalTerm
 from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
+from edm_sym.engines.symbolic.inertia import ModelInertia
 from edm_sym.engines.symbolic.model import RowModel, SymbolicModel
 from edm_sym.engines.symbolic.operators import LTI, Delay, Relay
 
@@ -264,6 +270,7 @@ def judge_rows(
     options: SignificanceOptions | None = None,
     classify: ClassifyOptions | None = None,
     accelerations: Sequence[np.ndarray | None] | None = None,
+    inertia: ModelInertia | None = None,
 ) -> tuple[JudgedRow, ...]:
     """Judge every row of a decoded model: contribution, flags, the terms it may name.
 
@@ -288,6 +295,13 @@ def judge_rows(
         measure an acceleration term as an inertia (``unsupported``).
         Default: differentiated from ``inputs``, which must then be one
         contiguous stretch of a log.
+    inertia : ModelInertia, optional
+        The inertia the rows hold with the observer's lag taken out
+        (:func:`edm_sym.engines.symbolic.inertia.model_inertia`). Above the
+        threshold, and unless the acceleration terms named row by row add up
+        to it (within 25 %), it replaces them as one ``acceleration`` term on
+        the row that holds most of it; the rows that hold a tenth of it or
+        more are flagged ``joint``.
 
     Returns
     -------
@@ -348,7 +362,8 @@ def judge_rows(
                                  axis_units(model.axis).inertia)
         out.append(JudgedRow(j, share, tuple(terms), tuple(flags), rms[j], row_bounds))
     options = classify or ClassifyOptions.for_axis(model.axis)
-    return _joint_spatial(model, _joint(model, out, options), options)
+    out = _joint_spatial(model, _joint(model, out, options), options)
+    return _joint_inertia(model, out, inertia, ref if measured else 0.0, opts)
 
 
 #: Coulomb or viscous values named one by one may differ this much from the sum's.
@@ -467,6 +482,50 @@ def _unsupported(t: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None,
     if fit is None:
         return None
     return fit[1], what.format(c=fit[0]) + f", R^2 {fit[2]:.3g})"
+
+
+#: Acceleration terms named row by row stand when they add up to the model's inertia this closely.
+_INERTIA_AGREE = 0.25
+#: A row holds a part of the model's inertia worth naming when it is this share of it or more.
+_INERTIA_HOLDS = 0.1
+
+
+def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelInertia | None,
+                   ref: float, opts: SignificanceOptions) -> tuple[JudgedRow, ...]:
+    """Name the inertia the rows hold together, where the row-by-row names miss it."""
+    if mi is None or not ref > 0 or mi.rms / ref < opts.threshold:
+        return tuple(judged)
+    named = [(j, jt) for j, jr in enumerate(judged) for jt in jr.terms
+             if jt.term.kind == "acceleration"]
+    total = sum(float(jt.term.parameters["inertia"][0]) for _, jt in named)
+    if named and abs(total - mi.inertia) <= _INERTIA_AGREE * abs(mi.inertia):
+        return tuple(judged)
+    holders = [j for j, c in enumerate(mi.rows) if abs(c) >= _INERTIA_HOLDS * abs(mi.inertia)]
+    lead = max(range(len(mi.rows)), key=lambda j: (abs(mi.rows[j]) * (mi.rows[j] * mi.inertia > 0),
+                                                   -j))
+    where = sorted({*holders, *(j for j, _ in named), lead})
+    if any(judged[j].bounds for j in where):
+        return tuple(judged)  # a limit of the search is no estimate (as row by row)
+    U = axis_units(model.axis)
+    parts = ", ".join(f"row {j + 1} {mi.rows[j]:.3g}" for j in sorted(holders))
+    how = (f"the rows' outputs with the observer's lag taken out (y + y'/g, g = "
+           f"{mi.bandwidth:.4g} rad/s) regressed on sgn(v), v, a and 1 over the data; "
+           f"held by {parts} {U.inertia}")
+    term = PhysicalTerm("acceleration", {"inertia": (mi.inertia, U.inertia),
+                                         "observer_bandwidth": (mi.bandwidth, "rad/s")},
+                        f"acceleration-dependent term: equivalent inertia {mi.inertia:.6g} "
+                        f"{U.inertia} ({how})")
+    out = list(judged)
+    for j in where:
+        jr = judged[j]
+        keep = [jt for jt in jr.terms if jt.term.kind != "acceleration"]
+        if j == lead:
+            keep.append(JudgedTerm(term))
+        msg = (f"the model's inertia, {mi.inertia:.4g} {U.inertia}, is named as a whole: "
+               f"this row holds {mi.rows[j]:.3g} {U.inertia} of it"
+               + (" (named here)" if j == lead else f" (named in row {lead + 1})"))
+        out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
+    return tuple(out)
 
 
 def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,

@@ -14,6 +14,7 @@ from typing import Any
 from edm_sym.core.bounds import bound_flags
 from edm_sym.engines.description import classify_on
 from edm_sym.engines.symbolic.classify import ClassifyOptions
+from edm_sym.engines.symbolic.inertia import rows_inertia
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.engines.symbolic.significance import JudgedRow, judge_rows
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
@@ -48,7 +49,9 @@ def judge_report_rows(model: SymbolicModel, runs: Sequence[LogRun],
     run = runs[-1]
     inputs = (None if run.inputs is None
               else [run.inputs[row.input] for row in model.compensator.matrix.rows])
-    return judge_rows(model, run.rows, run.target, inputs, classify=classify)
+    inertia = None if inputs is None else rows_inertia(
+        [row.role for row in model.rows], run.rows, inputs, run.ts, run.observer_bandwidth)
+    return judge_rows(model, run.rows, run.target, inputs, classify=classify, inertia=inertia)
 
 
 def row_flags(p: EdmLatexPrinter, judged: JudgedRow) -> list[str]:

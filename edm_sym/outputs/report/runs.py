@@ -66,6 +66,8 @@ class LogRun:
         The LuGre model's torque on this log and its RMSE, when a LuGre result is given.
     inputs : numpy.ndarray or None
         Shape (n_inputs, N): the compensator's inputs on this log, in the result's order.
+    observer_bandwidth : float or None
+        The log's scalar ``observer_bandwidth`` [rad/s] (docs/describe.md#honest-names).
     """
 
     label: str
@@ -81,6 +83,7 @@ class LogRun:
     lugre: np.ndarray | None = None
     lugre_rmse: float | None = None
     inputs: np.ndarray | None = None
+    observer_bandwidth: float | None = None
 
     @property
     def residual(self) -> np.ndarray:
@@ -155,7 +158,8 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
     contrib = contributions(result, data, target)
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
                   sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse,
-                  data.stack(result.compensator.matrix.inputs))
+                  data.stack(result.compensator.matrix.inputs),
+                  data.scalars.get("observer_bandwidth"))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,83 @@
+"""The inertia a model holds, with the observer's lag taken out (edm_sym.engines.symbolic.inertia)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import smooth_signal
+from scipy import signal
+
+import edm_sym
+from edm_sym.engines.sources import load_data
+from edm_sym.engines.symbolic.inertia import model_inertia, motion_signals
+
+ROOT = Path(__file__).resolve().parents[1]
+TS = 1e-3
+G = 200.0  # the observer's bandwidth [rad/s]
+
+
+def _lagged(x: np.ndarray) -> np.ndarray:
+    """``g/(s+g) x``: what the observer makes of ``x`` (Tustin: no extra half-sample delay)."""
+    b, a, _ = signal.cont2discrete(([G], [1.0, G]), TS, method="bilinear")
+    return signal.lfilter(b.ravel(), a, x)
+
+
+@pytest.fixture(scope="module")
+def motion() -> tuple[np.ndarray, np.ndarray]:
+    omega = 20 * smooth_signal(20000, TS, seed=5)
+    return omega, np.gradient(omega, TS)
+
+
+def test_the_lag_is_taken_out_before_the_inertia_is_read(motion) -> None:  # noqa: ANN001
+    v, a = motion
+    friction = 0.4 * np.sign(v) + 0.01 * v
+    # Two rows as the search writes them: the friction and the inertia error, lagged
+    # by the observer, split between them in no physical way.
+    j = 1.5e-4
+    total = _lagged(friction + j * a)
+    rows = np.stack([0.7 * total, 0.3 * total])
+    mi = model_inertia(rows, v, a, TS, G)
+    assert mi.inertia == pytest.approx(j, rel=0.03)
+    assert sum(mi.rows) == pytest.approx(mi.inertia)
+    assert mi.rows[0] == pytest.approx(0.7 * mi.inertia)
+    assert mi.rms == pytest.approx(abs(mi.inertia) * np.sqrt(np.mean(a * a)))
+    # Read without taking the lag out, the friction's lag is a (negative) inertia.
+    raw = model_inertia(rows, v, a, TS, 1e12)
+    assert raw.inertia < 0.7 * j
+
+
+def test_a_lagged_friction_holds_no_inertia(motion) -> None:  # noqa: ANN001
+    v, a = motion
+    rows = _lagged(0.4 * np.sign(v) + 0.01 * v)[None, :]
+    mi = model_inertia(rows, v, a, TS, G)
+    raw = model_inertia(rows, v, a, TS, 1e12)
+    assert abs(mi.inertia) < 0.1 * abs(raw.inertia)
+
+
+def test_motion_signals_from_the_inputs_a_model_has(motion) -> None:  # noqa: ANN001
+    v, a = motion
+    theta = np.cumsum(v) * TS
+    got = motion_signals([theta], ["angle"], TS)
+    np.testing.assert_allclose(got[0][2:-2], np.gradient(theta, TS)[2:-2])
+    assert motion_signals([v, a], ["velocity", "acceleration"], TS)[1] is a
+    assert motion_signals([np.mod(theta, 6.28)], ["angle_wrapped"], TS) is None
+
+
+def test_describe_names_the_inertia_only_with_the_bandwidth() -> None:
+    # The shipped example's viscous row holds the auger plant's inertia error in its
+    # filters. A plant: log records the observer's bandwidth; a log without it is
+    # described row by row, and --observer-bandwidth supplies it.
+    result = ROOT / "examples" / "auger" / "result.json"
+    log = load_data("plant:auger/evaluation")
+    assert log.scalars["observer_bandwidth"] == 150.0
+    bare = dataclasses.replace(log, scalars={})
+    kinds = lambda d: [[t.term.kind for t in r.terms] for r in d.rows]  # noqa: E731
+    assert kinds(edm_sym.describe(result, bare))[1] == ["viscous"]
+    given = edm_sym.describe(result, bare, observer_bandwidth=150.0)
+    assert kinds(given)[1] == ["viscous", "acceleration"]
+    assert kinds(given) == kinds(edm_sym.describe(result, log))
+    flags = [f.code for f in given.rows[1].flags]
+    assert "joint" in flags
