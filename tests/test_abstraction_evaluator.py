@@ -226,3 +226,27 @@ def test_cache_mb_bounds_the_stores_of_every_process(signals, cache_mb: float) -
         assert len(own) <= own.slots and len(pool) <= pool.slots
         if cache_mb == 4.0:  # room for all: nothing was simulated twice
             assert ev.stats.rows_simulated <= 6 * 24 * 3
+
+
+def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
+    # With the forked pool the prefixes are shared like the rows: a row that differs
+    # from a simulated one only in its last parameter starts from the same prefix as
+    # in one process, whichever lane simulated the first one.
+    x, y = signals
+    ops = Operators(GaSettings(through_rate=0.0), 3)
+    pop = ops.random_population(np.random.default_rng(5), 32, 3, 4)
+    shifted = pop.take(np.arange(32))
+    shifted.ps[:, :, -1] = (shifted.ps[:, :, -1] + 0.37) % 1.0
+    got = {}
+    for workers in (1, 2):
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
+            ev.evaluate(pop.inputs, pop.codes, pop.ps)
+            before = (ev.stats.rows_simulated, ev.stats.elements_simulated)
+            fit = ev.evaluate(shifted.inputs, shifted.codes, shifted.ps)
+            rows = ev.stats.rows_simulated - before[0]
+            elements = ev.stats.elements_simulated - before[1]
+            # Most rows run their last element only (a few start earlier, before a
+            # `through` that stores no prefix).
+            assert rows > 32 and rows <= elements < 1.2 * rows
+            got[workers] = (fit, rows, elements)
+    assert np.array_equal(got[1][0], got[2][0]) and got[1][1:] == got[2][1:]

@@ -3,9 +3,10 @@
 :class:`SlotStore` holds rows in one anonymous memory map of fixed-size slots,
 shared with worker processes forked after it was made: they write simulated
 rows straight into their slots and read any row from it, so no row output is
-ever pickled between processes. A worker without a shared store keeps a
-private one, and every process keeps its row prefixes in another. Its size is
-fixed when it is made (``cache_mb``), so it bounds the memory by construction.
+ever pickled between processes. Row prefixes go into a second such store,
+shared the same way (see :mod:`~edm_sym.engines.abstraction.prefixes`). A
+worker without shared stores keeps private ones. A store's size is fixed
+when it is made (``cache_mb``), so it bounds the memory by construction.
 """
 
 from __future__ import annotations
@@ -84,6 +85,18 @@ class SlotStore:
                 raise RuntimeError(f"row store of {self.slots} slots is too small for a "
                                    f"batch of {count} new rows")
         return out
+
+    def place(self, keys: Collection[bytes], keep: Collection[bytes]) -> list[int]:
+        """Slots for the new rows ``keys`` (see :meth:`allocate`); :meth:`commit` each once written."""
+        return self.allocate(len(keys), keep)
+
+    def storing(self, keys: Collection[bytes]) -> bool:
+        """Whether new rows ``keys`` get slots: always (the store makes room)."""
+        return True
+
+    def release(self, slots: Collection[int]) -> None:
+        """Give back slots allocated but never committed."""
+        self._free.extend(int(s) for s in slots)
 
     def commit(self, key: bytes, slot: int) -> np.ndarray:
         """Record that ``slot`` holds the row of ``key``; return its view."""

@@ -60,6 +60,7 @@ from edm_sym.engines.abstraction.lanes import (
     dask_lanes,
 )
 from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
+from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
 from edm_sym.engines.abstraction.rowsim import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
@@ -84,6 +85,9 @@ __all__ = ["EvalStats", "Evaluator", "row_table"]
 class EvalStats:
     """Counters of an evaluator (for progress lines and benchmarks).
 
+    ``elements_simulated`` counts elements run over the signal (a row that
+    starts from a stored prefix runs only its other elements),
+    ``element_samples`` the rows simulated times their elements and samples.
     ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
     (simulation and scoring, in whichever process), ``sim_seconds`` and
     ``task_seconds`` the time the workers spent simulating rows and running
@@ -95,6 +99,7 @@ class EvalStats:
     row_requests: int = 0
     rows_missed: int = 0
     rows_simulated: int = 0
+    elements_simulated: int = 0
     element_samples: int = 0
     sim_seconds: float = 0.0
     task_seconds: float = 0.0
@@ -176,12 +181,15 @@ class Evaluator:
         self.shared = (executor is None and client is None and self.workers > 1
                        and "fork" in multiprocessing.get_all_start_methods())
         self.store: SlotStore | None = None
+        self.prefixes: SlotStore | None = None
         if self.shared:
             slots = max(cache_bytes // (8 * n), 2 * max_batch_rows + 16)
             self.store = SlotStore(slots, n)
-        # Made before any fork, so forked workers inherit it (and the store).
+            self.prefixes = SlotStore(max(self.ctx.prefix_bytes // (8 * n), 8), n)
+        # Made before any fork, so forked workers inherit it (and the stores).
         self._local = worker_for(self._token, ctx=self.ctx,
-                                 rows=self.store.rows if self.shared else None)
+                                 rows=self.store.rows if self.shared else None,
+                                 prefix_rows=self.prefixes.rows if self.shared else None)
         self.lanes: list = [LocalLane()]
         self._pools: list[ProcessPoolExecutor] = []
         self._started = False
@@ -417,7 +425,7 @@ class Evaluator:
                         ) else list(range(len(self.lanes)))
         if lanes == [0] and not self.lanes[0].local:
             lanes = []  # no local lane among a client's or an executor's: run here
-        slots = missing = None
+        slots = missing = plan = None
         if self.shared:
             slots = np.empty(len(keys), dtype=np.int64)
             missing = np.zeros(len(keys), dtype=bool)
@@ -432,7 +440,8 @@ class Evaluator:
                 fresh = self.store.allocate(len(miss), set(keys))
                 slots[miss] = fresh
                 missing[miss] = True
-        parts = self._partition(keys, members, missing, lanes)
+            plan = plan_prefixes(self.prefixes, table, missing)
+        parts = self._partition(keys, members, missing, lanes, plan)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         results: list[tuple[list[int], ChunkResult]] = []
@@ -440,7 +449,7 @@ class Evaluator:
         for lane, idx in parts:
             if not idx:
                 continue
-            chunk, lines = self._chunk(table, members, score, free, slots, missing, idx)
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
             pending.append((lane, idx, lines, chunk))
         if not lanes:
             for _, idx, lines, chunk in pending:
@@ -457,6 +466,8 @@ class Evaluator:
         if self.shared and missing is not None:
             for r in np.flatnonzero(missing):
                 self.store.commit(keys[r], int(slots[r]))
+            plan.commit(self.prefixes, [res.prefixes for _, _, res in results
+                                        if res.prefixes is not None])
         if local:
             _, lines, res = results[0]
             store = self.store.rows if self.shared else self._local.own.rows
@@ -466,19 +477,22 @@ class Evaluator:
         return fitness, scales, rows
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
-               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None, idx: list[int]
-               ) -> tuple[Chunk, list[int]]:
+               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None,
+               plan: PrefixPlan | None, idx: list[int]) -> tuple[Chunk, list[int]]:
         """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
         sub = members[idx]
         lines, inverse = np.unique(sub.reshape(-1), return_inverse=True)
         chunk = Chunk(table[lines], inverse.reshape(sub.shape).astype(np.int64), score[idx],
                       None if free is None else free[idx],
                       None if slots is None else slots[lines],
-                      None if missing is None else missing[lines])
+                      None if missing is None else missing[lines],
+                      None if plan is None else plan.start[lines],
+                      None if plan is None else plan.slots[lines])
         return chunk, lines.tolist()
 
     def _partition(self, keys: list[bytes], members: np.ndarray, missing: np.ndarray | None,
-                   lanes: list[int]) -> list[tuple[int, list[int]]]:
+                   lanes: list[int], plan: PrefixPlan | None = None
+                   ) -> list[tuple[int, list[int]]]:
         """Individuals per lane. Changes speed only, never a result.
 
         With a shared store, individuals that need the same new row go to one
@@ -501,10 +515,15 @@ class Evaluator:
 
             owner: dict[int, int] = {}
             for i in range(count):
-                for r in members[i]:
+                for r in members[i].tolist():
                     if missing[r]:
-                        j = owner.setdefault(int(r), i)
+                        j = owner.setdefault(r, i)
                         parent[find(i)] = find(j)
+                        # A new prefix is made once too: its rows' individuals go together.
+                        for s in plan.slots[r, plan.start[r] + 1:].tolist():
+                            if s >= 0:
+                                j = owner.setdefault(-1 - s, i)
+                                parent[find(i)] = find(j)
             groups: dict[int, list[int]] = {}
             for i in range(count):
                 groups.setdefault(find(i), []).append(i)
@@ -583,6 +602,7 @@ class Evaluator:
         st = self.stats
         st.rows_missed += res.simulated
         st.rows_simulated += res.simulated
+        st.elements_simulated += res.elements
         st.element_samples += res.simulated * n * self.n_samples
         st.sim_seconds += res.sim_seconds
         st.task_seconds += res.seconds

@@ -39,6 +39,7 @@ from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.polish import row_scales
+from edm_sym.engines.abstraction.prefixes import ChunkPrefixes, prefix_key
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
@@ -119,6 +120,10 @@ class Chunk:
     simulate : numpy.ndarray or None
         Shape (R,) bool, with ``slots``: the rows this task must simulate
         into their slots (the others are there already).
+    prefix_start, prefix_slots : numpy.ndarray or None
+        With a shared prefix store: the table's lines of the batch's
+        :class:`~edm_sym.engines.abstraction.prefixes.PrefixPlan` (where each
+        row starts, where its new prefixes go).
     """
 
     table: np.ndarray
@@ -127,6 +132,8 @@ class Chunk:
     free: np.ndarray | None = None
     slots: np.ndarray | None = None
     simulate: np.ndarray | None = None
+    prefix_start: np.ndarray | None = None
+    prefix_slots: np.ndarray | None = None
 
 
 @dataclass
@@ -152,6 +159,10 @@ class ChunkResult:
         The process that ran it.
     peak_rss : int
         That process's peak resident memory [bytes] (0 where unknown).
+    elements : int
+        Elements run over the signal (a row from a stored prefix runs only the rest).
+    prefixes : numpy.ndarray or None
+        With a shared prefix store: the slots of the new prefixes written.
     """
 
     fitness: np.ndarray
@@ -162,6 +173,8 @@ class ChunkResult:
     seconds: float
     pid: int
     peak_rss: int
+    elements: int = 0
+    prefixes: np.ndarray | None = None
 
 
 @dataclass
@@ -170,8 +183,10 @@ class Worker:
 
     ``rows`` is the shared store's rows when the main process manages the
     slots; otherwise the worker keeps its own :class:`SlotStore` (``own``).
-    Row prefixes go into a store of this process (:meth:`prefix_store`),
-    slots reused in place, so simulating a row allocates no memory.
+    Row prefixes go into the shared prefix store (``prefix_rows``, its slots
+    planned by the main process) or into a store of this process
+    (:meth:`prefix_store`); slots are reused in place, so simulating a row
+    allocates no memory.
     ``trig`` holds sin and cos of each input signal: a sine element reading an
     input directly (the paper's position-dependent friction; its class
     declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
@@ -194,6 +209,7 @@ class Worker:
     pool: SlotStore | None = field(default=None)
     work: np.ndarray | None = field(default=None)
     pool_pid: int = field(default=0)
+    prefix_rows: np.ndarray | None = field(default=None)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -258,7 +274,8 @@ _LOCK = threading.Lock()  # executors may run tasks in threads (dask, thread poo
 
 
 def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = None,
-               rows: np.ndarray | None = None) -> Worker | None:
+               rows: np.ndarray | None = None, prefix_rows: np.ndarray | None = None
+               ) -> Worker | None:
     """This process's :class:`Worker` of run ``token`` (made from ``ctx`` or ``blob``).
 
     None when it has none and neither ``ctx`` nor ``blob`` is given.
@@ -272,7 +289,7 @@ def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = N
             if blob is None:
                 return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        hit = Worker(ctx, ctx.decoder(), rows)
+        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows)
         _WORKERS[token] = hit
         while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)
@@ -283,11 +300,6 @@ def forget(token: str) -> None:
     """Drop this process's state of run ``token``."""
     with _LOCK:
         _WORKERS.pop(token, None)
-
-
-def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
-    """Key of the first ``k`` elements of a gene-table line (the row key of that prefix)."""
-    return line[:1 + k].tobytes() + line[1 + n:1 + n + k].tobytes()
 
 
 def simulate_table(worker: Worker, table: np.ndarray,
@@ -326,11 +338,13 @@ def simulate_table(worker: Worker, table: np.ndarray,
 BATCH_ROWS = 64
 
 
-def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np.ndarray) -> None:
+def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np.ndarray,
+                  pool: SlotStore | ChunkPrefixes | None = None) -> int:
     """Simulate the rows of a canonical gene table into ``store[dest[r]]``.
 
-    Each row starts from the longest prefix found in the worker's prefix
-    store; each prefix it computes goes into that store. With numba the row
+    Each row starts from the longest prefix found in the prefix store
+    (``pool``, default the worker's own); each prefix it computes goes into
+    that store, when the store has room for all of them. With numba the row
     kernel runs the rows in batches (:func:`edm_sym.engines.kernel.run_rows`,
     writing the prefixes straight into their slots); a row whose longest
     prefix another row of the batch computes waits for the next batch, so it
@@ -347,13 +361,20 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
         Shape (S, N): row r's output goes to ``store[dest[r]]``.
     dest : numpy.ndarray
         int64, shape (R,), distinct.
+    pool : SlotStore or ChunkPrefixes, optional
+        The prefix store (default: :meth:`Worker.prefix_store`).
+
+    Returns
+    -------
+    int
+        Elements run over the signal.
     """
+    if pool is None:
+        pool = worker.prefix_store()
     if not worker.use_kernel:
-        for r, line in enumerate(table):
-            _simulate_reference(worker, line, store[dest[r]])
-        return
+        return sum(_simulate_reference(worker, pool, line, store[dest[r]])
+                   for r, line in enumerate(table))
     ctx, decoder = worker.ctx, worker.decoder
-    pool = worker.prefix_store()
     n = (table.shape[1] - 1) // 2
     sources = ctx.inputs
     if not (sources.flags.c_contiguous and sources.dtype == np.float64):
@@ -361,6 +382,7 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
     # A batch's prefixes all need a slot at once: at most half the prefix store.
     cap = max(1, min(BATCH_ROWS, pool.slots // (2 * max(1, n - 1))))
     todo = list(range(len(table)))
+    elements = 0
     while todo:
         batch, later, produced, used = [], [], set(), set()
         for r in todo:
@@ -395,20 +417,27 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
                     keep = begin if n > 1 else None
                     continue
                 stages.append(worker.stage(code, p))
-            program, stored = kernel.compile_steps(stages, store=True)
-            batch.append((r, line, program, stored, start, begin, keep))
-            produced.update(prefix_key(line, n, k) for k in range(found + 1, n))
-        _run_batch(worker, pool, batch, n, store, dest, sources, used)
+            new = [prefix_key(line, n, k) for k in range(found + 1, n)]
+            storing = pool.storing(new)
+            program, stored = kernel.compile_steps(stages, store=storing)
+            batch.append((r, line, program, stored, start, begin, keep if storing else None))
+            elements += n - found
+            if storing:
+                produced.update(new)
+        _run_batch(pool, batch, n, store, dest, sources, used)
         todo = later
+    return elements
 
 
-def _run_batch(worker: Worker, pool: SlotStore, batch: list, n: int, store: np.ndarray,
+def _run_batch(pool: SlotStore | ChunkPrefixes, batch: list, n: int, store: np.ndarray,
                dest: np.ndarray, sources: np.ndarray, used: set[bytes]) -> None:
     """Run a batch of rows in the kernel; record their prefixes.
 
     The prefixes rows start from (``used``) keep their slots during the batch.
     """
-    slots = pool.allocate(sum(len(b[3]) for b in batch), used)
+    keys = [prefix_key(line, n, start + count)
+            for _, line, _, stored, start, _, _ in batch for count in stored]
+    slots = pool.place(keys, used)
     row_slots, at = [], 0
     for b in batch:
         row_slots.append(slots[at:at + len(b[3])])
@@ -416,17 +445,20 @@ def _run_batch(worker: Worker, pool: SlotStore, batch: list, n: int, store: np.n
     kernel.run_rows([b[2] for b in batch], [b[5] for b in batch], store,
                     np.array([dest[b[0]] for b in batch], dtype=np.int64), pool.rows, row_slots,
                     sources=sources)
-    for (_, line, _, stored, start, _, keep), mine in zip(batch, row_slots, strict=True):
-        for slot, count in zip(mine, stored, strict=True):
-            pool.commit(prefix_key(line, n, start + count), slot)
+    for key, slot in zip(keys, slots, strict=True):
+        pool.commit(key, slot)
+    for _, line, _, _, _, _, keep in batch:
         if keep is not None:
             _keep(pool, prefix_key(line, n, 1), keep)
 
 
-def _simulate_reference(worker: Worker, line: np.ndarray, out: np.ndarray) -> None:
-    """One row with the realisations, from its longest stored prefix (storing the others)."""
+def _simulate_reference(worker: Worker, pool: SlotStore | ChunkPrefixes, line: np.ndarray,
+                        out: np.ndarray) -> int:
+    """One row with the realisations, from its longest stored prefix (storing the others).
+
+    Returns the number of elements run.
+    """
     ctx, decoder = worker.ctx, worker.decoder
-    pool = worker.prefix_store()
     n = (line.shape[0] - 1) // 2
     y, start = None, 0
     for k in range(n - 1, 0, -1):
@@ -449,12 +481,13 @@ def _simulate_reference(worker: Worker, line: np.ndarray, out: np.ndarray) -> No
         if i + 1 < n:
             _keep(pool, prefix_key(line, n, i + 1), y)
     out[:] = y
+    return n - start
 
 
-def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
-    """Copy a prefix into the pool (unless it is there)."""
-    if pool.lookup(key) is None:
-        slot = pool.allocate(1, ())[0]
+def _keep(pool: SlotStore | ChunkPrefixes, key: bytes, y: np.ndarray) -> None:
+    """Copy a prefix into the pool (unless it is there, or the pool has no room planned)."""
+    if pool.lookup(key) is None and pool.storing([key]):
+        slot = pool.place([key], ())[0]
         pool.rows[slot] = y
         pool.commit(key, slot)
 
@@ -508,9 +541,16 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
             for r, slot in zip(todo_list, fresh, strict=True):
                 slots[r] = slot
         store_rows, todo = store.rows, np.array(todo_list, dtype=np.intp)
+    elements, written = 0, None
     if len(todo):
         s0 = time.perf_counter()
-        simulate_into(worker, table[todo], store_rows, slots[todo])
+        pool = None
+        if chunk.prefix_start is not None:
+            pool = ChunkPrefixes(worker.prefix_rows, table[todo], chunk.prefix_start[todo],
+                                 chunk.prefix_slots[todo], worker.prefix_rows.shape[0])
+        elements = simulate_into(worker, table[todo], store_rows, slots[todo], pool)
+        if pool is not None:
+            written = np.array(pool.written, dtype=np.int64)
         sim_seconds, simulated = time.perf_counter() - s0, len(todo)
         if chunk.slots is None:
             for r in todo:
@@ -527,7 +567,7 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
                              [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
-                       time.perf_counter() - t0, os.getpid(), peak_rss())
+                       time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written)
 
 
 def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,
