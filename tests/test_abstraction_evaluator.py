@@ -250,3 +250,21 @@ def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
             assert rows > 32 and rows <= elements < 1.2 * rows
             got[workers] = (fit, rows, elements)
     assert np.array_equal(got[1][0], got[2][0]) and got[1][1:] == got[2][1:]
+
+
+def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
+    # The local search wants the rows back: with the forked pool they are in the
+    # shared store, so the batch still runs on both lanes, with the same bits.
+    x, y = signals
+    pop = _population(7, p=16)
+    got = {}
+    for workers in (1, 2):
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
+            rows: list = []
+            fit = ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+            got[workers] = (fit, [[np.array(r) for r in outs] for _, outs in rows])
+            pids = set(ev.stats.peak_rss)
+        assert len(pids) == workers
+    assert np.array_equal(got[1][0], got[2][0])
+    for a, b in zip(got[1][1], got[2][1], strict=True):
+        assert all(np.array_equal(u, v, equal_nan=True) for u, v in zip(a, b, strict=True))

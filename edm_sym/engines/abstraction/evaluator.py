@@ -51,6 +51,7 @@ import numpy as np
 
 from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.engines import kernel
+from edm_sym.engines.abstraction.balance import Feeder, by_affinity, group_costs, groups
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
@@ -342,9 +343,9 @@ class Evaluator:
         ps : numpy.ndarray
             Shape (P, m, n) normalised parameters.
         rows_out : list, optional
-            When given, the batch runs in this process and the list is filled
-            with one entry per individual: its m row keys and m row outputs
-            (valid until the next call).
+            When given, the list is filled with one entry per individual: its
+            m row keys and m row outputs (valid until the next call). Without
+            shared stores the batch then runs in this process.
         free : numpy.ndarray, optional
             Shape (P, m) bool: the rows whose scale the gain fit may change
             (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
@@ -363,13 +364,13 @@ class Evaluator:
             self.start()
         p, m, n = codes.shape
         table = row_table(inputs.reshape(-1), codes.reshape(-1, n), ps.reshape(-1, n))
-        keys = [line.tobytes() for line in table]
+        keys = _line_keys(table)
         self.stats.individuals += p
         self.stats.row_requests += p * m
         want_scales = scales_out is not None and free is not None
         out = np.empty(p)
         scales: list = [None] * p
-        ikeys = [b"".join(keys[k * m:(k + 1) * m]) for k in range(p)]
+        ikeys = _line_keys(table.reshape(p, -1))
         need = []
         for k in range(p):
             hit = self._memo.get(ikeys[k])
@@ -381,20 +382,15 @@ class Evaluator:
         send = list(range(p)) if local else need
         if send:
             index: dict[bytes, int] = {}
-            first: list[int] = []
-            members = np.empty((len(send), m), dtype=np.int64)
-            for a, k in enumerate(send):
-                for j in range(m):
-                    key = keys[k * m + j]
-                    at = index.get(key)
-                    if at is None:
-                        at = index[key] = len(first)
-                        first.append(k * m + j)
-                    members[a, j] = at
+            flat = [k * m + j for k in send for j in range(m)]
+            at = [index.setdefault(keys[i], len(index)) for i in flat]
+            members = np.array(at, dtype=np.int64).reshape(len(send), m)
+            first = np.empty(len(index), dtype=np.int64)
+            first[members.reshape(-1)] = flat  # any line of a key: they are equal
             needed = set(need)
             score = np.array([k in needed for k in send], dtype=bool)
             utab = table[first]
-            ukeys = [keys[i] for i in first]
+            ukeys = list(index)
             sub_free = free[send] if want_scales else None
             fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
             if self.reject_poles:
@@ -419,10 +415,15 @@ class Evaluator:
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
                   score: np.ndarray, free: np.ndarray | None, local: bool
                   ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
-        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local)."""
+        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
+
+        With shared stores every lane reads every row, so ``local`` (rows
+        wanted back) does not keep the batch in this process.
+        """
         count = len(members)
-        lanes = [0] if (local or len(self.lanes) == 1 or int(score.sum()) < self.MIN_PARALLEL
-                        ) else list(range(len(self.lanes)))
+        alone = (local and not self.shared) or len(self.lanes) == 1 or (
+            int(score.sum()) < self.MIN_PARALLEL)
+        lanes = [0] if alone else list(range(len(self.lanes)))
         if lanes == [0] and not self.lanes[0].local:
             lanes = []  # no local lane among a client's or an executor's: run here
         slots = missing = plan = None
@@ -441,39 +442,46 @@ class Evaluator:
                 slots[miss] = fresh
                 missing[miss] = True
             plan = plan_prefixes(self.prefixes, table, missing)
-        parts = self._partition(keys, members, missing, lanes, plan)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
-        results: list[tuple[list[int], ChunkResult]] = []
-        pending = []
-        for lane, idx in parts:
-            if not idx:
-                continue
-            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
-            pending.append((lane, idx, lines, chunk))
-        if not lanes:
-            for _, idx, lines, chunk in pending:
-                results.append((idx, lines, run_chunk(self._local, chunk)))
+        if self.shared and len(lanes) > 1:
+            results = self._feed(table, members, score, free, slots, missing, plan, lanes)
         else:
-            results = self._gather(pending)
-        rows = None
+            if len(lanes) > 1:
+                parts = by_affinity(keys, members, lanes, self._mirror,
+                                    max(64, self.ctx.row_bytes // (8 * self.n_samples)))
+            else:
+                parts = [(lanes[0] if lanes else 0, list(range(count)))]
+            pending = []
+            for lane, idx in parts:
+                if idx:
+                    chunk, lines = self._chunk(table, members, score, free, slots, missing, plan,
+                                               idx)
+                    pending.append((lane, idx, lines, chunk))
+            if lanes:
+                results = self._gather(pending)
+            else:
+                results = [(idx, lines, run_chunk(self._local, chunk))
+                           for _, idx, lines, chunk in pending]
         for idx, _lines, res in results:
             for a, i in enumerate(idx):
                 fitness[i] = res.fitness[a]
                 if res.scales is not None:
                     scales[i] = res.scales[a]
             self._account(res, table.shape[1])
-        if self.shared and missing is not None:
+        rows = None
+        if self.shared:
             for r in np.flatnonzero(missing):
                 self.store.commit(keys[r], int(slots[r]))
             plan.commit(self.prefixes, [res.prefixes for _, _, res in results
                                         if res.prefixes is not None])
-        if local:
+            if local:
+                rows = [self.store.rows[s] for s in slots.tolist()]
+        elif local:
             _, lines, res = results[0]
-            store = self.store.rows if self.shared else self._local.own.rows
             rows = [None] * len(keys)
             for line, s in zip(lines, res.slots, strict=True):
-                rows[line] = store[s]
+                rows[line] = self._local.own.rows[s]
         return fitness, scales, rows
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
@@ -490,73 +498,50 @@ class Evaluator:
                       None if plan is None else plan.slots[lines])
         return chunk, lines.tolist()
 
-    def _partition(self, keys: list[bytes], members: np.ndarray, missing: np.ndarray | None,
-                   lanes: list[int], plan: PrefixPlan | None = None
-                   ) -> list[tuple[int, list[int]]]:
-        """Individuals per lane. Changes speed only, never a result.
+    def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
+              free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
+              lanes: list[int]) -> list:
+        """Run a batch on the shared-store lanes, handing out pieces as lanes finish.
 
-        With a shared store, individuals that need the same new row go to one
-        lane (which simulates it), and lanes get about equal work. Otherwise
-        each individual goes to the lane whose store most likely holds most
-        of its rows, unless that lane already has a quarter more than its
-        share.
+        Each pool lane has up to two pieces queued (one runs while the next is
+        on its way); this process runs a piece at a time and hands out more
+        between them. Results come back in no particular order: each piece
+        says which individuals it holds.
         """
-        count = len(members)
-        if len(lanes) <= 1:
-            return [(lanes[0] if lanes else 0, list(range(count)))]
-        if missing is not None:
-            parent = list(range(count))
+        parts = groups(members, plan, missing)
+        feeder = Feeder(parts, group_costs(parts, members, plan, score, free), len(lanes))
+        pool = [lane for lane in lanes if not self.lanes[lane].local]
+        queued: dict[int, list] = {lane: [] for lane in pool}
+        sent: list = []
+        results: list = []
 
-            def find(i: int) -> int:
-                while parent[i] != i:
-                    parent[i] = parent[parent[i]]
-                    i = parent[i]
-                return i
+        def hand_out() -> None:
+            for lane in pool:
+                busy = queued[lane]
+                busy[:] = [f for f in busy if not f.done()]
+                while len(busy) < 2 and feeder:
+                    idx = feeder.take()
+                    chunk, lines = self._chunk(table, members, score, free, slots, missing,
+                                               plan, idx)
+                    wblob = None if self._sent_w[lane] == self._wtoken else self._wblob
+                    future = self.lanes[lane].submit(evaluate_chunk, self._token, None,
+                                                     self._wtoken, wblob, chunk)
+                    self._sent_w[lane] = self._wtoken
+                    busy.append(future)
+                    sent.append((future, idx, lines, chunk))
 
-            owner: dict[int, int] = {}
-            for i in range(count):
-                for r in members[i].tolist():
-                    if missing[r]:
-                        j = owner.setdefault(r, i)
-                        parent[find(i)] = find(j)
-                        # A new prefix is made once too: its rows' individuals go together.
-                        for s in plan.slots[r, plan.start[r] + 1:].tolist():
-                            if s >= 0:
-                                j = owner.setdefault(-1 - s, i)
-                                parent[find(i)] = find(j)
-            groups: dict[int, list[int]] = {}
-            for i in range(count):
-                groups.setdefault(find(i), []).append(i)
-            new = {}
-            for g, idx in groups.items():
-                new[g] = len({int(r) for i in idx for r in members[i] if missing[r]})
-            load = [0.0] * len(lanes)
-            parts: list[list[int]] = [[] for _ in lanes]
-            for g in sorted(groups, key=lambda g: -(3 * new[g] + len(groups[g]))):
-                w = min(range(len(lanes)), key=lambda w: load[w])
-                parts[w].extend(groups[g])
-                load[w] += 3 * new[g] + len(groups[g])
-            return [(lanes[w], sorted(idx)) for w, idx in enumerate(parts)]
-        cap = math.ceil(count * 5 / (4 * len(lanes)))
-        parts = [[] for _ in lanes]
-        limit = max(64, self.ctx.row_bytes // (8 * self.n_samples))
-        for i in range(count):
-            rk = [keys[r] for r in members[i]]
-            best, held = None, -1
-            for w, lane in enumerate(lanes):
-                if len(parts[w]) >= cap:
-                    continue
-                have = sum(k in self._mirror[lane] for k in rk)
-                if have > held or (have == held and len(parts[w]) < len(parts[best])):
-                    best, held = w, have
-            parts[best].append(i)
-            mirror = self._mirror[lanes[best]]
-            for k in rk:
-                mirror[k] = True
-                mirror.move_to_end(k)
-            while len(mirror) > limit:
-                mirror.popitem(last=False)
-        return [(lanes[w], idx) for w, idx in enumerate(parts)]
+        hand_out()
+        while feeder:
+            idx = feeder.take()
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            results.append((idx, lines, run_chunk(self._local, chunk)))
+            hand_out()
+        for future, idx, lines, chunk in sent:
+            res = future.result()
+            if res in (NEED_CONTEXT, NEED_WEIGHTS):  # pragma: no cover (forked with both)
+                res = run_chunk(self._local, chunk)
+            results.append((idx, lines, res))
+        return results
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
@@ -609,6 +594,12 @@ class Evaluator:
         st.tasks += 1
         if res.peak_rss:
             st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
+
+
+def _line_keys(table: np.ndarray) -> list[bytes]:
+    """The bytes of each line of a 2-d float64 array (at once)."""
+    lines = np.ascontiguousarray(table)
+    return lines.view(np.dtype((np.void, lines.shape[1] * 8))).ravel().tolist()
 
 
 def kernel_in_use() -> bool:

@@ -1,0 +1,166 @@
+"""How a batch of individuals is cut among lanes: speed only, never a result.
+
+With the shared stores of the default pool (a row or prefix simulated once
+serves every lane), a batch is cut into *groups*: individuals that need the
+same new row, or whose new rows make the same new prefix, form one group, so
+no row or prefix is computed by two lanes (:func:`groups`). Each group gets
+an estimated cost (:func:`group_costs`: the elements its new rows run, and
+the scoring of its individuals), and a :class:`Feeder` hands the groups out
+in pieces, largest groups first, each piece about the not yet handed out
+cost over twice the number of lanes: the lanes take pieces as they finish
+(the main process between its own pieces), so they end at about the same
+time whatever the estimate's error.
+
+Without shared stores (a dask cluster, an executor), each worker keeps its
+own, so an individual goes to the lane whose store most likely holds its
+rows (:func:`by_affinity`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from collections.abc import Sequence
+
+import numpy as np
+
+from edm_sym.engines.abstraction.prefixes import PrefixPlan
+
+#: Estimated cost of scoring one row of an individual (eq. 8), in elements run.
+SCORE_COST = 0.1
+#: Estimated cost of the gain fit of one individual per row (inner products, least squares).
+FIT_COST = 0.3
+
+
+def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[list[int]]:
+    """Individuals that must run in one chunk: they share a new row or a new prefix.
+
+    Parameters
+    ----------
+    members : numpy.ndarray
+        Shape (P, m): each individual's rows, as lines of the batch's table.
+    plan : PrefixPlan
+        The batch's prefix plan (its new prefixes' slots).
+    missing : numpy.ndarray
+        Shape (R,) bool: the lines to simulate.
+
+    Returns
+    -------
+    list of list of int
+        The groups, each sorted, in the order of their first individual.
+    """
+    count = len(members)
+    parent = list(range(count))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner: dict[int, int] = {}
+    new = np.flatnonzero(missing)
+    made = {int(r): [s for s in plan.slots[r, plan.start[r] + 1:].tolist() if s >= 0]
+            for r in new.tolist()}
+    for i, row in enumerate(members.tolist()):
+        for r in row:
+            mine = made.get(r)
+            if mine is None:
+                continue
+            for token in (r, *(-1 - s for s in mine)):
+                j = owner.setdefault(token, i)
+                if j != i:
+                    parent[find(i)] = find(j)
+    out: dict[int, list[int]] = {}
+    for i in range(count):
+        out.setdefault(find(i), []).append(i)
+    return list(out.values())
+
+
+def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: PrefixPlan,
+                score: np.ndarray, free: np.ndarray | None) -> np.ndarray:
+    """Estimated cost of each group, in elements run over the signal.
+
+    A new row costs the elements it runs (from its longest stored prefix);
+    a scored individual :data:`SCORE_COST` per row, and with the gain fit
+    :data:`FIT_COST` per row more.
+    """
+    m = members.shape[1]
+    per = np.where(score, SCORE_COST * m, 0.0)
+    if free is not None:
+        per = per + np.where(score & free.any(axis=1), FIT_COST * m, 0.0)
+    out = np.empty(len(parts))
+    for g, idx in enumerate(parts):
+        rows = np.unique(members[idx])
+        out[g] = float(plan.cost[rows].sum()) + float(per[idx].sum())
+    return out
+
+
+class Feeder:
+    """Hands out groups in pieces, largest first, each about the rest over ``2 * lanes``.
+
+    Parameters
+    ----------
+    parts : sequence of list of int
+        The groups.
+    costs : numpy.ndarray
+        Their estimated costs.
+    lanes : int
+        Lanes that share the batch.
+    """
+
+    def __init__(self, parts: Sequence[list[int]], costs: np.ndarray, lanes: int):
+        order = np.argsort(-costs, kind="stable")
+        self._parts = [parts[g] for g in order]
+        self._costs = costs[order].tolist()
+        self._at = 0
+        self.remaining = float(costs.sum())
+        self._lanes = max(1, lanes)
+        # The last pieces: small, so the lanes end together, but not so small
+        # that a piece costs less than sending it.
+        self._least = self.remaining / (8 * self._lanes)
+
+    def __bool__(self) -> bool:
+        return self._at < len(self._parts)
+
+    def take(self) -> list[int]:
+        """The next piece: individuals of whole groups (sorted)."""
+        want = max(self.remaining / (2 * self._lanes), self._least)
+        idx: list[int] = []
+        got = 0.0
+        while self._at < len(self._parts) and (not idx or got + self._costs[self._at] <= want):
+            idx.extend(self._parts[self._at])
+            got += self._costs[self._at]
+            self._at += 1
+        self.remaining -= got
+        return sorted(idx)
+
+
+def by_affinity(keys: Sequence[bytes], members: np.ndarray, lanes: Sequence[int],
+                mirrors: Sequence[OrderedDict], limit: int) -> list[tuple[int, list[int]]]:
+    """Individuals per lane when each lane keeps its own store.
+
+    Each individual goes to the lane whose store most likely holds most of
+    its rows (``mirrors``: per lane, the row keys sent to it lately, at most
+    ``limit``), unless that lane already has a quarter more than its share.
+    """
+    count = len(members)
+    cap = math.ceil(count * 5 / (4 * len(lanes)))
+    parts: list[list[int]] = [[] for _ in lanes]
+    for i in range(count):
+        rk = [keys[r] for r in members[i]]
+        best, held = None, -1
+        for w, lane in enumerate(lanes):
+            if len(parts[w]) >= cap:
+                continue
+            have = sum(k in mirrors[lane] for k in rk)
+            if have > held or (have == held and len(parts[w]) < len(parts[best])):
+                best, held = w, have
+        parts[best].append(i)
+        mirror = mirrors[lanes[best]]
+        for k in rk:
+            mirror[k] = True
+            mirror.move_to_end(k)
+        while len(mirror) > limit:
+            mirror.popitem(last=False)
+    return [(lanes[w], idx) for w, idx in enumerate(parts)]
