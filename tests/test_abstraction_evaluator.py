@@ -16,7 +16,8 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
+from edm_sym.engines.abstraction.rows import simulate_table
+from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
 

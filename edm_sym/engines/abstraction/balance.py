@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -134,6 +135,66 @@ class Feeder:
             self._at += 1
         self.remaining -= got
         return sorted(idx)
+
+
+def feed(feeder: Feeder, remote: Sequence[int], here: bool,
+         send: Callable[[int, list[int]], Any], receive: Callable[[int, list[int], Any], Any],
+         run: Callable[[list[int]], Any]) -> list:
+    """Run a batch's pieces on the lanes, handing them out as the lanes finish.
+
+    Each remote lane (a pool process, a dask worker) has up to two pieces
+    queued, so one runs while the next is on its way. When this process is
+    a lane too (``here``), it runs a piece at a time and hands out more
+    between them; else it waits for the oldest piece sent.
+
+    Parameters
+    ----------
+    feeder : Feeder
+        The batch's groups.
+    remote : sequence of int
+        The remote lanes.
+    here : bool
+        Whether this process runs pieces too.
+    send : callable
+        ``send(lane, idx)``: submit piece ``idx`` to a remote lane; a future.
+    receive : callable
+        ``receive(lane, idx, future)``: the piece's result, once it is done.
+    run : callable
+        ``run(idx)``: run a piece in this process; its result.
+
+    Returns
+    -------
+    list
+        The results, in no particular order.
+    """
+    queued = dict.fromkeys(remote, 0)
+    sent: list = []
+    results: list = []
+
+    def hand_out() -> None:
+        for lane in remote:
+            while queued[lane] < 2 and feeder:
+                idx = feeder.take()
+                sent.append((lane, idx, send(lane, idx)))
+                queued[lane] += 1
+
+    def collect(at: int) -> None:
+        lane, idx, future = sent.pop(at)
+        queued[lane] -= 1
+        results.append(receive(lane, idx, future))
+
+    hand_out()
+    while feeder:
+        if here:
+            results.append(run(feeder.take()))
+            for at in [a for a, (_, _, f) in enumerate(sent) if f.done()][::-1]:
+                collect(at)
+        else:
+            collect(0)
+        hand_out()
+    while sent:
+        collect(0)
+    return results
 
 
 def by_affinity(keys: Sequence[bytes], members: np.ndarray, lanes: Sequence[int],

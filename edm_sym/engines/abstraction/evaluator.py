@@ -7,7 +7,7 @@ simulates the rows no earlier generation has left in a store, and an
 individual seen before (an elite) is not evaluated again until the weighting
 changes.
 
-A batch of individuals is cut into one chunk per lane
+A batch of individuals is cut into chunks for the lanes
 (:mod:`edm_sym.engines.abstraction.lanes`); a worker simulates the rows it
 lacks and sends back a few numbers per individual (eq. 8 and, for the gain
 fit, the least-squares scales of its rows), never a row. The run's data
@@ -15,23 +15,23 @@ goes to each worker once, the weighting once per step.
 
 Where the rows are simulated and kept:
 
-* ``workers=1``: in this process, in its own row store.
+* ``workers=1``: in this process, in its own stores.
 * default (``executor=None``, ``workers=W > 1``): this process and W - 1
-  single-process pools forked after one shared memory map of row slots was
-  made. This process manages the slots; a worker writes the rows it
-  simulates into theirs and reads any row from the map, so a row simulated
-  once serves every worker.
-* ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker;
-  each keeps its own row store, and individuals go to the worker that holds
-  most of their rows.
+  single-process pools forked after two shared memory maps of slots (rows,
+  row prefixes) were made. This process manages the slots; a worker writes
+  the rows and prefixes it simulates into theirs and reads any from the
+  maps, so a row or prefix simulated once serves every worker. The batch
+  goes out in pieces as the lanes finish (:mod:`~edm_sym.engines.abstraction.balance`).
+* ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker.
+  Workers on this machine open the same two maps (named, in ``/dev/shm``) and
+  run as the pool does; otherwise each keeps its own stores, and individuals
+  go to the worker that holds most of their rows.
 * ``executor=`` (any :class:`~concurrent.futures.Executor`): ``workers``
-  unpinned lanes with the same protocol.
+  unpinned lanes with their own stores.
 
-Results are gathered in submission order and are pure functions of the
-genes, so a run's outcome never depends on the number of workers or on which
-task finishes first.
+Results are pure functions of the genes, gathered by individual, so a run's
+outcome never depends on the number of workers or on which task finishes first.
 """
-
 from __future__ import annotations
 
 import hashlib
@@ -51,7 +51,7 @@ import numpy as np
 
 from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.engines import kernel
-from edm_sym.engines.abstraction.balance import Feeder, by_affinity, group_costs, groups
+from edm_sym.engines.abstraction.balance import Feeder, by_affinity, feed, group_costs, groups
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
@@ -59,6 +59,7 @@ from edm_sym.engines.abstraction.lanes import (
     LocalLane,
     PoolLane,
     dask_lanes,
+    share_stores,
 )
 from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
@@ -183,10 +184,10 @@ class Evaluator:
                        and "fork" in multiprocessing.get_all_start_methods())
         self.store: SlotStore | None = None
         self.prefixes: SlotStore | None = None
+        self._slots = (max(cache_bytes // (8 * n), 2 * max_batch_rows + 16),
+                       max(self.ctx.prefix_bytes // (8 * n), 8))
         if self.shared:
-            slots = max(cache_bytes // (8 * n), 2 * max_batch_rows + 16)
-            self.store = SlotStore(slots, n)
-            self.prefixes = SlotStore(max(self.ctx.prefix_bytes // (8 * n), 8), n)
+            self.store, self.prefixes = SlotStore(self._slots[0], n), SlotStore(self._slots[1], n)
         # Made before any fork, so forked workers inherit it (and the stores).
         self._local = worker_for(self._token, ctx=self.ctx,
                                  rows=self.store.rows if self.shared else None,
@@ -214,6 +215,11 @@ class Evaluator:
         warm_up()  # the row kernel, loaded once before the fork
         if self.client is not None:
             self.lanes = dask_lanes(self.client)
+            stores = share_stores(self.lanes, self._token, self._blob, self._slots, self.n_samples)
+            if stores is not None:
+                self.shared = True
+                self.store, self.prefixes = stores
+                self._local.rows, self._local.prefix_rows = self.store.rows, self.prefixes.rows
         elif self.executor is not None:
             self.lanes = [ExecutorLane(self.executor) for _ in range(self.workers)]
         elif self.workers > 1:
@@ -501,47 +507,34 @@ class Evaluator:
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
               lanes: list[int]) -> list:
-        """Run a batch on the shared-store lanes, handing out pieces as lanes finish.
-
-        Each pool lane has up to two pieces queued (one runs while the next is
-        on its way); this process runs a piece at a time and hands out more
-        between them. Results come back in no particular order: each piece
-        says which individuals it holds.
-        """
+        """Run a batch on the shared-store lanes, handing out pieces as they finish (:func:`feed`)."""
         parts = groups(members, plan, missing)
         feeder = Feeder(parts, group_costs(parts, members, plan, score, free), len(lanes))
-        pool = [lane for lane in lanes if not self.lanes[lane].local]
-        queued: dict[int, list] = {lane: [] for lane in pool}
-        sent: list = []
-        results: list = []
+        chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
-        def hand_out() -> None:
-            for lane in pool:
-                busy = queued[lane]
-                busy[:] = [f for f in busy if not f.done()]
-                while len(busy) < 2 and feeder:
-                    idx = feeder.take()
-                    chunk, lines = self._chunk(table, members, score, free, slots, missing,
-                                               plan, idx)
-                    wblob = None if self._sent_w[lane] == self._wtoken else self._wblob
-                    future = self.lanes[lane].submit(evaluate_chunk, self._token, None,
-                                                     self._wtoken, wblob, chunk)
-                    self._sent_w[lane] = self._wtoken
-                    busy.append(future)
-                    sent.append((future, idx, lines, chunk))
+        def send(lane: int, idx: list[int], again: bool = False) -> Any:
+            if not again:
+                chunks[id(idx)] = self._chunk(table, members, score, free, slots, missing, plan,
+                                              idx)
+            # The weighting goes with every piece until the lane confirms it has it.
+            wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
+            return self.lanes[lane].submit(evaluate_chunk, self._token,
+                                           self._blob if again else None, self._wtoken, wblob,
+                                           chunks[id(idx)][0])
 
-        hand_out()
-        while feeder:
-            idx = feeder.take()
-            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
-            results.append((idx, lines, run_chunk(self._local, chunk)))
-            hand_out()
-        for future, idx, lines, chunk in sent:
+        def receive(lane: int, idx: list[int], future: Any) -> tuple:
             res = future.result()
-            if res in (NEED_CONTEXT, NEED_WEIGHTS):  # pragma: no cover (forked with both)
-                res = run_chunk(self._local, chunk)
-            results.append((idx, lines, res))
-        return results
+            if res in (NEED_CONTEXT, NEED_WEIGHTS):  # a restarted worker, or a call overtaken
+                res = send(lane, idx, again=True).result()
+            self._sent_w[lane] = self._wtoken
+            return idx, chunks.pop(id(idx))[1], res
+
+        def run(idx: list[int]) -> tuple:
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            return idx, lines, run_chunk(self._local, chunk)
+
+        remote = [lane for lane in lanes if not self.lanes[lane].local]
+        return feed(feeder, remote, len(remote) < len(lanes), send, receive, run)
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.

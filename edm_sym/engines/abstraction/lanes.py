@@ -12,13 +12,19 @@ individuals whose rows that worker most likely holds.
   through the scheduler (a round trip of a few ms instead of tens).
 * :class:`ExecutorLane` -- any :class:`concurrent.futures.Executor`; tasks go
   wherever the executor puts them, so it is not pinned.
+
+A dask cluster's workers on this machine share the run's row and prefix
+stores with this process, as a forked pool does (:func:`share_stores`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future
 from typing import Any
+
+from edm_sym.engines.abstraction.cache import SlotStore
+from edm_sym.engines.abstraction.rowsim import attach, forget
 
 
 class LocalLane:
@@ -127,3 +133,47 @@ def dask_lanes(client: Any) -> list[DaskLane]:
     if not workers:
         raise RuntimeError("the dask cluster has no worker")
     return [DaskLane(client, address) for address in workers]
+
+
+def share_stores(lanes: Sequence[Any], token: str, blob: bytes, slots: tuple[int, int], n: int
+                 ) -> tuple[SlotStore, SlotStore] | None:
+    """Named row and prefix stores that every lane maps, when its workers are on this machine.
+
+    A dask cluster's workers are not forked from this process, but those of a
+    LocalCluster (or started here with ``dask worker``) can open a store in
+    ``/dev/shm`` and then share rows and prefixes as the forked pool does.
+    Each lane also gets the run's context (``blob``) with the stores.
+
+    Parameters
+    ----------
+    lanes : sequence
+        The lanes (each with ``submit``).
+    token, blob : str, bytes
+        The run and its pickled context.
+    slots : tuple of int
+        Slots of the row store and of the prefix store.
+    n : int
+        Samples per row.
+
+    Returns
+    -------
+    tuple of SlotStore or None
+        The row and prefix stores; None when a lane cannot open them (another
+        machine: every lane keeps its own), or this machine has no ``/dev/shm``.
+    """
+    stores = [SlotStore.named(count, n) for count in slots]
+    if None in stores:  # pragma: no cover (no /dev/shm, or no room in it)
+        return None
+    try:
+        futures = [lane.submit(attach, token, blob, *((st.path, st.slots) for st in stores), n)
+                   for lane in lanes]
+        ok = [f.result() for f in futures]
+    finally:
+        for st in stores:
+            st.unlink()  # every lane has it mapped by now, or never will
+    if all(ok):
+        return stores[0], stores[1]
+    for lane, yes in zip(lanes, ok, strict=True):  # pragma: no cover (a remote worker)
+        if yes:
+            lane.submit(forget, token).result()
+    return None
