@@ -269,3 +269,27 @@ def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
     assert np.array_equal(got[1][0], got[2][0])
     for a, b in zip(got[1][1], got[2][1], strict=True):
         assert all(np.array_equal(u, v, equal_nan=True) for u, v in zip(a, b, strict=True))
+
+
+def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_the_feeder_hands_out_all() -> None:
+    from edm_sym.engines.abstraction.balance import Feeder, group_costs, groups
+    from edm_sym.engines.abstraction.prefixes import PrefixPlan
+
+    # Lines 0-5; 1 and 4 are new; line 4's new prefix (slot 7) is also line 5's.
+    members = np.array([[0, 1], [2, 4], [3, 5], [0, 1], [2, 3], [0, 2]])
+    missing = np.array([False, True, False, False, True, True])
+    slots = np.full((6, 3), -1)
+    slots[4, 1:] = [7, 8]
+    slots[5, 1:] = [7, 9]
+    plan = PrefixPlan(np.zeros(6, dtype=np.int64), slots, np.where(missing, 3, 0))
+    parts = groups(members, plan, missing)
+    assert sorted(parts) == [[0, 3], [1, 2], [4], [5]]
+    costs = group_costs(parts, members, plan, np.ones(6, dtype=bool), None)
+    assert costs.tolist() == [3 + 0.4, 6 + 0.4, 0.2, 0.2]
+    feeder = Feeder(parts, costs, 2)
+    pieces = []
+    while feeder:
+        pieces.append(feeder.take())
+    assert sorted(i for p in pieces for i in p) == list(range(6))
+    assert pieces[0] == [1, 2]  # the dearest group first
+    assert feeder.remaining == pytest.approx(0.0)

@@ -90,11 +90,15 @@ def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: Prefi
     per = np.where(score, SCORE_COST * m, 0.0)
     if free is not None:
         per = per + np.where(score & free.any(axis=1), FIT_COST * m, 0.0)
-    out = np.empty(len(parts))
+    group = np.empty(len(members), dtype=np.int64)
     for g, idx in enumerate(parts):
-        rows = np.unique(members[idx])
-        out[g] = float(plan.cost[rows].sum()) + float(per[idx].sum())
-    return out
+        group[idx] = g
+    # A row to simulate belongs to one group (its individuals are all in it); a row
+    # not simulated costs 0 wherever it is.
+    owner = np.empty(len(plan.cost), dtype=np.int64)
+    owner[members.reshape(-1)] = np.repeat(group, m)
+    return (np.bincount(owner, weights=plan.cost, minlength=len(parts))
+            + np.bincount(group, weights=per, minlength=len(parts)))
 
 
 class Feeder:
