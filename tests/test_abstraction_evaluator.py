@@ -271,7 +271,7 @@ def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
         assert all(np.array_equal(u, v, equal_nan=True) for u, v in zip(a, b, strict=True))
 
 
-def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_the_feeder_hands_out_all() -> None:
+def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_speeds() -> None:
     from edm_sym.engines.abstraction.balance import Feeder, group_costs, groups
     from edm_sym.engines.abstraction.prefixes import PrefixPlan
 
@@ -285,11 +285,11 @@ def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_the_feeder_hands_out_a
     parts = groups(members, plan, missing)
     assert sorted(parts) == [[0, 3], [1, 2], [4], [5]]
     costs = group_costs(parts, members, plan, np.ones(6, dtype=bool), None)
-    assert costs.tolist() == [3 + 0.4, 6 + 0.4, 0.2, 0.2]
-    feeder = Feeder(parts, costs, 2)
-    pieces = []
-    while feeder:
-        pieces.append(feeder.take())
-    assert sorted(i for p in pieces for i in p) == list(range(6))
-    assert pieces[0] == [1, 2]  # the dearest group first
-    assert feeder.remaining == pytest.approx(0.0)
+    score = 2 * 2 * 0.6  # two scored individuals of two rows
+    assert costs.tolist() == pytest.approx([3 + score, 6 + score, score / 2, score / 2])
+    even = Feeder(parts, costs, [1.0, 1.0])
+    assert sorted(i for p in even.pieces for i in p) == list(range(6))
+    assert even.pieces[0] == [1, 2] and even.pieces[1] == [0, 3, 4, 5]
+    # A lane three times as fast gets the dear groups.
+    fast = Feeder(parts, costs, [1.0, 3.0])
+    assert fast.loads[1] > 2 * fast.loads[0]

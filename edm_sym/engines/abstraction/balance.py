@@ -27,10 +27,12 @@ import numpy as np
 
 from edm_sym.engines.abstraction.prefixes import PrefixPlan
 
-#: Estimated cost of scoring one row of an individual (eq. 8), in elements run.
-SCORE_COST = 0.1
+#: Estimated cost of scoring one row of an individual (eq. 8), in elements run (fitted
+#: on the auger schedule's tasks: about 100 us per element, 60 per scored row, 80 more with
+#: the gain fit).
+SCORE_COST = 0.6
 #: Estimated cost of the gain fit of one individual per row (inner products, least squares).
-FIT_COST = 0.3
+FIT_COST = 0.8
 
 
 def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[list[int]]:
@@ -102,7 +104,11 @@ def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: Prefi
 
 
 class Feeder:
-    """Hands out groups in pieces, largest first, each about the rest over ``2 * lanes``.
+    """A batch's groups cut into one piece per lane, in proportion to the lanes' speeds.
+
+    The groups go, dearest first, to the piece that would end first with
+    them (its estimated cost over its lane's speed): longest processing
+    time first, for lanes of different speeds.
 
     Parameters
     ----------
@@ -110,55 +116,53 @@ class Feeder:
         The groups.
     costs : numpy.ndarray
         Their estimated costs.
-    lanes : int
-        Lanes that share the batch.
+    speeds : sequence of float
+        Each lane's speed (estimated cost per second; only the ratios count).
     """
 
-    def __init__(self, parts: Sequence[list[int]], costs: np.ndarray, lanes: int):
-        order = np.argsort(-costs, kind="stable")
-        self._parts = [parts[g] for g in order]
-        self._costs = costs[order].tolist()
-        self._at = 0
-        self.remaining = float(costs.sum())
-        self._lanes = max(1, lanes)
-        # The last pieces: small, so the lanes end together, but not so small
-        # that a piece costs less than sending it.
-        self._least = self.remaining / (8 * self._lanes)
-
-    def __bool__(self) -> bool:
-        return self._at < len(self._parts)
-
-    def take(self) -> list[int]:
-        """The next piece: individuals of whole groups (sorted)."""
-        want = max(self.remaining / (2 * self._lanes), self._least)
-        idx: list[int] = []
-        got = 0.0
-        while self._at < len(self._parts) and (not idx or got + self._costs[self._at] <= want):
-            idx.extend(self._parts[self._at])
-            got += self._costs[self._at]
-            self._at += 1
-        self.remaining -= got
-        return sorted(idx)
+    def __init__(self, parts: Sequence[list[int]], costs: np.ndarray, speeds: Sequence[float]):
+        count = len(speeds)
+        bins: list[list[int]] = [[] for _ in range(count)]
+        self.loads = [0.0] * count
+        for g in np.argsort(-costs, kind="stable").tolist():
+            b = min(range(count), key=lambda b: (self.loads[b] + costs[g]) / speeds[b])
+            bins[b].extend(parts[g])
+            self.loads[b] += float(costs[g])
+        self.pieces = [sorted(piece) for piece in bins]
 
 
-def feed(feeder: Feeder, remote: Sequence[int], here: bool,
+class Speeds:
+    """Each lane's speed: estimated cost per second, a moving average over its pieces."""
+
+    def __init__(self, count: int):
+        self._speed: list[float | None] = [None] * count
+
+    def of(self, lanes: Sequence[int]) -> list[float]:
+        """The speeds of ``lanes`` (a lane not timed yet: the mean of the others, or 1)."""
+        known = [v for v in self._speed if v is not None]
+        guess = sum(known) / len(known) if known else 1.0
+        return [guess if self._speed[lane] is None else self._speed[lane] for lane in lanes]
+
+    def timed(self, lane: int, cost: float, seconds: float) -> None:
+        """Fold in a piece of ``cost`` that took ``seconds``."""
+        if cost > 0.0 and seconds > 1e-4:
+            old = self._speed[lane]
+            self._speed[lane] = cost / seconds if old is None else old + 0.2 * (cost / seconds - old)
+
+
+def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,
          send: Callable[[int, list[int]], Any], receive: Callable[[int, list[int], Any], Any],
          run: Callable[[list[int]], Any]) -> list:
-    """Run a batch's pieces on the lanes, handing them out as the lanes finish.
-
-    Each remote lane (a pool process, a dask worker) has up to two pieces
-    queued, so one runs while the next is on its way. When this process is
-    a lane too (``here``), it runs a piece at a time and hands out more
-    between them; else it waits for the oldest piece sent.
+    """Run a batch's pieces, one per lane: the remote ones first, then this process's.
 
     Parameters
     ----------
-    feeder : Feeder
-        The batch's groups.
-    remote : sequence of int
-        The remote lanes.
-    here : bool
-        Whether this process runs pieces too.
+    pieces : sequence of list of int
+        One per lane (empty: nothing for that lane).
+    lanes : sequence of int
+        The lanes, in the order of ``pieces``.
+    here : int or None
+        The position of this process's lane among ``lanes`` (None: it is none).
     send : callable
         ``send(lane, idx)``: submit piece ``idx`` to a remote lane; a future.
     receive : callable
@@ -169,35 +173,14 @@ def feed(feeder: Feeder, remote: Sequence[int], here: bool,
     Returns
     -------
     list
-        The results, in no particular order.
+        The results, one per non-empty piece.
     """
-    queued = dict.fromkeys(remote, 0)
-    sent: list = []
-    results: list = []
-
-    def hand_out() -> None:
-        for lane in remote:
-            while queued[lane] < 2 and feeder:
-                idx = feeder.take()
-                sent.append((lane, idx, send(lane, idx)))
-                queued[lane] += 1
-
-    def collect(at: int) -> None:
-        lane, idx, future = sent.pop(at)
-        queued[lane] -= 1
-        results.append(receive(lane, idx, future))
-
-    hand_out()
-    while feeder:
-        if here:
-            results.append(run(feeder.take()))
-            for at in [a for a, (_, _, f) in enumerate(sent) if f.done()][::-1]:
-                collect(at)
-        else:
-            collect(0)
-        hand_out()
-    while sent:
-        collect(0)
+    sent = [(lane, idx, send(lane, idx))
+            for k, (lane, idx) in enumerate(zip(lanes, pieces, strict=True)) if k != here and idx]
+    results = []
+    if here is not None and pieces[here]:
+        results.append(run(pieces[here]))
+    results.extend(receive(lane, idx, future) for lane, idx, future in sent)
     return results
 
 

@@ -51,12 +51,20 @@ import numpy as np
 
 from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.engines import kernel
-from edm_sym.engines.abstraction.balance import Feeder, by_affinity, feed, group_costs, groups
+from edm_sym.engines.abstraction.balance import (
+    Feeder,
+    Speeds,
+    by_affinity,
+    feed,
+    group_costs,
+    groups,
+)
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
     ExecutorLane,
     LocalLane,
+    PipeLane,
     PoolLane,
     dask_lanes,
     share_stores,
@@ -193,7 +201,7 @@ class Evaluator:
                                  rows=self.store.rows if self.shared else None,
                                  prefix_rows=self.prefixes.rows if self.shared else None)
         self.lanes: list = [LocalLane()]
-        self._pools: list[ProcessPoolExecutor] = []
+        self._pools: list[ProcessPoolExecutor | PipeLane] = []
         self._started = False
         self._sent_ctx: list[bool] = []
         self._sent_w: list[str | None] = []
@@ -226,17 +234,24 @@ class Evaluator:
             with warnings.catch_warnings():
                 # Forking is safe here: the pool starts before the run makes threads.
                 warnings.simplefilter("ignore", DeprecationWarning)
-                ctx = multiprocessing.get_context("fork" if self.shared else None)
-                self._pools = [ProcessPoolExecutor(1, mp_context=ctx, initializer=worker_init,
-                                                   initargs=(os.getpid(),))
-                               for _ in range(self.workers - 1)]
-                for f in [pool.submit(ping) for pool in self._pools]:
+                if self.shared:
+                    ctx = multiprocessing.get_context("fork")
+                    self._pools = [PipeLane(ctx, worker_init, (os.getpid(),))
+                                   for _ in range(self.workers - 1)]
+                    others = list(self._pools)
+                else:
+                    self._pools = [ProcessPoolExecutor(1, initializer=worker_init,
+                                                       initargs=(os.getpid(),))
+                                   for _ in range(self.workers - 1)]
+                    others = [PoolLane(p) for p in self._pools]
+                for f in [lane.submit(ping) for lane in others]:
                     f.result()
             # This process is a lane too: it works while the others do.
-            self.lanes = [LocalLane(), *(PoolLane(p) for p in self._pools)]
+            self.lanes = [LocalLane(), *others]
         count = len(self.lanes)
         self._sent_ctx = [lane.local or self.shared for lane in self.lanes]
         self._sent_w = [None] * count
+        self._speed = Speeds(count)
         self._mirror = [OrderedDict() for _ in range(count)]
 
     def close(self) -> None:
@@ -257,7 +272,10 @@ class Evaluator:
 
     def _shutdown(self, wait: bool) -> None:
         for pool in self._pools:
-            pool.shutdown(wait=wait, cancel_futures=True)
+            if isinstance(pool, PipeLane):
+                pool.shutdown(wait=wait)
+            else:
+                pool.shutdown(wait=wait, cancel_futures=True)
         self._pools = []
         self.lanes = [LocalLane()]
 
@@ -507,34 +525,44 @@ class Evaluator:
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
               lanes: list[int]) -> list:
-        """Run a batch on the shared-store lanes, handing out pieces as they finish (:func:`feed`)."""
+        """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
+
+        A lane's speed is the estimated cost it gets through per second,
+        averaged over its earlier pieces, so a lane slowed by anything (its
+        round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
+        """
         parts = groups(members, plan, missing)
-        feeder = Feeder(parts, group_costs(parts, members, plan, score, free), len(lanes))
+        feeder = Feeder(parts, group_costs(parts, members, plan, score, free),
+                        self._speed.of(lanes))
+        cost = {lane: load for lane, load in zip(lanes, feeder.loads, strict=True)}
         chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
         def send(lane: int, idx: list[int], again: bool = False) -> Any:
             if not again:
-                chunks[id(idx)] = self._chunk(table, members, score, free, slots, missing, plan,
-                                              idx)
+                chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx)
             # The weighting goes with every piece until the lane confirms it has it.
             wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
             return self.lanes[lane].submit(evaluate_chunk, self._token,
                                            self._blob if again else None, self._wtoken, wblob,
-                                           chunks[id(idx)][0])
+                                           chunks[lane][0])
 
         def receive(lane: int, idx: list[int], future: Any) -> tuple:
             res = future.result()
             if res in (NEED_CONTEXT, NEED_WEIGHTS):  # a restarted worker, or a call overtaken
                 res = send(lane, idx, again=True).result()
             self._sent_w[lane] = self._wtoken
-            return idx, chunks.pop(id(idx))[1], res
+            self._speed.timed(lane, cost[lane], res.seconds)
+            return idx, chunks[lane][1], res
 
         def run(idx: list[int]) -> tuple:
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
-            return idx, lines, run_chunk(self._local, chunk)
+            res = run_chunk(self._local, chunk)
+            self._speed.timed(lanes[here], cost[lanes[here]], res.seconds)
+            return idx, lines, res
 
-        remote = [lane for lane in lanes if not self.lanes[lane].local]
-        return feed(feeder, remote, len(remote) < len(lanes), send, receive, run)
+        local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
+        here = local[0] if local else None
+        return feed(feeder.pieces, lanes, here, send, receive, run)
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
