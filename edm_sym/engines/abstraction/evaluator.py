@@ -66,8 +66,10 @@ from edm_sym.engines.abstraction.lanes import (
     LocalLane,
     PipeLane,
     PoolLane,
+    SocketLane,
     dask_lanes,
     share_stores,
+    socket_lanes,
 )
 from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
@@ -228,6 +230,7 @@ class Evaluator:
                 self.shared = True
                 self.store, self.prefixes = stores
                 self._local.rows, self._local.prefix_rows = self.store.rows, self.prefixes.rows
+                self.lanes = socket_lanes(self.lanes)
         elif self.executor is not None:
             self.lanes = [ExecutorLane(self.executor) for _ in range(self.workers)]
         elif self.workers > 1:
@@ -257,6 +260,9 @@ class Evaluator:
     def close(self) -> None:
         """Free the run's state in every worker; shut down the processes this evaluator started."""
         for lane in self.lanes:
+            if isinstance(lane, SocketLane):
+                lane.hang_up()
+                lane = lane.via
             if isinstance(lane, DaskLane):
                 # A cluster's workers outlive the run: drop its data and stores there.
                 try:
@@ -271,6 +277,9 @@ class Evaluator:
         self._shutdown(wait=False)
 
     def _shutdown(self, wait: bool) -> None:
+        for lane in self.lanes:
+            if isinstance(lane, SocketLane):
+                lane.hang_up()
         for pool in self._pools:
             if isinstance(pool, PipeLane):
                 pool.shutdown(wait=wait)
@@ -418,7 +427,9 @@ class Evaluator:
             sub_free = free[send] if want_scales else None
             fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
             if self.reject_poles:
-                pole = np.array([self.has_pole(key, line) for key, line in zip(ukeys, utab, strict=True)])
+                known = self._poles
+                pole = np.array([self.has_pole(key, utab[r]) if (hit := known.get(key)) is None
+                                 else hit for r, key in enumerate(ukeys)], dtype=bool)
                 fit = np.where(pole[members].any(axis=1), np.inf, fit)
             if len(self._memo) > 50_000:
                 self._memo.clear()

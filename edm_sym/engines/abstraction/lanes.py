@@ -20,9 +20,14 @@ stores with this process, as a forked pool does (:func:`share_stores`).
 
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
+import threading
 from collections import deque
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future
+from multiprocessing.connection import Client, Listener
 from typing import Any
 
 from edm_sym.engines.abstraction.cache import SlotStore
@@ -59,38 +64,26 @@ class PoolLane:
         return self.pool.submit(fn, *args)
 
 
-class PipeLane:
-    """One forked process that runs the tasks sent down a pipe, in order.
+class ConnectionLane:
+    """A process that runs the tasks sent over a connection (a pipe, a socket), in order.
 
-    The main process writes each task to the pipe itself and reads each
+    The main thread writes each task to the connection itself and reads each
     result when it asks for it, so no thread of this process has to win the
     GIL for a task to start or end (a
     :class:`~concurrent.futures.ProcessPoolExecutor` hands a task through two
-    threads: about 2 ms from submit to start on the auger schedule, measured).
-
-    Parameters
-    ----------
-    context : multiprocessing context
-        A ``fork`` context (the process inherits this one's state).
-    init : callable
-        Run first in the process (with ``init_args``).
-    init_args : tuple
-        Its arguments.
+    threads: about 2 ms from submit to start on the auger schedule, measured;
+    a dask actor call goes through the client's event loop and the worker's).
     """
 
     pinned = True
     local = False
 
-    def __init__(self, context: Any, init: Callable[..., Any], init_args: tuple = ()):
-        self._conn, child = context.Pipe()
-        self._process = context.Process(target=_serve, args=(child, init, init_args),
-                                        daemon=True)
-        self._process.start()
-        child.close()
+    def __init__(self, conn: Any):
+        self._conn = conn
         self._waiting: deque[_PipeFuture] = deque()
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> _PipeFuture:
-        """Send ``fn(*args)`` to the process; a future with ``done()`` and ``result()``."""
+        """Send ``fn(*args)``; a future with ``done()`` and ``result()``."""
         self._conn.send((fn, args))
         future = _PipeFuture(self)
         self._waiting.append(future)
@@ -102,18 +95,55 @@ class PipeLane:
             ok, value = self._conn.recv()
             self._waiting.popleft()._set(ok, value)
 
+    def hang_up(self) -> None:
+        """Tell the other end to stop serving, and close the connection."""
+        with contextlib.suppress(OSError):
+            self._conn.send(None)
+        self._conn.close()
+
+
+class PipeLane(ConnectionLane):
+    """One forked process that runs the tasks sent down a pipe.
+
+    Parameters
+    ----------
+    context : multiprocessing context
+        A ``fork`` context (the process inherits this one's state).
+    init : callable
+        Run first in the process (with ``init_args``).
+    init_args : tuple
+        Its arguments.
+    """
+
+    def __init__(self, context: Any, init: Callable[..., Any], init_args: tuple = ()):
+        conn, child = context.Pipe()
+        self._process = context.Process(target=_serve, args=(child, init, init_args),
+                                        daemon=True)
+        self._process.start()
+        child.close()
+        super().__init__(conn)
+
     def shutdown(self, wait: bool = True) -> None:
         """End the process: after its tasks (``wait``), or now."""
         if wait and self._process.is_alive():
-            try:
+            with contextlib.suppress(OSError):
                 self._conn.send(None)
-            except OSError:  # pragma: no cover (the process is gone)
-                pass
             self._process.join(timeout=10)
         if self._process.is_alive():
             self._process.kill()
             self._process.join()
         self._conn.close()
+
+
+class SocketLane(ConnectionLane):
+    """A dask worker on this machine, through a socket that a thread of the worker serves.
+
+    ``via`` is the worker's :class:`DaskLane` (for the calls that stay dask's).
+    """
+
+    def __init__(self, conn: Any, via: DaskLane):
+        super().__init__(conn)
+        self.via = via
 
 
 class _PipeFuture:
@@ -145,13 +175,14 @@ class _PipeFuture:
         return self._value
 
 
-def _serve(conn: Any, init: Callable[..., Any], init_args: tuple) -> None:
-    """A :class:`PipeLane`'s process: run each task received, send back its value or error."""
-    init(*init_args)
+def _serve(conn: Any, init: Callable[..., Any] | None = None, init_args: tuple = ()) -> None:
+    """A :class:`ConnectionLane`'s other end: run each task received, send back its value or error."""
+    if init is not None:
+        init(*init_args)
     while True:
         try:
             task = conn.recv()
-        except EOFError:  # the main process is gone
+        except (EOFError, OSError):  # the main process is gone
             return
         if task is None:
             return
@@ -160,7 +191,10 @@ def _serve(conn: Any, init: Callable[..., Any], init_args: tuple) -> None:
             out = (True, fn(*args))
         except BaseException as exc:  # noqa: BLE001 (sent to the main process)
             out = (False, exc)
-        conn.send(out)
+        try:
+            conn.send(out)
+        except OSError:  # pragma: no cover (the main process is gone)
+            return
 
 
 class ExecutorLane:
@@ -283,3 +317,45 @@ def share_stores(lanes: Sequence[Any], token: str, blob: bytes, slots: tuple[int
         if yes:
             lane.submit(forget, token).result()
     return None
+
+
+def socket_lanes(lanes: Sequence[DaskLane]) -> list[ConnectionLane | DaskLane]:
+    """The lanes of dask workers on this machine, each through a socket of its own.
+
+    Each worker connects to a Unix socket of this process (in a private
+    folder) and serves the tasks sent over it in a thread
+    (:func:`serve_socket`); the lanes stay dask's where that fails.
+    """
+    folder = tempfile.mkdtemp(prefix="edm_sym-", dir="/dev/shm" if os.path.isdir("/dev/shm")
+                              else None)
+    address = os.path.join(folder, "lanes")
+    try:
+        with Listener(address, family="AF_UNIX", backlog=len(lanes)) as listener:
+            ok = [f.result() for f in [lane.submit(serve_socket, address, k)
+                                       for k, lane in enumerate(lanes)]]
+            if not all(ok):  # pragma: no cover (a worker on another machine)
+                return list(lanes)
+            conns: dict[int, Any] = {}
+            for _ in lanes:
+                conn = listener.accept()
+                conns[conn.recv()] = conn
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(address)
+        with contextlib.suppress(OSError):
+            os.rmdir(folder)
+    return [SocketLane(conns[k], lane) for k, lane in enumerate(lanes)]
+
+
+def serve_socket(address: str, index: int) -> bool:
+    """Task for a dask worker: connect to ``address`` and serve tasks from it in a thread.
+
+    False when there is no such socket here (another machine).
+    """
+    try:
+        conn = Client(address, family="AF_UNIX")
+    except OSError:
+        return False
+    conn.send(index)
+    threading.Thread(target=_serve, args=(conn,), daemon=True, name="edm_sym-lane").start()
+    return True
