@@ -44,7 +44,6 @@ import warnings
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -89,45 +88,9 @@ from edm_sym.engines.abstraction.rowsim import (
     worker_for,
     worker_init,
 )
+from edm_sym.engines.abstraction.stats import EvalStats
 
 __all__ = ["EvalStats", "Evaluator", "row_table"]
-
-
-@dataclass
-class EvalStats:
-    """Counters of an evaluator (for progress lines and benchmarks).
-
-    ``elements_simulated`` counts elements run over the signal (a row that
-    starts from a stored prefix runs only its other elements),
-    ``element_samples`` the rows simulated times their elements and samples.
-    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
-    (simulation and scoring, in whichever process), ``sim_seconds`` and
-    ``task_seconds`` the time the workers spent simulating rows and running
-    tasks, summed over workers; ``peak_rss`` the peak resident memory of
-    each process that ran a task, by process id.
-    """
-
-    individuals: int = 0
-    row_requests: int = 0
-    rows_missed: int = 0
-    rows_simulated: int = 0
-    elements_simulated: int = 0
-    element_samples: int = 0
-    sim_seconds: float = 0.0
-    task_seconds: float = 0.0
-    eval_seconds: float = 0.0
-    tasks: int = 0
-    peak_rss: dict = field(default_factory=dict)
-
-    @property
-    def cache_hits(self) -> int:
-        """Row requests served without simulating (store, memo or a twin in the batch)."""
-        return self.row_requests - self.rows_missed
-
-    @property
-    def hit_rate(self) -> float:
-        """Share of row requests served without simulating."""
-        return self.cache_hits / self.row_requests if self.row_requests else 0.0
 
 
 class Evaluator:
@@ -568,11 +531,13 @@ class Evaluator:
         def run(idx: list[int]) -> tuple:
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
             res = run_chunk(self._local, chunk)
-            self._speed.timed(lanes[here], cost[lanes[here]], res.seconds)
+            # This lane's time includes sending the others theirs.
+            self._speed.timed(lanes[here], cost[lanes[here]], time.perf_counter() - t0)
             return idx, lines, res
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
         here = local[0] if local else None
+        t0 = time.perf_counter()
         return feed(feeder.pieces, lanes, here, send, receive, run)
 
     def _gather(self, pending: list) -> list:
