@@ -132,32 +132,22 @@ class Feeder:
 
 
 class Speeds:
-    """Each lane's speed: estimated cost per second over its recent pieces.
-
-    The ratio of decaying sums of cost and seconds, so a large piece counts
-    more than a small one (whose time is mostly fixed costs).
-    """
-
-    #: Weight of the pieces before the latest one.
-    DECAY = 0.9
+    """Each lane's speed: estimated cost per second, a moving average over its pieces."""
 
     def __init__(self, count: int):
-        self._cost = [0.0] * count
-        self._seconds = [0.0] * count
+        self._speed: list[float | None] = [None] * count
 
     def of(self, lanes: Sequence[int]) -> list[float]:
         """The speeds of ``lanes`` (a lane not timed yet: the mean of the others, or 1)."""
-        speed = [c / s if s > 0.0 else None for c, s in zip(self._cost, self._seconds,
-                                                                strict=True)]
-        known = [v for v in speed if v is not None]
+        known = [v for v in self._speed if v is not None]
         guess = sum(known) / len(known) if known else 1.0
-        return [guess if speed[lane] is None else speed[lane] for lane in lanes]
+        return [guess if self._speed[lane] is None else self._speed[lane] for lane in lanes]
 
     def timed(self, lane: int, cost: float, seconds: float) -> None:
         """Fold in a piece of ``cost`` that took ``seconds``."""
-        if cost > 0.0 and seconds > 0.0:
-            self._cost[lane] = self.DECAY * self._cost[lane] + cost
-            self._seconds[lane] = self.DECAY * self._seconds[lane] + seconds
+        if cost > 0.0 and seconds > 1e-4:
+            old = self._speed[lane]
+            self._speed[lane] = cost / seconds if old is None else old + 0.2 * (cost / seconds - old)
 
 
 def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,

@@ -531,13 +531,11 @@ class Evaluator:
         def run(idx: list[int]) -> tuple:
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
             res = run_chunk(self._local, chunk)
-            # This lane's time includes sending the others theirs.
-            self._speed.timed(lanes[here], cost[lanes[here]], time.perf_counter() - t0)
+            self._speed.timed(lanes[here], cost[lanes[here]], res.seconds)
             return idx, lines, res
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
         here = local[0] if local else None
-        t0 = time.perf_counter()
         return feed(feeder.pieces, lanes, here, send, receive, run)
 
     def _gather(self, pending: list) -> list:
