@@ -17,7 +17,9 @@ Prints, with ratios measured in the same run rather than verdicts:
    time limit and the RMSE of the result on the evaluation log.
 
 Run ``python benchmarks/bench_ga.py [--workers N] [--scheduler ADDRESS]
-[--dask-local K] [--generations G] [--skip-batched] [--plant]``. The machine's
+[--dask-local K] [--generations G] [--repeat R] [--skip-batched] [--plant]``
+(``--repeat``: the scaling comparison R times, then each figure as median
+[min-max]). The machine's
 load (``os.getloadavg``) is printed with the figures: on a shared machine
 the parallel figures are noisy.
 """
@@ -264,6 +266,7 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
             "evaluations": st.individuals, "rate": st.individuals / info.elapsed,
             "hit_rate": st.hit_rate, "own_share": 1.0 - st.eval_seconds / info.elapsed,
             "sim_seconds": st.sim_seconds, "task_seconds": st.task_seconds,
+            "rows": st.rows_simulated, "elements": st.elements_simulated,
             "peak_rss": dict(st.peak_rss), "main_rss": main_rss}
 
 
@@ -279,34 +282,70 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
     print(f"{'':34s} cache hit rate {run['hit_rate']:.3f}   GA outside evaluation "
           f"{100 * run['own_share']:.1f} %   peak memory per worker [MiB]: {workers} "
           f"(this process {run['main_rss'] / mib:.0f})")
+    print(f"{'':34s} rows simulated {run['rows']}, elements run {run['elements']}; summed over "
+          f"workers: simulating {run['sim_seconds']:.1f} s, in tasks {run['task_seconds']:.1f} s")
 
 
-def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_local: int) -> None:
-    """One worker against ``workers``, a LocalCluster and a scheduler, on the same generations."""
-    print(f"== scaling: auger schedule, seed 1, its first {generations} generations "
-          f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
-    one = _auger_run(generations, workers=1)
-    print(f"log of {one['samples']} samples")
-    _print_scaling("1 worker (this process)", one, 1, None)
-    if workers > 1:
-        run = _auger_run(generations, workers=workers)
-        _print_scaling(f"{workers} workers (this process + {workers - 1} forked)", run, workers,
-                       one)
-    if dask_local:
-        import distributed
+def _spread(values: list[float], fmt: str = ".2f") -> str:
+    """``median [min-max]``."""
+    return (f"{np.median(values):{fmt}} [{min(values):{fmt}}-{max(values):{fmt}}]"
+            if len(values) > 1 else f"{values[0]:{fmt}}")
 
-        with distributed.LocalCluster(n_workers=dask_local, threads_per_worker=1,
-                                      processes=True, dashboard_address=None) as cluster, \
-                distributed.Client(cluster) as client:
-            run = _auger_run(generations, scheduler=client)
-        _print_scaling(f"dask LocalCluster, {dask_local} workers", run, dask_local, one)
-    if scheduler:
-        import distributed
 
-        with distributed.Client(scheduler) as client:
-            count = len(client.scheduler_info()["workers"])
-            run = _auger_run(generations, scheduler=client)
-        _print_scaling(f"dask scheduler {scheduler}, {count} workers", run, count, one)
+def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_local: int,
+                  repeat: int = 1) -> None:
+    """One worker against ``workers``, a LocalCluster and a scheduler, on the same generations.
+
+    With ``repeat`` > 1 the whole comparison runs again, and a summary gives
+    each figure as median [min-max] over the repeats.
+    """
+    figures: dict[str, dict[str, list[float]]] = {}
+
+    def keep(title: str, run: dict, one: dict) -> None:
+        fig = figures.setdefault(title, {})
+        fig.setdefault("rate", []).append(run["rate"])
+        fig.setdefault("speed-up", []).append(run["rate"] / one["rate"])
+        fig.setdefault("outside %", []).append(100 * run["own_share"])
+        fig.setdefault("elements", []).append(run["elements"])
+
+    for k in range(repeat):
+        print(f"== scaling: auger schedule, seed 1, its first {generations} generations "
+              f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
+              + (f", run {k + 1} of {repeat}" if repeat > 1 else ""))
+        one = _auger_run(generations, workers=1)
+        print(f"log of {one['samples']} samples")
+        _print_scaling("1 worker (this process)", one, 1, None)
+        keep("1 worker", one, one)
+        if workers > 1:
+            run = _auger_run(generations, workers=workers)
+            _print_scaling(f"{workers} workers (this process + {workers - 1} forked)", run,
+                           workers, one)
+            keep(f"{workers} workers", run, one)
+        if dask_local:
+            import distributed
+
+            # One single-threaded worker process per core, as docs/abstraction.md says.
+            with distributed.LocalCluster(n_workers=dask_local, threads_per_worker=1,
+                                          processes=True, dashboard_address=None) as cluster, \
+                    distributed.Client(cluster) as client:
+                run = _auger_run(generations, scheduler=client)
+            _print_scaling(f"dask LocalCluster, {dask_local} workers", run, dask_local, one)
+            keep(f"dask LocalCluster {dask_local}", run, one)
+        if scheduler:
+            import distributed
+
+            with distributed.Client(scheduler) as client:
+                count = len(client.scheduler_info()["workers"])
+                run = _auger_run(generations, scheduler=client)
+            _print_scaling(f"dask scheduler {scheduler}, {count} workers", run, count, one)
+            keep(f"dask scheduler, {count} workers", run, one)
+    if repeat > 1:
+        print(f"== summary over {repeat} runs: median [min-max]")
+        for title, fig in figures.items():
+            print(f"{title:28s} evaluations/s {_spread(fig['rate'], '.0f')}  speed-up "
+                  f"{_spread(fig['speed-up'])}  GA outside evaluation "
+                  f"{_spread(fig['outside %'], '.1f')} %  elements run "
+                  f"{_spread(fig['elements'], '.0f')}")
 
 
 def bench_plant(time_limit: float, workers: int) -> None:
@@ -345,6 +384,8 @@ def main() -> None:
                     help="also run on a dask LocalCluster of K worker processes")
     ap.add_argument("--generations", type=int, default=300,
                     help="generations of the auger schedule per scaling run (default 300)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="run the scaling comparison this many times; a median [min-max] summary")
     ap.add_argument("--skip-batched", action="store_true", help="no batched-evaluation figures")
     ap.add_argument("--skip-scaling", action="store_true", help="no scaling runs")
     ap.add_argument("--synthetic", action="store_true",
@@ -361,7 +402,7 @@ def main() -> None:
     if not args.skip_batched:
         bench_batched(log)
     if not args.skip_scaling:
-        bench_scaling(args.generations, workers, args.scheduler, args.dask_local)
+        bench_scaling(args.generations, workers, args.scheduler, args.dask_local, args.repeat)
     if args.synthetic:
         bench_ga(log, workers)
     if args.plant:

@@ -16,6 +16,14 @@ def _workers_with_the_run(client) -> int:  # noqa: ANN001
     return sum(1 for v in counts.values() if v)
 
 
+def _workers_sharing_the_stores(client) -> int:  # noqa: ANN001
+    # A LocalCluster's workers run on this machine: they map the run's stores in /dev/shm.
+    shared = client.run(lambda: any(w.rows is not None and w.prefix_rows is not None
+                                    for w in __import__("edm_sym.engines.abstraction.rowsim",
+                                                        fromlist=["_WORKERS"])._WORKERS.values()))
+    return sum(1 for v in shared.values() if v)
+
+
 def test_a_dask_cluster_gives_the_same_result_as_one_process() -> None:
     log, _ = friction_log(2.0)
     want = dumps(run(log, SMALL, seed=8, workers=1))
@@ -29,10 +37,11 @@ def test_a_dask_cluster_gives_the_same_result_as_one_process() -> None:
         def look(info) -> None:  # noqa: ANN001
             if info.generation == 1 and not seen:
                 seen.append(_workers_with_the_run(client))
+                seen.append(_workers_sharing_the_stores(client))
 
         res = run(log, SMALL, seed=8, scheduler=client, callback=look)
         assert dumps(res) == want
-        assert seen == [2] and _workers_with_the_run(client) == 0
+        assert seen == [2, 2] and _workers_with_the_run(client) == 0
         # Any executor (unpinned lanes): the same bytes again.
         res = run(log, SMALL, seed=8, executor=client.get_executor(), workers=2)
         assert dumps(res) == want

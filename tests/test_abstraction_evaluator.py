@@ -16,7 +16,8 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
+from edm_sym.engines.abstraction.rows import simulate_table
+from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
@@ -226,3 +227,69 @@ def test_cache_mb_bounds_the_stores_of_every_process(signals, cache_mb: float) -
         assert len(own) <= own.slots and len(pool) <= pool.slots
         if cache_mb == 4.0:  # room for all: nothing was simulated twice
             assert ev.stats.rows_simulated <= 6 * 24 * 3
+
+
+def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
+    # With the forked pool the prefixes are shared like the rows: a row that differs
+    # from a simulated one only in its last parameter starts from the same prefix as
+    # in one process, whichever lane simulated the first one.
+    x, y = signals
+    ops = Operators(GaSettings(through_rate=0.0), 3)
+    pop = ops.random_population(np.random.default_rng(5), 32, 3, 4)
+    shifted = pop.take(np.arange(32))
+    shifted.ps[:, :, -1] = (shifted.ps[:, :, -1] + 0.37) % 1.0
+    got = {}
+    for workers in (1, 2):
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
+            ev.evaluate(pop.inputs, pop.codes, pop.ps)
+            before = (ev.stats.rows_simulated, ev.stats.elements_simulated)
+            fit = ev.evaluate(shifted.inputs, shifted.codes, shifted.ps)
+            rows = ev.stats.rows_simulated - before[0]
+            elements = ev.stats.elements_simulated - before[1]
+            # Most rows run their last element only (a few start earlier, before a
+            # `through` that stores no prefix).
+            assert rows > 32 and rows <= elements < 1.2 * rows
+            got[workers] = (fit, rows, elements)
+    assert np.array_equal(got[1][0], got[2][0]) and got[1][1:] == got[2][1:]
+
+
+def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
+    # The local search wants the rows back: with the forked pool they are in the
+    # shared store, so the batch still runs on both lanes, with the same bits.
+    x, y = signals
+    pop = _population(7, p=16)
+    got = {}
+    for workers in (1, 2):
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
+            rows: list = []
+            fit = ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+            got[workers] = (fit, [[np.array(r) for r in outs] for _, outs in rows])
+            pids = set(ev.stats.peak_rss)
+        assert len(pids) == workers
+    assert np.array_equal(got[1][0], got[2][0])
+    for a, b in zip(got[1][1], got[2][1], strict=True):
+        assert all(np.array_equal(u, v, equal_nan=True) for u, v in zip(a, b, strict=True))
+
+
+def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_speeds() -> None:
+    from edm_sym.engines.abstraction.balance import Feeder, group_costs, groups
+    from edm_sym.engines.abstraction.prefixes import PrefixPlan
+
+    # Lines 0-5; 1 and 4 are new; line 4's new prefix (slot 7) is also line 5's.
+    members = np.array([[0, 1], [2, 4], [3, 5], [0, 1], [2, 3], [0, 2]])
+    missing = np.array([False, True, False, False, True, True])
+    slots = np.full((6, 3), -1)
+    slots[4, 1:] = [7, 8]
+    slots[5, 1:] = [7, 9]
+    plan = PrefixPlan(np.zeros(6, dtype=np.int64), slots, np.where(missing, 3, 0))
+    parts = groups(members, plan, missing)
+    assert sorted(parts) == [[0, 3], [1, 2], [4], [5]]
+    costs = group_costs(parts, members, plan, np.ones(6, dtype=bool), None)
+    score = 2 * 2 * 0.6  # two scored individuals of two rows
+    assert costs.tolist() == pytest.approx([3 + score, 6 + score, score / 2, score / 2])
+    even = Feeder(parts, costs, [1.0, 1.0])
+    assert sorted(i for p in even.pieces for i in p) == list(range(6))
+    assert even.pieces[0] == [1, 2] and even.pieces[1] == [0, 3, 4, 5]
+    # A lane three times as fast gets the dear groups.
+    fast = Feeder(parts, costs, [1.0, 3.0])
+    assert fast.loads[1] > 2 * fast.loads[0]

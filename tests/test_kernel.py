@@ -17,7 +17,8 @@ from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.ga import Operators
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table, simulate_table
+from edm_sym.engines.abstraction.rows import simulate_table
+from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
 from edm_sym.engines.kernel import program
 from edm_sym.engines.simulate import simulate_row

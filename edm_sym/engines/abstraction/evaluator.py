@@ -7,7 +7,7 @@ simulates the rows no earlier generation has left in a store, and an
 individual seen before (an elite) is not evaluated again until the weighting
 changes.
 
-A batch of individuals is cut into one chunk per lane
+A batch of individuals is cut into chunks for the lanes
 (:mod:`edm_sym.engines.abstraction.lanes`); a worker simulates the rows it
 lacks and sends back a few numbers per individual (eq. 8 and, for the gain
 fit, the least-squares scales of its rows), never a row. The run's data
@@ -15,23 +15,23 @@ goes to each worker once, the weighting once per step.
 
 Where the rows are simulated and kept:
 
-* ``workers=1``: in this process, in its own row store.
+* ``workers=1``: in this process, in its own stores.
 * default (``executor=None``, ``workers=W > 1``): this process and W - 1
-  single-process pools forked after one shared memory map of row slots was
-  made. This process manages the slots; a worker writes the rows it
-  simulates into theirs and reads any row from the map, so a row simulated
-  once serves every worker.
-* ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker;
-  each keeps its own row store, and individuals go to the worker that holds
-  most of their rows.
+  single-process pools forked after two shared memory maps of slots (rows,
+  row prefixes) were made. This process manages the slots; a worker writes
+  the rows and prefixes it simulates into theirs and reads any from the
+  maps, so a row or prefix simulated once serves every worker. The batch
+  goes out in pieces as the lanes finish (:mod:`~edm_sym.engines.abstraction.balance`).
+* ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker.
+  Workers on this machine open the same two maps (named, in ``/dev/shm``) and
+  run as the pool does; otherwise each keeps its own stores, and individuals
+  go to the worker that holds most of their rows.
 * ``executor=`` (any :class:`~concurrent.futures.Executor`): ``workers``
-  unpinned lanes with the same protocol.
+  unpinned lanes with their own stores.
 
-Results are gathered in submission order and are pure functions of the
-genes, so a run's outcome never depends on the number of workers or on which
-task finishes first.
+Results are pure functions of the genes, gathered by individual, so a run's
+outcome never depends on the number of workers or on which task finishes first.
 """
-
 from __future__ import annotations
 
 import hashlib
@@ -44,22 +44,34 @@ import warnings
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.engines import kernel
+from edm_sym.engines.abstraction.balance import (
+    Feeder,
+    Speeds,
+    by_affinity,
+    feed,
+    group_costs,
+    groups,
+)
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
     ExecutorLane,
     LocalLane,
+    PipeLane,
     PoolLane,
+    SocketLane,
     dask_lanes,
+    share_stores,
+    socket_lanes,
 )
 from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
+from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
 from edm_sym.engines.abstraction.rowsim import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
@@ -76,41 +88,9 @@ from edm_sym.engines.abstraction.rowsim import (
     worker_for,
     worker_init,
 )
+from edm_sym.engines.abstraction.stats import EvalStats
 
 __all__ = ["EvalStats", "Evaluator", "row_table"]
-
-
-@dataclass
-class EvalStats:
-    """Counters of an evaluator (for progress lines and benchmarks).
-
-    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
-    (simulation and scoring, in whichever process), ``sim_seconds`` and
-    ``task_seconds`` the time the workers spent simulating rows and running
-    tasks, summed over workers; ``peak_rss`` the peak resident memory of
-    each process that ran a task, by process id.
-    """
-
-    individuals: int = 0
-    row_requests: int = 0
-    rows_missed: int = 0
-    rows_simulated: int = 0
-    element_samples: int = 0
-    sim_seconds: float = 0.0
-    task_seconds: float = 0.0
-    eval_seconds: float = 0.0
-    tasks: int = 0
-    peak_rss: dict = field(default_factory=dict)
-
-    @property
-    def cache_hits(self) -> int:
-        """Row requests served without simulating (store, memo or a twin in the batch)."""
-        return self.row_requests - self.rows_missed
-
-    @property
-    def hit_rate(self) -> float:
-        """Share of row requests served without simulating."""
-        return self.cache_hits / self.row_requests if self.row_requests else 0.0
 
 
 class Evaluator:
@@ -176,14 +156,17 @@ class Evaluator:
         self.shared = (executor is None and client is None and self.workers > 1
                        and "fork" in multiprocessing.get_all_start_methods())
         self.store: SlotStore | None = None
+        self.prefixes: SlotStore | None = None
+        self._slots = (max(cache_bytes // (8 * n), 2 * max_batch_rows + 16),
+                       max(self.ctx.prefix_bytes // (8 * n), 8))
         if self.shared:
-            slots = max(cache_bytes // (8 * n), 2 * max_batch_rows + 16)
-            self.store = SlotStore(slots, n)
-        # Made before any fork, so forked workers inherit it (and the store).
+            self.store, self.prefixes = SlotStore(self._slots[0], n), SlotStore(self._slots[1], n)
+        # Made before any fork, so forked workers inherit it (and the stores).
         self._local = worker_for(self._token, ctx=self.ctx,
-                                 rows=self.store.rows if self.shared else None)
+                                 rows=self.store.rows if self.shared else None,
+                                 prefix_rows=self.prefixes.rows if self.shared else None)
         self.lanes: list = [LocalLane()]
-        self._pools: list[ProcessPoolExecutor] = []
+        self._pools: list[ProcessPoolExecutor | PipeLane] = []
         self._started = False
         self._sent_ctx: list[bool] = []
         self._sent_w: list[str | None] = []
@@ -205,28 +188,44 @@ class Evaluator:
         warm_up()  # the row kernel, loaded once before the fork
         if self.client is not None:
             self.lanes = dask_lanes(self.client)
+            stores = share_stores(self.lanes, self._token, self._blob, self._slots, self.n_samples)
+            if stores is not None:
+                self.shared = True
+                self.store, self.prefixes = stores
+                self._local.rows, self._local.prefix_rows = self.store.rows, self.prefixes.rows
+                self.lanes = socket_lanes(self.lanes)
         elif self.executor is not None:
             self.lanes = [ExecutorLane(self.executor) for _ in range(self.workers)]
         elif self.workers > 1:
             with warnings.catch_warnings():
                 # Forking is safe here: the pool starts before the run makes threads.
                 warnings.simplefilter("ignore", DeprecationWarning)
-                ctx = multiprocessing.get_context("fork" if self.shared else None)
-                self._pools = [ProcessPoolExecutor(1, mp_context=ctx, initializer=worker_init,
-                                                   initargs=(os.getpid(),))
-                               for _ in range(self.workers - 1)]
-                for f in [pool.submit(ping) for pool in self._pools]:
+                if self.shared:
+                    ctx = multiprocessing.get_context("fork")
+                    self._pools = [PipeLane(ctx, worker_init, (os.getpid(),))
+                                   for _ in range(self.workers - 1)]
+                    others = list(self._pools)
+                else:
+                    self._pools = [ProcessPoolExecutor(1, initializer=worker_init,
+                                                       initargs=(os.getpid(),))
+                                   for _ in range(self.workers - 1)]
+                    others = [PoolLane(p) for p in self._pools]
+                for f in [lane.submit(ping) for lane in others]:
                     f.result()
             # This process is a lane too: it works while the others do.
-            self.lanes = [LocalLane(), *(PoolLane(p) for p in self._pools)]
+            self.lanes = [LocalLane(), *others]
         count = len(self.lanes)
         self._sent_ctx = [lane.local or self.shared for lane in self.lanes]
         self._sent_w = [None] * count
+        self._speed = Speeds(count)
         self._mirror = [OrderedDict() for _ in range(count)]
 
     def close(self) -> None:
         """Free the run's state in every worker; shut down the processes this evaluator started."""
         for lane in self.lanes:
+            if isinstance(lane, SocketLane):
+                lane.hang_up()
+                lane = lane.via
             if isinstance(lane, DaskLane):
                 # A cluster's workers outlive the run: drop its data and stores there.
                 try:
@@ -241,8 +240,14 @@ class Evaluator:
         self._shutdown(wait=False)
 
     def _shutdown(self, wait: bool) -> None:
+        for lane in self.lanes:
+            if isinstance(lane, SocketLane):
+                lane.hang_up()
         for pool in self._pools:
-            pool.shutdown(wait=wait, cancel_futures=True)
+            if isinstance(pool, PipeLane):
+                pool.shutdown(wait=wait)
+            else:
+                pool.shutdown(wait=wait, cancel_futures=True)
         self._pools = []
         self.lanes = [LocalLane()]
 
@@ -334,9 +339,9 @@ class Evaluator:
         ps : numpy.ndarray
             Shape (P, m, n) normalised parameters.
         rows_out : list, optional
-            When given, the batch runs in this process and the list is filled
-            with one entry per individual: its m row keys and m row outputs
-            (valid until the next call).
+            When given, the list is filled with one entry per individual: its
+            m row keys and m row outputs (valid until the next call). Without
+            shared stores the batch then runs in this process.
         free : numpy.ndarray, optional
             Shape (P, m) bool: the rows whose scale the gain fit may change
             (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
@@ -355,13 +360,13 @@ class Evaluator:
             self.start()
         p, m, n = codes.shape
         table = row_table(inputs.reshape(-1), codes.reshape(-1, n), ps.reshape(-1, n))
-        keys = [line.tobytes() for line in table]
+        keys = _line_keys(table)
         self.stats.individuals += p
         self.stats.row_requests += p * m
         want_scales = scales_out is not None and free is not None
         out = np.empty(p)
         scales: list = [None] * p
-        ikeys = [b"".join(keys[k * m:(k + 1) * m]) for k in range(p)]
+        ikeys = _line_keys(table.reshape(p, -1))
         need = []
         for k in range(p):
             hit = self._memo.get(ikeys[k])
@@ -373,24 +378,21 @@ class Evaluator:
         send = list(range(p)) if local else need
         if send:
             index: dict[bytes, int] = {}
-            first: list[int] = []
-            members = np.empty((len(send), m), dtype=np.int64)
-            for a, k in enumerate(send):
-                for j in range(m):
-                    key = keys[k * m + j]
-                    at = index.get(key)
-                    if at is None:
-                        at = index[key] = len(first)
-                        first.append(k * m + j)
-                    members[a, j] = at
+            flat = [k * m + j for k in send for j in range(m)]
+            at = [index.setdefault(keys[i], len(index)) for i in flat]
+            members = np.array(at, dtype=np.int64).reshape(len(send), m)
+            first = np.empty(len(index), dtype=np.int64)
+            first[members.reshape(-1)] = flat  # any line of a key: they are equal
             needed = set(need)
             score = np.array([k in needed for k in send], dtype=bool)
             utab = table[first]
-            ukeys = [keys[i] for i in first]
+            ukeys = list(index)
             sub_free = free[send] if want_scales else None
             fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
             if self.reject_poles:
-                pole = np.array([self.has_pole(key, line) for key, line in zip(ukeys, utab, strict=True)])
+                known = self._poles
+                pole = np.array([self.has_pole(key, utab[r]) if (hit := known.get(key)) is None
+                                 else hit for r, key in enumerate(ukeys)], dtype=bool)
                 fit = np.where(pole[members].any(axis=1), np.inf, fit)
             if len(self._memo) > 50_000:
                 self._memo.clear()
@@ -411,13 +413,18 @@ class Evaluator:
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
                   score: np.ndarray, free: np.ndarray | None, local: bool
                   ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
-        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local)."""
+        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
+
+        With shared stores every lane reads every row, so ``local`` (rows
+        wanted back) does not keep the batch in this process.
+        """
         count = len(members)
-        lanes = [0] if (local or len(self.lanes) == 1 or int(score.sum()) < self.MIN_PARALLEL
-                        ) else list(range(len(self.lanes)))
+        alone = (local and not self.shared) or len(self.lanes) == 1 or (
+            int(score.sum()) < self.MIN_PARALLEL)
+        lanes = [0] if alone else list(range(len(self.lanes)))
         if lanes == [0] and not self.lanes[0].local:
             lanes = []  # no local lane among a client's or an executor's: run here
-        slots = missing = None
+        slots = missing = plan = None
         if self.shared:
             slots = np.empty(len(keys), dtype=np.int64)
             missing = np.zeros(len(keys), dtype=bool)
@@ -432,112 +439,104 @@ class Evaluator:
                 fresh = self.store.allocate(len(miss), set(keys))
                 slots[miss] = fresh
                 missing[miss] = True
-        parts = self._partition(keys, members, missing, lanes)
+            plan = plan_prefixes(self.prefixes, table, missing)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
-        results: list[tuple[list[int], ChunkResult]] = []
-        pending = []
-        for lane, idx in parts:
-            if not idx:
-                continue
-            chunk, lines = self._chunk(table, members, score, free, slots, missing, idx)
-            pending.append((lane, idx, lines, chunk))
-        if not lanes:
-            for _, idx, lines, chunk in pending:
-                results.append((idx, lines, run_chunk(self._local, chunk)))
+        if self.shared and len(lanes) > 1:
+            results = self._feed(table, members, score, free, slots, missing, plan, lanes)
         else:
-            results = self._gather(pending)
-        rows = None
+            if len(lanes) > 1:
+                parts = by_affinity(keys, members, lanes, self._mirror,
+                                    max(64, self.ctx.row_bytes // (8 * self.n_samples)))
+            else:
+                parts = [(lanes[0] if lanes else 0, list(range(count)))]
+            pending = []
+            for lane, idx in parts:
+                if idx:
+                    chunk, lines = self._chunk(table, members, score, free, slots, missing, plan,
+                                               idx)
+                    pending.append((lane, idx, lines, chunk))
+            if lanes:
+                results = self._gather(pending)
+            else:
+                results = [(idx, lines, run_chunk(self._local, chunk))
+                           for _, idx, lines, chunk in pending]
         for idx, _lines, res in results:
             for a, i in enumerate(idx):
                 fitness[i] = res.fitness[a]
                 if res.scales is not None:
                     scales[i] = res.scales[a]
             self._account(res, table.shape[1])
-        if self.shared and missing is not None:
+        rows = None
+        if self.shared:
             for r in np.flatnonzero(missing):
                 self.store.commit(keys[r], int(slots[r]))
-        if local:
+            plan.commit(self.prefixes, [res.prefixes for _, _, res in results
+                                        if res.prefixes is not None])
+            if local:
+                rows = [self.store.rows[s] for s in slots.tolist()]
+        elif local:
             _, lines, res = results[0]
-            store = self.store.rows if self.shared else self._local.own.rows
             rows = [None] * len(keys)
             for line, s in zip(lines, res.slots, strict=True):
-                rows[line] = store[s]
+                rows[line] = self._local.own.rows[s]
         return fitness, scales, rows
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
-               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None, idx: list[int]
-               ) -> tuple[Chunk, list[int]]:
+               free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None,
+               plan: PrefixPlan | None, idx: list[int]) -> tuple[Chunk, list[int]]:
         """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
         sub = members[idx]
         lines, inverse = np.unique(sub.reshape(-1), return_inverse=True)
         chunk = Chunk(table[lines], inverse.reshape(sub.shape).astype(np.int64), score[idx],
                       None if free is None else free[idx],
                       None if slots is None else slots[lines],
-                      None if missing is None else missing[lines])
+                      None if missing is None else missing[lines],
+                      None if plan is None else plan.start[lines],
+                      None if plan is None else plan.slots[lines])
         return chunk, lines.tolist()
 
-    def _partition(self, keys: list[bytes], members: np.ndarray, missing: np.ndarray | None,
-                   lanes: list[int]) -> list[tuple[int, list[int]]]:
-        """Individuals per lane. Changes speed only, never a result.
+    def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
+              free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
+              lanes: list[int]) -> list:
+        """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
 
-        With a shared store, individuals that need the same new row go to one
-        lane (which simulates it), and lanes get about equal work. Otherwise
-        each individual goes to the lane whose store most likely holds most
-        of its rows, unless that lane already has a quarter more than its
-        share.
+        A lane's speed is the estimated cost it gets through per second,
+        averaged over its earlier pieces, so a lane slowed by anything (its
+        round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
         """
-        count = len(members)
-        if len(lanes) <= 1:
-            return [(lanes[0] if lanes else 0, list(range(count)))]
-        if missing is not None:
-            parent = list(range(count))
+        parts = groups(members, plan, missing)
+        feeder = Feeder(parts, group_costs(parts, members, plan, score, free),
+                        self._speed.of(lanes))
+        cost = {lane: load for lane, load in zip(lanes, feeder.loads, strict=True)}
+        chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
-            def find(i: int) -> int:
-                while parent[i] != i:
-                    parent[i] = parent[parent[i]]
-                    i = parent[i]
-                return i
+        def send(lane: int, idx: list[int], again: bool = False) -> Any:
+            if not again:
+                chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            # The weighting goes with every piece until the lane confirms it has it.
+            wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
+            return self.lanes[lane].submit(evaluate_chunk, self._token,
+                                           self._blob if again else None, self._wtoken, wblob,
+                                           chunks[lane][0])
 
-            owner: dict[int, int] = {}
-            for i in range(count):
-                for r in members[i]:
-                    if missing[r]:
-                        j = owner.setdefault(int(r), i)
-                        parent[find(i)] = find(j)
-            groups: dict[int, list[int]] = {}
-            for i in range(count):
-                groups.setdefault(find(i), []).append(i)
-            new = {}
-            for g, idx in groups.items():
-                new[g] = len({int(r) for i in idx for r in members[i] if missing[r]})
-            load = [0.0] * len(lanes)
-            parts: list[list[int]] = [[] for _ in lanes]
-            for g in sorted(groups, key=lambda g: -(3 * new[g] + len(groups[g]))):
-                w = min(range(len(lanes)), key=lambda w: load[w])
-                parts[w].extend(groups[g])
-                load[w] += 3 * new[g] + len(groups[g])
-            return [(lanes[w], sorted(idx)) for w, idx in enumerate(parts)]
-        cap = math.ceil(count * 5 / (4 * len(lanes)))
-        parts = [[] for _ in lanes]
-        limit = max(64, self.ctx.row_bytes // (8 * self.n_samples))
-        for i in range(count):
-            rk = [keys[r] for r in members[i]]
-            best, held = None, -1
-            for w, lane in enumerate(lanes):
-                if len(parts[w]) >= cap:
-                    continue
-                have = sum(k in self._mirror[lane] for k in rk)
-                if have > held or (have == held and len(parts[w]) < len(parts[best])):
-                    best, held = w, have
-            parts[best].append(i)
-            mirror = self._mirror[lanes[best]]
-            for k in rk:
-                mirror[k] = True
-                mirror.move_to_end(k)
-            while len(mirror) > limit:
-                mirror.popitem(last=False)
-        return [(lanes[w], idx) for w, idx in enumerate(parts)]
+        def receive(lane: int, idx: list[int], future: Any) -> tuple:
+            res = future.result()
+            if res in (NEED_CONTEXT, NEED_WEIGHTS):  # a restarted worker, or a call overtaken
+                res = send(lane, idx, again=True).result()
+            self._sent_w[lane] = self._wtoken
+            self._speed.timed(lane, cost[lane], res.seconds)
+            return idx, chunks[lane][1], res
+
+        def run(idx: list[int]) -> tuple:
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            res = run_chunk(self._local, chunk)
+            self._speed.timed(lanes[here], cost[lanes[here]], res.seconds)
+            return idx, lines, res
+
+        local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
+        here = local[0] if local else None
+        return feed(feeder.pieces, lanes, here, send, receive, run)
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
@@ -583,12 +582,19 @@ class Evaluator:
         st = self.stats
         st.rows_missed += res.simulated
         st.rows_simulated += res.simulated
+        st.elements_simulated += res.elements
         st.element_samples += res.simulated * n * self.n_samples
         st.sim_seconds += res.sim_seconds
         st.task_seconds += res.seconds
         st.tasks += 1
         if res.peak_rss:
             st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
+
+
+def _line_keys(table: np.ndarray) -> list[bytes]:
+    """The bytes of each line of a 2-d float64 array (at once)."""
+    lines = np.ascontiguousarray(table)
+    return lines.view(np.dtype((np.void, lines.shape[1] * 8))).ravel().tolist()
 
 
 def kernel_in_use() -> bool:

@@ -6,8 +6,10 @@ Rows travel as a canonical gene table (:func:`row_table`), one float64 line
 decoder from codes to element classes and ranges, the current weighting (sent
 once per step), a store of whole rows, and a store of row prefixes (the
 signal after the first k elements), so a row that differs from an earlier one
-only in its later elements starts where they part. Both stores are fixed
-blocks of slots, bounded by the config's ``cache_mb``.
+only in its later elements starts where they part
+(:mod:`~edm_sym.engines.abstraction.rows`). Both stores are fixed blocks of
+slots, bounded by the config's ``cache_mb``: the worker's own, or the main
+process's shared ones (the chunk then says where each row and prefix goes).
 
 A task (:func:`evaluate_chunk`) gets a :class:`Chunk`: a batch of individuals
 as indices into a table of their distinct rows. The worker simulates the rows
@@ -39,6 +41,8 @@ from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.polish import row_scales
+from edm_sym.engines.abstraction.prefixes import ChunkPrefixes
+from edm_sym.engines.abstraction.rows import simulate_into
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
@@ -119,6 +123,10 @@ class Chunk:
     simulate : numpy.ndarray or None
         Shape (R,) bool, with ``slots``: the rows this task must simulate
         into their slots (the others are there already).
+    prefix_start, prefix_slots : numpy.ndarray or None
+        With a shared prefix store: the table's lines of the batch's
+        :class:`~edm_sym.engines.abstraction.prefixes.PrefixPlan` (where each
+        row starts, where its new prefixes go).
     """
 
     table: np.ndarray
@@ -127,6 +135,8 @@ class Chunk:
     free: np.ndarray | None = None
     slots: np.ndarray | None = None
     simulate: np.ndarray | None = None
+    prefix_start: np.ndarray | None = None
+    prefix_slots: np.ndarray | None = None
 
 
 @dataclass
@@ -152,6 +162,10 @@ class ChunkResult:
         The process that ran it.
     peak_rss : int
         That process's peak resident memory [bytes] (0 where unknown).
+    elements : int
+        Elements run over the signal (a row from a stored prefix runs only the rest).
+    prefixes : numpy.ndarray or None
+        With a shared prefix store: the slots of the new prefixes written.
     """
 
     fitness: np.ndarray
@@ -162,6 +176,8 @@ class ChunkResult:
     seconds: float
     pid: int
     peak_rss: int
+    elements: int = 0
+    prefixes: np.ndarray | None = None
 
 
 @dataclass
@@ -170,8 +186,10 @@ class Worker:
 
     ``rows`` is the shared store's rows when the main process manages the
     slots; otherwise the worker keeps its own :class:`SlotStore` (``own``).
-    Row prefixes go into a store of this process (:meth:`prefix_store`),
-    slots reused in place, so simulating a row allocates no memory.
+    Row prefixes go into the shared prefix store (``prefix_rows``, its slots
+    planned by the main process) or into a store of this process
+    (:meth:`prefix_store`); slots are reused in place, so simulating a row
+    allocates no memory.
     ``trig`` holds sin and cos of each input signal: a sine element reading an
     input directly (the paper's position-dependent friction; its class
     declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
@@ -194,6 +212,7 @@ class Worker:
     pool: SlotStore | None = field(default=None)
     work: np.ndarray | None = field(default=None)
     pool_pid: int = field(default=0)
+    prefix_rows: np.ndarray | None = field(default=None)
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -258,7 +277,8 @@ _LOCK = threading.Lock()  # executors may run tasks in threads (dask, thread poo
 
 
 def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = None,
-               rows: np.ndarray | None = None) -> Worker | None:
+               rows: np.ndarray | None = None, prefix_rows: np.ndarray | None = None
+               ) -> Worker | None:
     """This process's :class:`Worker` of run ``token`` (made from ``ctx`` or ``blob``).
 
     None when it has none and neither ``ctx`` nor ``blob`` is given.
@@ -272,191 +292,33 @@ def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = N
             if blob is None:
                 return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        hit = Worker(ctx, ctx.decoder(), rows)
+        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows)
         _WORKERS[token] = hit
         while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)
         return hit
 
 
+def attach(token: str, blob: bytes, rows: tuple[str, int], prefixes: tuple[str, int], n: int
+           ) -> bool:
+    """Executor task: share the main process's named stores (same machine) for run ``token``.
+
+    ``rows`` and ``prefixes`` are each a store's path and slot count. False
+    when this process cannot open them (another machine): it keeps its own.
+    """
+    worker = worker_for(token, blob)
+    try:
+        shared = SlotStore.attach(*rows, n), SlotStore.attach(*prefixes, n)
+    except OSError:
+        return False
+    worker.rows, worker.prefix_rows = shared
+    return True
+
+
 def forget(token: str) -> None:
     """Drop this process's state of run ``token``."""
     with _LOCK:
         _WORKERS.pop(token, None)
-
-
-def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
-    """Key of the first ``k`` elements of a gene-table line (the row key of that prefix)."""
-    return line[:1 + k].tobytes() + line[1 + n:1 + n + k].tobytes()
-
-
-def simulate_table(worker: Worker, table: np.ndarray,
-                   outs: list[np.ndarray] | np.ndarray | None = None) -> list[np.ndarray]:
-    """Simulate the rows of a canonical gene table (see :func:`simulate_into`).
-
-    Parameters
-    ----------
-    worker : Worker
-        Context, decoder and prefix store of this process.
-    table : numpy.ndarray
-        Shape (R, 1 + 2 n).
-    outs : sequence of numpy.ndarray, optional
-        Where each row's output goes (shape (N,) each, or one (R, N) array);
-        new arrays when None.
-
-    Returns
-    -------
-    list of numpy.ndarray
-        The R row outputs (``outs`` when given).
-    """
-    count, length = len(table), worker.ctx.inputs.shape[1]
-    order = np.arange(count, dtype=np.int64)
-    if outs is None or (isinstance(outs, np.ndarray) and outs.ndim == 2):
-        store = np.empty((count, length)) if outs is None else outs
-        simulate_into(worker, table, store, order)
-        return list(store)
-    store = np.empty((count, length))
-    simulate_into(worker, table, store, order)
-    for out, row in zip(outs, store, strict=True):
-        out[:] = row
-    return list(outs)
-
-
-#: The most rows the row kernel runs together (one schedule, their filters overlapped).
-BATCH_ROWS = 64
-
-
-def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np.ndarray) -> None:
-    """Simulate the rows of a canonical gene table into ``store[dest[r]]``.
-
-    Each row starts from the longest prefix found in the worker's prefix
-    store; each prefix it computes goes into that store. With numba the row
-    kernel runs the rows in batches (:func:`edm_sym.engines.kernel.run_rows`,
-    writing the prefixes straight into their slots); a row whose longest
-    prefix another row of the batch computes waits for the next batch, so it
-    starts there as it would have one after the other. Without numba the
-    realisations run, one numpy call per element, row after row.
-
-    Parameters
-    ----------
-    worker : Worker
-        Context, decoder and prefix store of this process.
-    table : numpy.ndarray
-        Shape (R, 1 + 2 n).
-    store : numpy.ndarray
-        Shape (S, N): row r's output goes to ``store[dest[r]]``.
-    dest : numpy.ndarray
-        int64, shape (R,), distinct.
-    """
-    if not worker.use_kernel:
-        for r, line in enumerate(table):
-            _simulate_reference(worker, line, store[dest[r]])
-        return
-    ctx, decoder = worker.ctx, worker.decoder
-    pool = worker.prefix_store()
-    n = (table.shape[1] - 1) // 2
-    sources = ctx.inputs
-    if not (sources.flags.c_contiguous and sources.dtype == np.float64):
-        sources = np.ascontiguousarray(sources, dtype=np.float64)
-    # A batch's prefixes all need a slot at once: at most half the prefix store.
-    cap = max(1, min(BATCH_ROWS, pool.slots // (2 * max(1, n - 1))))
-    todo = list(range(len(table)))
-    while todo:
-        batch, later, produced, used = [], [], set(), set()
-        for r in todo:
-            line = table[r]
-            if len(batch) >= cap:
-                later.append(r)
-                continue
-            start, begin, wait = 0, None, False
-            for k in range(n - 1, 0, -1):
-                key = prefix_key(line, n, k)
-                if key in produced:  # a row of this batch computes it: start there next time
-                    wait = True
-                    break
-                slot = pool.lookup(key)
-                if slot is not None:
-                    start, begin = k, -1 - slot  # the prefix, read in place
-                    used.add(key)
-                    break
-            if wait:
-                later.append(r)
-                continue
-            found, keep, stages = start, None, []
-            if begin is None:
-                begin = int(line[0])  # the input, read in place
-            for i in range(start, n):
-                code, p = int(line[1 + i]), float(line[1 + n + i])
-                cls, rng = decoder[code]
-                if i == 0 and cls.from_sin_cos is not None:
-                    a = rng.decode(p) if rng is not None else None
-                    begin = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
-                    start = 1
-                    keep = begin if n > 1 else None
-                    continue
-                stages.append(worker.stage(code, p))
-            program, stored = kernel.compile_steps(stages, store=True)
-            batch.append((r, line, program, stored, start, begin, keep))
-            produced.update(prefix_key(line, n, k) for k in range(found + 1, n))
-        _run_batch(worker, pool, batch, n, store, dest, sources, used)
-        todo = later
-
-
-def _run_batch(worker: Worker, pool: SlotStore, batch: list, n: int, store: np.ndarray,
-               dest: np.ndarray, sources: np.ndarray, used: set[bytes]) -> None:
-    """Run a batch of rows in the kernel; record their prefixes.
-
-    The prefixes rows start from (``used``) keep their slots during the batch.
-    """
-    slots = pool.allocate(sum(len(b[3]) for b in batch), used)
-    row_slots, at = [], 0
-    for b in batch:
-        row_slots.append(slots[at:at + len(b[3])])
-        at += len(b[3])
-    kernel.run_rows([b[2] for b in batch], [b[5] for b in batch], store,
-                    np.array([dest[b[0]] for b in batch], dtype=np.int64), pool.rows, row_slots,
-                    sources=sources)
-    for (_, line, _, stored, start, _, keep), mine in zip(batch, row_slots, strict=True):
-        for slot, count in zip(mine, stored, strict=True):
-            pool.commit(prefix_key(line, n, start + count), slot)
-        if keep is not None:
-            _keep(pool, prefix_key(line, n, 1), keep)
-
-
-def _simulate_reference(worker: Worker, line: np.ndarray, out: np.ndarray) -> None:
-    """One row with the realisations, from its longest stored prefix (storing the others)."""
-    ctx, decoder = worker.ctx, worker.decoder
-    pool = worker.prefix_store()
-    n = (line.shape[0] - 1) // 2
-    y, start = None, 0
-    for k in range(n - 1, 0, -1):
-        y = pool.get(prefix_key(line, n, k))
-        if y is not None:
-            start = k
-            break
-    if y is None:
-        y = ctx.inputs[int(line[0])]
-    for i in range(start, n):
-        code, p = int(line[1 + i]), float(line[1 + n + i])
-        cls, rng = decoder[code]
-        if i == 0 and cls.from_sin_cos is not None:
-            a = rng.decode(p) if rng is not None else None
-            y = cls.from_sin_cos(*worker.sin_cos(int(line[0])), a)
-        else:
-            prev, y = y, worker.stage(code, p).run(y)
-            if y is prev:
-                continue
-        if i + 1 < n:
-            _keep(pool, prefix_key(line, n, i + 1), y)
-    out[:] = y
-
-
-def _keep(pool: SlotStore, key: bytes, y: np.ndarray) -> None:
-    """Copy a prefix into the pool (unless it is there)."""
-    if pool.lookup(key) is None:
-        slot = pool.allocate(1, ())[0]
-        pool.rows[slot] = y
-        pool.commit(key, slot)
 
 
 def _gram(worker: Worker, rows: list[np.ndarray], keys: list[bytes], target: np.ndarray
@@ -508,9 +370,16 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
             for r, slot in zip(todo_list, fresh, strict=True):
                 slots[r] = slot
         store_rows, todo = store.rows, np.array(todo_list, dtype=np.intp)
+    elements, written = 0, None
     if len(todo):
         s0 = time.perf_counter()
-        simulate_into(worker, table[todo], store_rows, slots[todo])
+        pool = None
+        if chunk.prefix_start is not None:
+            pool = ChunkPrefixes(worker.prefix_rows, table[todo], chunk.prefix_start[todo],
+                                 chunk.prefix_slots[todo], worker.prefix_rows.shape[0])
+        elements = simulate_into(worker, table[todo], store_rows, slots[todo], pool)
+        if pool is not None:
+            written = np.array(pool.written, dtype=np.int64)
         sim_seconds, simulated = time.perf_counter() - s0, len(todo)
         if chunk.slots is None:
             for r in todo:
@@ -527,7 +396,7 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
                              [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
-                       time.perf_counter() - t0, os.getpid(), peak_rss())
+                       time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written)
 
 
 def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,

@@ -1,0 +1,214 @@
+"""How a batch of individuals is cut among lanes: speed only, never a result.
+
+With the shared stores of the default pool (a row or prefix simulated once
+serves every lane), a batch is cut into *groups*: individuals that need the
+same new row, or whose new rows make the same new prefix, form one group, so
+no row or prefix is computed by two lanes (:func:`groups`). Each group gets
+an estimated cost (:func:`group_costs`: the elements its new rows run, and
+the scoring of its individuals), and a :class:`Feeder` hands the groups out
+in pieces, largest groups first, each piece about the not yet handed out
+cost over twice the number of lanes: the lanes take pieces as they finish
+(the main process between its own pieces), so they end at about the same
+time whatever the estimate's error.
+
+Without shared stores (a dask cluster, an executor), each worker keeps its
+own, so an individual goes to the lane whose store most likely holds its
+rows (:func:`by_affinity`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from edm_sym.engines.abstraction.prefixes import PrefixPlan
+
+#: Estimated cost of scoring one row of an individual (eq. 8), in elements run (fitted
+#: on the auger schedule's tasks: about 100 us per element, 60 per scored row, 80 more with
+#: the gain fit).
+SCORE_COST = 0.6
+#: Estimated cost of the gain fit of one individual per row (inner products, least squares).
+FIT_COST = 0.8
+
+
+def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[list[int]]:
+    """Individuals that must run in one chunk: they share a new row or a new prefix.
+
+    Parameters
+    ----------
+    members : numpy.ndarray
+        Shape (P, m): each individual's rows, as lines of the batch's table.
+    plan : PrefixPlan
+        The batch's prefix plan (its new prefixes' slots).
+    missing : numpy.ndarray
+        Shape (R,) bool: the lines to simulate.
+
+    Returns
+    -------
+    list of list of int
+        The groups, each sorted, in the order of their first individual.
+    """
+    count = len(members)
+    parent = list(range(count))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner: dict[int, int] = {}
+    new = np.flatnonzero(missing)
+    made = {int(r): [s for s in plan.slots[r, plan.start[r] + 1:].tolist() if s >= 0]
+            for r in new.tolist()}
+    for i, row in enumerate(members.tolist()):
+        for r in row:
+            mine = made.get(r)
+            if mine is None:
+                continue
+            for token in (r, *(-1 - s for s in mine)):
+                j = owner.setdefault(token, i)
+                if j != i:
+                    parent[find(i)] = find(j)
+    out: dict[int, list[int]] = {}
+    for i in range(count):
+        out.setdefault(find(i), []).append(i)
+    return list(out.values())
+
+
+def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: PrefixPlan,
+                score: np.ndarray, free: np.ndarray | None) -> np.ndarray:
+    """Estimated cost of each group, in elements run over the signal.
+
+    A new row costs the elements it runs (from its longest stored prefix);
+    a scored individual :data:`SCORE_COST` per row, and with the gain fit
+    :data:`FIT_COST` per row more.
+    """
+    m = members.shape[1]
+    per = np.where(score, SCORE_COST * m, 0.0)
+    if free is not None:
+        per = per + np.where(score & free.any(axis=1), FIT_COST * m, 0.0)
+    group = np.empty(len(members), dtype=np.int64)
+    for g, idx in enumerate(parts):
+        group[idx] = g
+    # A row to simulate belongs to one group (its individuals are all in it); a row
+    # not simulated costs 0 wherever it is.
+    owner = np.empty(len(plan.cost), dtype=np.int64)
+    owner[members.reshape(-1)] = np.repeat(group, m)
+    return (np.bincount(owner, weights=plan.cost, minlength=len(parts))
+            + np.bincount(group, weights=per, minlength=len(parts)))
+
+
+class Feeder:
+    """A batch's groups cut into one piece per lane, in proportion to the lanes' speeds.
+
+    The groups go, dearest first, to the piece that would end first with
+    them (its estimated cost over its lane's speed): longest processing
+    time first, for lanes of different speeds.
+
+    Parameters
+    ----------
+    parts : sequence of list of int
+        The groups.
+    costs : numpy.ndarray
+        Their estimated costs.
+    speeds : sequence of float
+        Each lane's speed (estimated cost per second; only the ratios count).
+    """
+
+    def __init__(self, parts: Sequence[list[int]], costs: np.ndarray, speeds: Sequence[float]):
+        count = len(speeds)
+        bins: list[list[int]] = [[] for _ in range(count)]
+        self.loads = [0.0] * count
+        for g in np.argsort(-costs, kind="stable").tolist():
+            b = min(range(count), key=lambda b: (self.loads[b] + costs[g]) / speeds[b])
+            bins[b].extend(parts[g])
+            self.loads[b] += float(costs[g])
+        self.pieces = [sorted(piece) for piece in bins]
+
+
+class Speeds:
+    """Each lane's speed: estimated cost per second, a moving average over its pieces."""
+
+    def __init__(self, count: int):
+        self._speed: list[float | None] = [None] * count
+
+    def of(self, lanes: Sequence[int]) -> list[float]:
+        """The speeds of ``lanes`` (a lane not timed yet: the mean of the others, or 1)."""
+        known = [v for v in self._speed if v is not None]
+        guess = sum(known) / len(known) if known else 1.0
+        return [guess if self._speed[lane] is None else self._speed[lane] for lane in lanes]
+
+    def timed(self, lane: int, cost: float, seconds: float) -> None:
+        """Fold in a piece of ``cost`` that took ``seconds``."""
+        if cost > 0.0 and seconds > 1e-4:
+            old = self._speed[lane]
+            self._speed[lane] = cost / seconds if old is None else old + 0.2 * (cost / seconds - old)
+
+
+def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,
+         send: Callable[[int, list[int]], Any], receive: Callable[[int, list[int], Any], Any],
+         run: Callable[[list[int]], Any]) -> list:
+    """Run a batch's pieces, one per lane: the remote ones first, then this process's.
+
+    Parameters
+    ----------
+    pieces : sequence of list of int
+        One per lane (empty: nothing for that lane).
+    lanes : sequence of int
+        The lanes, in the order of ``pieces``.
+    here : int or None
+        The position of this process's lane among ``lanes`` (None: it is none).
+    send : callable
+        ``send(lane, idx)``: submit piece ``idx`` to a remote lane; a future.
+    receive : callable
+        ``receive(lane, idx, future)``: the piece's result, once it is done.
+    run : callable
+        ``run(idx)``: run a piece in this process; its result.
+
+    Returns
+    -------
+    list
+        The results, one per non-empty piece.
+    """
+    sent = [(lane, idx, send(lane, idx))
+            for k, (lane, idx) in enumerate(zip(lanes, pieces, strict=True)) if k != here and idx]
+    results = []
+    if here is not None and pieces[here]:
+        results.append(run(pieces[here]))
+    results.extend(receive(lane, idx, future) for lane, idx, future in sent)
+    return results
+
+
+def by_affinity(keys: Sequence[bytes], members: np.ndarray, lanes: Sequence[int],
+                mirrors: Sequence[OrderedDict], limit: int) -> list[tuple[int, list[int]]]:
+    """Individuals per lane when each lane keeps its own store.
+
+    Each individual goes to the lane whose store most likely holds most of
+    its rows (``mirrors``: per lane, the row keys sent to it lately, at most
+    ``limit``), unless that lane already has a quarter more than its share.
+    """
+    count = len(members)
+    cap = math.ceil(count * 5 / (4 * len(lanes)))
+    parts: list[list[int]] = [[] for _ in lanes]
+    for i in range(count):
+        rk = [keys[r] for r in members[i]]
+        best, held = None, -1
+        for w, lane in enumerate(lanes):
+            if len(parts[w]) >= cap:
+                continue
+            have = sum(k in mirrors[lane] for k in rk)
+            if have > held or (have == held and len(parts[w]) < len(parts[best])):
+                best, held = w, have
+        parts[best].append(i)
+        mirror = mirrors[lanes[best]]
+        for k in rk:
+            mirror[k] = True
+            mirror.move_to_end(k)
+        while len(mirror) > limit:
+            mirror.popitem(last=False)
+    return [(lanes[w], idx) for w, idx in enumerate(parts)]

@@ -1,0 +1,185 @@
+"""Row prefixes: keys, and a store of them shared between processes.
+
+A row's prefix k is its signal after its first k elements. A row that
+differs from a stored one only in its later elements starts from their
+longest common prefix, and stores the prefixes it computes.
+
+A process without a shared store keeps its prefixes in a
+:class:`~edm_sym.engines.abstraction.cache.SlotStore` of its own. With the
+default pool the prefixes live in one shared store, which the main process
+manages as it manages the rows: before a batch is sent, :func:`plan_prefixes`
+finds each new row's longest stored prefix and gives every prefix the batch
+will make a slot of its own (a prefix two new rows share once, so the lanes
+never compute one twice); the lane that simulates the row reads and writes
+them through a :class:`ChunkPrefixes` and answers which slots it wrote, which
+the main process then records (:meth:`PrefixPlan.commit`).
+
+Both kinds of store answer the same calls (``lookup``, ``get``, ``place``,
+``commit``, ``storing``), so :func:`~edm_sym.engines.abstraction.rowsim.simulate_into`
+runs the same way on either.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from edm_sym.engines.abstraction.cache import SlotStore
+
+
+def prefix_key(line: np.ndarray, n: int, k: int) -> bytes:
+    """Key of the first ``k`` elements of a gene-table line (the row key of that prefix)."""
+    return line[:1 + k].tobytes() + line[1 + n:1 + n + k].tobytes()
+
+
+def prefix_keys(table: np.ndarray, k: int) -> list[bytes]:
+    """:func:`prefix_key` of every line of ``table`` for one ``k`` (at once)."""
+    n = (table.shape[1] - 1) // 2
+    part = np.ascontiguousarray(np.concatenate([table[:, :1 + k], table[:, 1 + n:1 + n + k]],
+                                               axis=1))
+    return part.view(np.dtype((np.void, part.shape[1] * 8))).ravel().tolist()
+
+
+@dataclass
+class PrefixPlan:
+    """Where a batch's rows start and where the prefixes they make go.
+
+    Attributes
+    ----------
+    start : numpy.ndarray
+        Shape (R,) int64: per line of the batch's table, the number of
+        elements of its longest stored prefix (0: none, or a row not simulated).
+    slots : numpy.ndarray
+        Shape (R, n) int64: column ``start`` the slot of that prefix; columns
+        above, the slots its new prefixes go to (all or none: -1); -1 elsewhere.
+    cost : numpy.ndarray
+        Shape (R,) int64: elements each line runs (0 for a row not simulated).
+    new : dict
+        Slot to key of every new prefix.
+    """
+
+    start: np.ndarray
+    slots: np.ndarray
+    cost: np.ndarray
+    new: dict[int, bytes] = field(default_factory=dict)
+
+    def commit(self, store: SlotStore, written: Sequence[np.ndarray]) -> None:
+        """Record the new prefixes the lanes wrote (slots); give back the others."""
+        done = set()
+        for part in written:
+            for s in part.tolist():
+                done.add(s)
+                store.commit(self.new[s], s)
+        store.release([s for s in self.new if s not in done])
+
+
+def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray) -> PrefixPlan:
+    """Each new row's longest stored prefix, and a slot for each prefix the batch makes.
+
+    Parameters
+    ----------
+    store : SlotStore
+        The shared prefix store (its least recent prefixes make room).
+    table : numpy.ndarray
+        Shape (R, 1 + 2 n): the batch's distinct rows.
+    simulate : numpy.ndarray
+        Shape (R,) bool: the rows to simulate.
+
+    Returns
+    -------
+    PrefixPlan
+        A row whose new prefixes do not fit in half the store gets none (it
+        is simulated without storing them).
+    """
+    count = table.shape[0]
+    n = (table.shape[1] - 1) // 2
+    start = np.zeros(count, dtype=np.int64)
+    slots = np.full((count, max(n, 1)), -1, dtype=np.int64)
+    cost = np.where(simulate, n, 0).astype(np.int64)
+    plan = PrefixPlan(start, slots, cost)
+    todo = np.flatnonzero(simulate)
+    if n < 2 or not len(todo):
+        return plan
+    sub = table[todo]
+    keys = [None, *(prefix_keys(sub, k) for k in range(1, n))]
+    used: set[bytes] = set()
+    wants: dict[bytes, list[tuple[int, int]]] = {}
+    budget = store.slots // 2
+    for a, r in enumerate(todo.tolist()):
+        found = 0
+        for k in range(n - 1, 0, -1):
+            slot = store.lookup(keys[k][a])
+            if slot is not None:
+                found = k
+                start[r], slots[r, k] = k, slot
+                used.add(keys[k][a])
+                break
+        cost[r] = n - found
+        mine = [keys[k][a] for k in range(found + 1, n)]
+        fresh = [key for key in mine if key not in wants]
+        if len(wants) + len(fresh) > budget:
+            continue
+        for k, key in zip(range(found + 1, n), mine, strict=True):
+            wants.setdefault(key, []).append((r, k))
+    if wants:
+        order = list(wants)
+        for key, slot in zip(order, store.place(order, used), strict=True):
+            plan.new[slot] = key
+            for r, k in wants[key]:
+                slots[r, k] = slot
+    return plan
+
+
+class ChunkPrefixes:
+    """A lane's view of the shared prefix store for one chunk.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        The shared store's rows.
+    table : numpy.ndarray
+        The chunk's rows.
+    start, slots : numpy.ndarray
+        Their lines of a :class:`PrefixPlan`.
+    capacity : int
+        The shared store's slot count (bounds the rows run together).
+    """
+
+    def __init__(self, rows: np.ndarray, table: np.ndarray, start: np.ndarray,
+                 slots: np.ndarray, capacity: int):
+        self.rows = rows
+        self.slots = int(capacity)
+        n = (table.shape[1] - 1) // 2
+        self._known: dict[bytes, int] = {}
+        self._assigned: dict[bytes, int] = {}
+        for line, k0, mine in zip(table, start.tolist(), slots.tolist(), strict=True):
+            if k0:
+                self._known[prefix_key(line, n, k0)] = mine[k0]
+            for k in range(k0 + 1, n):
+                if mine[k] >= 0:
+                    self._assigned[prefix_key(line, n, k)] = mine[k]
+        self.written: list[int] = []
+
+    def lookup(self, key: bytes) -> int | None:
+        """The slot of a stored prefix (one the plan named, or one this chunk wrote), or None."""
+        return self._known.get(key)
+
+    def get(self, key: bytes) -> np.ndarray | None:
+        """A view of a stored prefix, or None."""
+        slot = self._known.get(key)
+        return None if slot is None else self.rows[slot]
+
+    def storing(self, keys: Collection[bytes]) -> bool:
+        """Whether the plan gave slots to all these new prefixes (a row stores all or none)."""
+        return all(key in self._assigned for key in keys)
+
+    def place(self, keys: Sequence[bytes], keep: Collection[bytes]) -> list[int]:
+        """The slots the plan gave these new prefixes."""
+        return [self._assigned[key] for key in keys]
+
+    def commit(self, key: bytes, slot: int) -> None:
+        """Record that ``slot`` holds the prefix ``key``."""
+        self._known[key] = slot
+        self.written.append(slot)

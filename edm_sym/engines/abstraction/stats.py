@@ -1,0 +1,42 @@
+"""The evaluator's counters (for progress lines and benchmarks)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class EvalStats:
+    """Counters of an evaluator (for progress lines and benchmarks).
+
+    ``elements_simulated`` counts elements run over the signal (a row that
+    starts from a stored prefix runs only its other elements),
+    ``element_samples`` the rows simulated times their elements and samples.
+    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
+    (simulation and scoring, in whichever process), ``sim_seconds`` and
+    ``task_seconds`` the time the workers spent simulating rows and running
+    tasks, summed over workers; ``peak_rss`` the peak resident memory of
+    each process that ran a task, by process id.
+    """
+
+    individuals: int = 0
+    row_requests: int = 0
+    rows_missed: int = 0
+    rows_simulated: int = 0
+    elements_simulated: int = 0
+    element_samples: int = 0
+    sim_seconds: float = 0.0
+    task_seconds: float = 0.0
+    eval_seconds: float = 0.0
+    tasks: int = 0
+    peak_rss: dict = field(default_factory=dict)
+
+    @property
+    def cache_hits(self) -> int:
+        """Row requests served without simulating (store, memo or a twin in the batch)."""
+        return self.row_requests - self.rows_missed
+
+    @property
+    def hit_rate(self) -> float:
+        """Share of row requests served without simulating."""
+        return self.cache_hits / self.row_requests if self.row_requests else 0.0
