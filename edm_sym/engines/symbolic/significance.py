@@ -507,14 +507,15 @@ def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelI
     if any(judged[j].bounds for j in where):
         return tuple(judged)  # a limit of the search is no estimate (as row by row)
     U = axis_units(model.axis)
-    parts = ", ".join(f"row {j + 1} {mi.rows[j]:.3g}" for j in sorted(holders))
-    how = (f"the rows' outputs with the observer's lag taken out (y + y'/g, g = "
-           f"{mi.bandwidth:.4g} rad/s) regressed on sgn(v), v, a and 1 over the data; "
-           f"held by {parts} {U.inertia}")
+    parts = ", ".join(f"row {j + 1} {mi.rows[j]:.3g} {U.inertia}" for j in sorted(holders))
+    # Sentences apart ("; "): the report lists all but the first as notes.
     term = PhysicalTerm("acceleration", {"inertia": (mi.inertia, U.inertia),
                                          "observer_bandwidth": (mi.bandwidth, "rad/s")},
                         f"acceleration-dependent term: equivalent inertia {mi.inertia:.6g} "
-                        f"{U.inertia} ({how})")
+                        f"{U.inertia}; the rows' outputs with the observer's lag taken out, "
+                        f"y + y'/g at g = {mi.bandwidth:.4g} rad/s, regressed on sgn(v), v, a "
+                        f"and 1 over the data; held by {parts}",
+                        model.rows[lead].expr_numeric)
     out = list(judged)
     for j in where:
         jr = judged[j]
