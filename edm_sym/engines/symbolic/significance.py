@@ -405,6 +405,18 @@ def _joint(model: SymbolicModel, judged: list[JudgedRow],
     if kinds == jkinds and all(abs(a - b) <= _JOINT_AGREE * max(abs(a), abs(b))
                                for a, b in ((c1, c2), (v1, v2))):
         return tuple(judged)
+    return _named_together(judged, where, joint,
+                           f"its velocity terms are named with those of {names}, as their sum "
+                           f"over +-{options.velocity_range:.4g} "
+                           f"{axis_units(model.axis).velocity}: "
+                           + ", ".join(term_summary(t) for t in joint))
+
+
+def _named_together(judged: Sequence[JudgedRow], where: dict[int, list[int]],
+                    joint: Sequence[PhysicalTerm], message: str) -> tuple[JudgedRow, ...]:
+    """Rows ``where`` (row -> indices of its terms) lose those terms; ``joint`` is listed on
+    the one that contributes most, and each gets a ``joint`` flag: ``message`` and where."""
+    idx = sorted(where)
     lead = max(idx, key=lambda j: (judged[j].rms or 0.0, -j))
     out = list(judged)
     for j in idx:
@@ -412,10 +424,7 @@ def _joint(model: SymbolicModel, judged: list[JudgedRow],
         keep = [jt for q, jt in enumerate(jr.terms) if q not in where[j]]
         if j == lead:
             keep += [JudgedTerm(t, tuple(_term_flags(t))) for t in joint]
-        msg = (f"its velocity terms are named with those of {names}, as their sum over "
-               f"+-{options.velocity_range:.4g} {axis_units(model.axis).velocity}: "
-               + ", ".join(term_summary(t) for t in joint)
-               + (" (here)" if j == lead else f" (listed in row {lead + 1})"))
+        msg = message + (" (here)" if j == lead else f" (listed in row {lead + 1})")
         out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
     return tuple(out)
 
@@ -441,18 +450,9 @@ def _joint_spatial(model: SymbolicModel, judged: Sequence[JudgedRow],
     joint = joint_spatial_term(parts, options, names)
     if joint is None:
         return tuple(judged)
-    lead = max(idx, key=lambda j: (judged[j].rms or 0.0, -j))
-    out = list(judged)
-    for j in idx:
-        jr = judged[j]
-        keep = [jt for q, jt in enumerate(jr.terms) if q not in where[j]]
-        if j == lead:
-            keep.append(JudgedTerm(joint, tuple(_term_flags(joint))))
-        msg = (f"its position-dependent terms are named with those of {names}, as the ripple "
-               f"of their sum over one revolution: {term_summary(joint)}"
-               + (" (here)" if j == lead else f" (listed in row {lead + 1})"))
-        out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
-    return tuple(out)
+    return _named_together(judged, where, (joint,),
+                           f"its position-dependent terms are named with those of {names}, as "
+                           f"the ripple of their sum over one revolution: {term_summary(joint)}")
 
 
 def _unsupported(t: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None,
