@@ -253,6 +253,29 @@ def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
     assert np.array_equal(got[1][0], got[2][0]) and got[1][1:] == got[2][1:]
 
 
+def test_a_new_prefix_shared_by_the_whole_batch_is_split_between_lanes(signals) -> None:
+    # Every individual's first row is new and differs from the others only in its
+    # last parameter: one new prefix joins them all. Kept in one group, one lane
+    # would do the batch alone; over the cap the lanes each compute the prefix
+    # (the same bits into the same slot) and share the rows.
+    x, y = signals
+    ops = Operators(GaSettings(through_rate=0.0), 3)
+    pop = ops.random_population(np.random.default_rng(11), 32, 3, 4)
+    pop.inputs[:, 0] = pop.inputs[0, 0]
+    pop.codes[:, 0] = pop.codes[0, 0]
+    pop.ps[:, 0, :-1] = pop.ps[0, 0, :-1]
+    pop.ps[:, 0, -1] = np.linspace(0.05, 0.95, 32)
+    got = {}
+    for workers in (1, 2):
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
+            fit = ev.evaluate(pop.inputs, pop.codes, pop.ps)
+            got[workers] = (fit, ev.stats.elements_simulated, len(ev.stats.peak_rss))
+    assert np.array_equal(got[1][0], got[2][0])
+    assert got[2][2] == 2  # both lanes worked
+    # The shared prefix ran once per lane: at most its 3 elements more.
+    assert got[1][1] < got[2][1] <= got[1][1] + 3
+
+
 def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
     # The local search wants the rows back: with the forked pool they are in the
     # shared store, so the batch still runs on both lanes, with the same bits.
@@ -293,3 +316,10 @@ def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_spe
     # A lane three times as fast gets the dear groups.
     fast = Feeder(parts, costs, [1.0, 3.0])
     assert fast.loads[1] > 2 * fast.loads[0]
+    # Under a cost cap a shared new prefix no longer joins groups: each side computes it.
+    per = np.full(6, 1.0)
+    capped = groups(members, plan, missing, per, cap=5.0)
+    assert sorted(capped) == [[0, 3], [1], [2], [4], [5]]
+    # Within the cap it does.
+    assert sorted(groups(members, plan, missing, per, cap=10.0)) == [[0, 3], [1, 2], [4], [5]]
+

@@ -35,8 +35,30 @@ SCORE_COST = 0.6
 FIT_COST = 0.8
 
 
-def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[list[int]]:
-    """Individuals that must run in one chunk: they share a new row or a new prefix.
+def scoring_costs(members: np.ndarray, score: np.ndarray, free: np.ndarray | None) -> np.ndarray:
+    """Estimated cost of scoring each individual (eq. 8, and the gain fit), in elements run.
+
+    A scored individual costs :data:`SCORE_COST` per row, and with the gain
+    fit :data:`FIT_COST` per row more.
+    """
+    m = members.shape[1]
+    per = np.where(score, SCORE_COST * m, 0.0)
+    if free is not None:
+        per = per + np.where(score & free.any(axis=1), FIT_COST * m, 0.0)
+    return per
+
+
+def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray,
+           per: np.ndarray | None = None, cap: float = math.inf) -> list[list[int]]:
+    """Individuals that must run in one chunk: they share a new row (or a new prefix).
+
+    Individuals that need the same new row always form one group (a row is
+    simulated once). Individuals whose new rows make the same new prefix
+    join too, as long as the group's estimated cost stays within ``cap``;
+    past it the groups stay apart, and each lane that gets one of them
+    computes that prefix itself (into the same planned slot: the same bits,
+    so the lanes' writes agree). A few elements run twice, and no group is
+    so large that the lanes cannot end together.
 
     Parameters
     ----------
@@ -46,6 +68,12 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[l
         The batch's prefix plan (its new prefixes' slots).
     missing : numpy.ndarray
         Shape (R,) bool: the lines to simulate.
+    per : numpy.ndarray, optional
+        Shape (P,) each individual's scoring cost (:func:`scoring_costs`;
+        default 0).
+    cap : float
+        The largest estimated cost (new rows' elements and scoring) a group
+        joined by a shared prefix may reach (default: no bound).
 
     Returns
     -------
@@ -54,6 +82,7 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[l
     """
     count = len(members)
     parent = list(range(count))
+    cost = [0.0] * count if per is None else [float(c) for c in per]
 
     def find(i: int) -> int:
         while parent[i] != i:
@@ -61,19 +90,31 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray) -> list[l
             i = parent[i]
         return i
 
-    owner: dict[int, int] = {}
-    new = np.flatnonzero(missing)
-    made = {int(r): [s for s in plan.slots[r, plan.start[r] + 1:].tolist() if s >= 0]
-            for r in new.tolist()}
+    def join(i: int, j: int) -> None:
+        a, b = find(i), find(j)
+        if a != b:
+            parent[a] = b
+            cost[b] += cost[a]
+
+    new = np.flatnonzero(missing).tolist()
+    miss = missing.tolist()
+    row_owner: dict[int, int] = {}
     for i, row in enumerate(members.tolist()):
         for r in row:
-            mine = made.get(r)
-            if mine is None:
+            if miss[r]:
+                join(i, row_owner.setdefault(r, i))
+    for r in new:
+        cost[find(row_owner[r])] += float(plan.cost[r])
+    made: dict[int, int] = {}  # a new prefix's slot -> one individual that makes it
+    for r in new:
+        for s in plan.slots[r, plan.start[r] + 1:].tolist():
+            if s < 0:
                 continue
-            for token in (r, *(-1 - s for s in mine)):
-                j = owner.setdefault(token, i)
-                if j != i:
-                    parent[find(i)] = find(j)
+            i = row_owner[r]
+            j = made.setdefault(s, i)
+            a, b = find(i), find(j)
+            if a != b and cost[a] + cost[b] <= cap:
+                join(a, b)
     out: dict[int, list[int]] = {}
     for i in range(count):
         out.setdefault(find(i), []).append(i)
@@ -85,13 +126,10 @@ def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: Prefi
     """Estimated cost of each group, in elements run over the signal.
 
     A new row costs the elements it runs (from its longest stored prefix);
-    a scored individual :data:`SCORE_COST` per row, and with the gain fit
-    :data:`FIT_COST` per row more.
+    scoring costs :func:`scoring_costs`.
     """
     m = members.shape[1]
-    per = np.where(score, SCORE_COST * m, 0.0)
-    if free is not None:
-        per = per + np.where(score & free.any(axis=1), FIT_COST * m, 0.0)
+    per = scoring_costs(members, score, free)
     group = np.empty(len(members), dtype=np.int64)
     for g, idx in enumerate(parts):
         group[idx] = g

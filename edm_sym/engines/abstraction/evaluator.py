@@ -42,7 +42,7 @@ import pickle
 import time
 import warnings
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from typing import Any
 
@@ -57,6 +57,7 @@ from edm_sym.engines.abstraction.balance import (
     feed,
     group_costs,
     groups,
+    scoring_costs,
 )
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.lanes import (
@@ -70,7 +71,12 @@ from edm_sym.engines.abstraction.lanes import (
     share_stores,
     socket_lanes,
 )
-from edm_sym.engines.abstraction.poles import SEARCH_GRID, may_have_pole, prefix_has_pole
+from edm_sym.engines.abstraction.poles import (
+    SEARCH_GRID,
+    TANGENT_CODES,
+    may_have_pole,
+    prefix_has_pole,
+)
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
 from edm_sym.engines.abstraction.rowsim import (
     NEED_CONTEXT,
@@ -129,6 +135,9 @@ class Evaluator:
 
     #: Batches with fewer individuals to evaluate than this run in this process.
     MIN_PARALLEL = 4
+    #: A group joined by shared new prefixes stays within 1 / (SPLIT * lanes) of a batch's
+    #: estimated cost (past it, each lane computes the prefix itself: see ``balance.groups``).
+    SPLIT = 4
 
     def __init__(self, inputs: np.ndarray, target: np.ndarray, ts: float,
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
@@ -297,6 +306,15 @@ class Evaluator:
             self._poles[key] = hit
         return hit
 
+    def pole_rows(self, table: np.ndarray, keys: Sequence[bytes]) -> np.ndarray:
+        """Which lines of a gene table have a tangent pole in their input's range (cached)."""
+        n = (table.shape[1] - 1) // 2
+        pole = np.zeros(len(keys), dtype=bool)
+        # Only a row with a tangent can have a pole: the others are not looked at.
+        for r in np.flatnonzero(np.isin(table[:, 1:1 + n], _TANGENTS).any(axis=1)).tolist():
+            pole[r] = self.has_pole(keys[r], table[r])
+        return pole
+
     def gram(self, keys: Sequence[bytes], rows: Sequence[np.ndarray]
              ) -> tuple[np.ndarray, np.ndarray]:
         """Weighted inner products of rows (as the workers compute them for the gain fit).
@@ -388,12 +406,15 @@ class Evaluator:
             utab = table[first]
             ukeys = list(index)
             sub_free = free[send] if want_scales else None
-            fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local)
-            if self.reject_poles:
-                known = self._poles
-                pole = np.array([self.has_pole(key, utab[r]) if (hit := known.get(key)) is None
-                                 else hit for r, key in enumerate(ukeys)], dtype=bool)
-                fit = np.where(pole[members].any(axis=1), np.inf, fit)
+            poles: list[np.ndarray] = []
+
+            def aside() -> None:  # this process's share of the work while the lanes run
+                if self.reject_poles:
+                    poles.append(self.pole_rows(utab, ukeys))
+
+            fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local, aside)
+            if poles:
+                fit = np.where(poles[0][members].any(axis=1), np.inf, fit)
             if len(self._memo) > 50_000:
                 self._memo.clear()
             for a, k in enumerate(send):
@@ -411,9 +432,14 @@ class Evaluator:
 
     # -- dispatch -------------------------------------------------------------------
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
-                  score: np.ndarray, free: np.ndarray | None, local: bool
+                  score: np.ndarray, free: np.ndarray | None, local: bool,
+                  aside: Callable[[], None] = lambda: None
                   ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
         """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
+
+        ``aside()`` is work of this process that needs no result: it runs
+        while the other lanes work (before this process's own piece, and
+        counted in its time, so the lanes' shares allow for it).
 
         With shared stores every lane reads every row, so ``local`` (rows
         wanted back) does not keep the batch in this process.
@@ -443,8 +469,9 @@ class Evaluator:
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         if self.shared and len(lanes) > 1:
-            results = self._feed(table, members, score, free, slots, missing, plan, lanes)
+            results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside)
         else:
+            aside()
             if len(lanes) > 1:
                 parts = by_affinity(keys, members, lanes, self._mirror,
                                     max(64, self.ctx.row_bytes // (8 * self.n_samples)))
@@ -498,14 +525,16 @@ class Evaluator:
 
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
-              lanes: list[int]) -> list:
+              lanes: list[int], aside: Callable[[], None]) -> list:
         """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
 
         A lane's speed is the estimated cost it gets through per second,
         averaged over its earlier pieces, so a lane slowed by anything (its
         round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
         """
-        parts = groups(members, plan, missing)
+        per = scoring_costs(members, score, free)
+        total = float(plan.cost[missing].sum() + per.sum())
+        parts = groups(members, plan, missing, per, total / (self.SPLIT * len(lanes)))
         feeder = Feeder(parts, group_costs(parts, members, plan, score, free),
                         self._speed.of(lanes))
         cost = {lane: load for lane, load in zip(lanes, feeder.loads, strict=True)}
@@ -528,15 +557,23 @@ class Evaluator:
             self._speed.timed(lane, cost[lane], res.seconds)
             return idx, chunks[lane][1], res
 
+        done: list[bool] = []
+
         def run(idx: list[int]) -> tuple:
+            t0 = time.perf_counter()
+            aside()
+            done.append(True)
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
             res = run_chunk(self._local, chunk)
-            self._speed.timed(lanes[here], cost[lanes[here]], res.seconds)
+            self._speed.timed(lanes[here], cost[lanes[here]], time.perf_counter() - t0)
             return idx, lines, res
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
         here = local[0] if local else None
-        return feed(feeder.pieces, lanes, here, send, receive, run)
+        out = feed(feeder.pieces, lanes, here, send, receive, run)
+        if not done:
+            aside()
+        return out
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
@@ -589,6 +626,10 @@ class Evaluator:
         st.tasks += 1
         if res.peak_rss:
             st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
+
+
+#: The tangents' element codes, as they are in a gene table.
+_TANGENTS = np.array(sorted(TANGENT_CODES), dtype=float)
 
 
 def _line_keys(table: np.ndarray) -> list[bytes]:
