@@ -102,7 +102,9 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray,
     for i, row in enumerate(members.tolist()):
         for r in row:
             if miss[r]:
-                join(i, row_owner.setdefault(r, i))
+                j = row_owner.setdefault(r, i)
+                if j != i:
+                    join(i, j)
     for r in new:
         cost[find(row_owner[r])] += float(plan.cost[r])
     made: dict[int, int] = {}  # a new prefix's slot -> one individual that makes it

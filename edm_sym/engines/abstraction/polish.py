@@ -169,21 +169,26 @@ def gain_fit(
             continue
         free = np.flatnonzero(pos_all[k] >= 0)
         codes, ps = pop.codes[k].copy(), pop.ps[k].copy()
-        for i, j in enumerate(free):
-            if abs(float(delta[i])) < 1e-9:
+        changed = False
+        for i, j in enumerate(free.tolist()):
+            d = float(delta[i])
+            if abs(d) < 1e-9:
                 continue
-            c = 1.0 + float(delta[i])
+            c = 1.0 + d
             pos, is_through = int(pos_all[k, j]), bool(through_all[k, j])
             if is_through:
                 codes[j, pos] = GAIN
                 ps[j, pos] = ranges["gain"].encode(c)
+                changed = changed or codes[j, pos] != pop.codes[k, j, pos] or (
+                    ps[j, pos] != pop.ps[k, j, pos])
                 continue
             rng = ranges[REGISTRY[int(codes[j, pos])].name]
             a = rng.decode(float(ps[j, pos])) * c
             if rng.scaling == "log" and not a > 0:
                 continue
             ps[j, pos] = rng.encode(a)
-        if np.array_equal(codes, pop.codes[k]) and np.array_equal(ps, pop.ps[k]):
+            changed = changed or ps[j, pos] != pop.ps[k, j, pos]
+        if not changed:
             continue
         idx.append(k)
         out_in.append(pop.inputs[k].copy())
