@@ -540,9 +540,12 @@ class Evaluator:
         cost = {lane: load for lane, load in zip(lanes, feeder.loads, strict=True)}
         chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
+        sent_at: dict[int, float] = {}
+
         def send(lane: int, idx: list[int], again: bool = False) -> Any:
             if not again:
                 chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            sent_at[lane] = time.monotonic()
             # The weighting goes with every piece until the lane confirms it has it.
             wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
             return self.lanes[lane].submit(evaluate_chunk, self._token,
@@ -554,7 +557,14 @@ class Evaluator:
             if res in (NEED_CONTEXT, NEED_WEIGHTS):  # a restarted worker, or a call overtaken
                 res = send(lane, idx, again=True).result()
             self._sent_w[lane] = self._wtoken
-            self._speed.timed(lane, cost[lane], res.seconds)
+            seconds = res.seconds
+            if self.lanes[lane].same_clock:
+                # From send to end, on this machine's clock: the piece's transfer and
+                # the worker's start count against the lane too.
+                took = res.finished - sent_at[lane]
+                if seconds <= took < 10.0 * seconds + 1.0:
+                    seconds = took
+            self._speed.timed(lane, cost[lane], seconds)
             return idx, chunks[lane][1], res
 
         done: list[bool] = []

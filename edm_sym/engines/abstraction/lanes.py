@@ -39,6 +39,7 @@ class LocalLane:
 
     pinned = True
     local = True
+    same_clock = True
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Future:
         """Run ``fn(*args)`` now; a finished future."""
@@ -55,6 +56,7 @@ class PoolLane:
 
     pinned = True
     local = False
+    same_clock = False
 
     def __init__(self, pool: Executor):
         self.pool = pool
@@ -77,6 +79,8 @@ class ConnectionLane:
 
     pinned = True
     local = False
+    #: A process of this machine: its ``time.monotonic()`` is this process's.
+    same_clock = True
 
     def __init__(self, conn: Any):
         self._conn = conn
@@ -202,6 +206,7 @@ class ExecutorLane:
 
     pinned = False
     local = False
+    same_clock = False
 
     def __init__(self, executor: Executor):
         self.executor = executor
@@ -247,6 +252,7 @@ class DaskLane:
 
     pinned = True
     local = False
+    same_clock = False  # perhaps another machine
 
     def __init__(self, client: Any, address: str):
         self.client = client

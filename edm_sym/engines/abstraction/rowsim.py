@@ -166,6 +166,9 @@ class ChunkResult:
         Elements run over the signal (a row from a stored prefix runs only the rest).
     prefixes : numpy.ndarray or None
         With a shared prefix store: the slots of the new prefixes written.
+    finished : float
+        ``time.monotonic()`` when the task ended (one clock for the processes of
+        one machine, so the main process can time a lane from its send).
     """
 
     fitness: np.ndarray
@@ -178,6 +181,7 @@ class ChunkResult:
     peak_rss: int
     elements: int = 0
     prefixes: np.ndarray | None = None
+    finished: float = 0.0
 
 
 @dataclass
@@ -396,7 +400,8 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
                              [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
-                       time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written)
+                       time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written,
+                       time.monotonic())
 
 
 def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,
