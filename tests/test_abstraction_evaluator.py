@@ -253,6 +253,28 @@ def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
     assert np.array_equal(got[1][0], got[2][0]) and got[1][1:] == got[2][1:]
 
 
+def test_a_rows_estimated_cost_is_that_of_the_elements_it_runs() -> None:
+    from edm_sym.core.elements import BY_NAME
+    from edm_sym.engines.abstraction.balance import ELEMENT_COST, ROW_COST, element_costs
+    from edm_sym.engines.abstraction.cache import SlotStore
+    from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_key
+
+    code = {name: BY_NAME[name].code for name in ("gain", "tan_phase", "lpf")}
+    # Two rows: gain -> lpf -> tan_phase, and gain -> lpf -> gain (its 2-prefix stored).
+    table = np.array([[2, code["gain"], code["lpf"], code["tan_phase"], 0.5, 0.5, 0.5],
+                      [2, code["gain"], code["lpf"], code["gain"], 0.5, 0.5, 0.7]], dtype=float)
+    store = SlotStore(8, 4)
+    store.commit(prefix_key(table[1], 3, 2), 0)
+    plan = plan_prefixes(store, table, np.array([True, True]), element_costs(table))
+    assert plan.start.tolist() == [2, 2]  # both start from the stored prefix
+    assert plan.cost.tolist() == pytest.approx([ELEMENT_COST["tan_phase"] + ROW_COST,
+                                                ELEMENT_COST["gain"] + ROW_COST])
+    # Counted alike, they would cost the same: a tangent costs over twenty gains.
+    assert plan.cost[0] > 5 * plan.cost[1]
+    plain = plan_prefixes(SlotStore(8, 4), table, np.array([True, False]))
+    assert plain.cost.tolist() == [3, 0]
+
+
 def test_a_new_prefix_shared_by_the_whole_batch_is_split_between_lanes(signals) -> None:
     # Every individual's first row is new and differs from the others only in its
     # last parameter: one new prefix joins them all. Kept in one group, one lane

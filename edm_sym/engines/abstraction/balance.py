@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from edm_sym.core.elements import REGISTRY
 from edm_sym.engines.abstraction.prefixes import PrefixPlan
 
 #: Estimated cost of scoring one row of an individual (eq. 8), in elements run (fitted
@@ -33,6 +34,37 @@ from edm_sym.engines.abstraction.prefixes import PrefixPlan
 SCORE_COST = 0.6
 #: Estimated cost of the gain fit of one individual per row (inner products, least squares).
 FIT_COST = 0.8
+
+
+#: Estimated cost of an element over the signal, in the unit of :data:`SCORE_COST` (about
+#: 100 us on 20 000 samples), above a row's own :data:`ROW_COST`: measured per element on the
+#: development machine (the row kernel, 16 rows of one element on the auger log). The
+#: transcendental steps cost up to 25 times a gain; counting elements alike, a piece with
+#: a few tangents ran several times longer than its estimate.
+ELEMENT_COST = {
+    "through": 0.0, "power_gain": 0.01, "invert": 0.03, "gain": 0.05, "one_way": 0.05,
+    "offset": 0.06, "sign": 0.06, "saturation": 0.07, "dead_zone": 0.07, "derivative": 0.22,
+    "shift": 0.22, "dead_time": 0.23, "sin_amp": 0.25, "hysteresis": 0.33, "lpf": 0.36,
+    "integral": 0.39, "phase": 0.4, "hpf": 0.44, "lag": 0.44, "lead": 0.5, "notch": 0.52,
+    "sin_phase": 0.59, "tanh": 1.53, "asin": 1.92, "acos": 2.43, "atan": 2.89, "log": 3.15,
+    "power": 4.7, "tan_amp": 5.37, "tan_phase": 5.59,
+}
+#: A row's own cost (its program, its schedule, its output), in the same unit.
+ROW_COST = 0.2
+_CODE_COST = np.array([ELEMENT_COST.get(REGISTRY[c].name, 1.0) if c in REGISTRY else 1.0
+                       for c in range(max(REGISTRY) + 1)])
+
+
+def element_costs(table: np.ndarray) -> np.ndarray:
+    """The estimated cost of each element of each line of a gene table, shape (R, n).
+
+    A row's own :data:`ROW_COST` is carried by its last element (always run).
+    """
+    n = (table.shape[1] - 1) // 2
+    costs = _CODE_COST[table[:, 1:1 + n].astype(np.int64)]
+    if n:
+        costs[:, -1] += ROW_COST
+    return costs
 
 
 def scoring_costs(members: np.ndarray, score: np.ndarray, free: np.ndarray | None) -> np.ndarray:

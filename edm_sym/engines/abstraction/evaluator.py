@@ -54,6 +54,7 @@ from edm_sym.engines.abstraction.balance import (
     Feeder,
     Speeds,
     by_affinity,
+    element_costs,
     feed,
     group_costs,
     groups,
@@ -465,7 +466,7 @@ class Evaluator:
                 fresh = self.store.allocate(len(miss), set(keys))
                 slots[miss] = fresh
                 missing[miss] = True
-            plan = plan_prefixes(self.prefixes, table, missing)
+            plan = plan_prefixes(self.prefixes, table, missing, element_costs(table))
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         if self.shared and len(lanes) > 1:

@@ -55,7 +55,8 @@ class PrefixPlan:
         Shape (R, n) int64: column ``start`` the slot of that prefix; columns
         above, the slots its new prefixes go to (all or none: -1); -1 elsewhere.
     cost : numpy.ndarray
-        Shape (R,) int64: elements each line runs (0 for a row not simulated).
+        Shape (R,): the estimated cost of the elements each line runs (from
+        its longest stored prefix; 0 for a row not simulated).
     new : dict
         Slot to key of every new prefix.
     """
@@ -75,7 +76,8 @@ class PrefixPlan:
         store.release([s for s in self.new if s not in done])
 
 
-def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray) -> PrefixPlan:
+def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
+                  costs: np.ndarray | None = None) -> PrefixPlan:
     """Each new row's longest stored prefix, and a slot for each prefix the batch makes.
 
     Parameters
@@ -86,6 +88,9 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray) -> 
         Shape (R, 1 + 2 n): the batch's distinct rows.
     simulate : numpy.ndarray
         Shape (R,) bool: the rows to simulate.
+    costs : numpy.ndarray, optional
+        Shape (R, n): the estimated cost of each element of each row (default
+        1 each: :attr:`PrefixPlan.cost` counts the elements run).
 
     Returns
     -------
@@ -97,7 +102,11 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray) -> 
     n = (table.shape[1] - 1) // 2
     start = np.zeros(count, dtype=np.int64)
     slots = np.full((count, max(n, 1)), -1, dtype=np.int64)
-    cost = np.where(simulate, n, 0).astype(np.int64)
+    if costs is None:
+        costs = np.ones((count, n))
+    # rest[r, k]: the cost of row r's elements k .. n - 1.
+    rest = np.cumsum(costs[:, ::-1], axis=1)[:, ::-1]
+    cost = np.where(simulate, rest[:, 0] if n else 0.0, 0.0)
     plan = PrefixPlan(start, slots, cost)
     todo = np.flatnonzero(simulate)
     if n < 2 or not len(todo):
@@ -116,7 +125,7 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray) -> 
                 start[r], slots[r, k] = k, slot
                 used.add(keys[k][a])
                 break
-        cost[r] = n - found
+        cost[r] = rest[r, found]
         mine = [keys[k][a] for k in range(found + 1, n)]
         fresh = [key for key in mine if key not in wants]
         if len(wants) + len(fresh) > budget:
