@@ -2,18 +2,17 @@
 
 With the shared stores of the default pool (a row or prefix simulated once
 serves every lane), a batch is cut into *groups*: individuals that need the
-same new row, or whose new rows make the same new prefix, form one group, so
-no row or prefix is computed by two lanes (:func:`groups`). Each group gets
-an estimated cost (:func:`group_costs`: the elements its new rows run, and
-the scoring of its individuals), and a :class:`Feeder` hands the groups out
-in pieces, largest groups first, each piece about the not yet handed out
-cost over twice the number of lanes: the lanes take pieces as they finish
-(the main process between its own pieces), so they end at about the same
-time whatever the estimate's error.
+same new row form one group, so no row is computed by two lanes, and so do
+individuals whose new rows make the same new prefix, up to a cost cap past
+which each lane computes that prefix itself (:func:`groups`). Each group
+gets an estimated cost (:func:`group_costs`: the elements its new rows run,
+each by its kind (:data:`ELEMENT_COST`), and the scoring of its
+individuals), and a :class:`Feeder` cuts the groups into one piece per lane,
+dearest first, in proportion to the lanes' measured speeds (:class:`Speeds`).
 
-Without shared stores (a dask cluster, an executor), each worker keeps its
-own, so an individual goes to the lane whose store most likely holds its
-rows (:func:`by_affinity`).
+Without shared stores (a dask cluster on other machines, an executor), each
+worker keeps its own, so an individual goes to the lane whose store most
+likely holds its rows (:func:`by_affinity`).
 """
 
 from __future__ import annotations
