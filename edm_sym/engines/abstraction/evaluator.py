@@ -21,7 +21,8 @@ Where the rows are simulated and kept:
   row prefixes) were made. This process manages the slots; a worker writes
   the rows and prefixes it simulates into theirs and reads any from the
   maps, so a row or prefix simulated once serves every worker. The batch
-  goes out in pieces as the lanes finish (:mod:`~edm_sym.engines.abstraction.balance`).
+  goes out in one piece per lane, sized by the lanes' measured speeds
+  (:mod:`~edm_sym.engines.abstraction.balance`).
 * ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker.
   Workers on this machine open the same two maps (named, in ``/dev/shm``) and
   run as the pool does; otherwise each keeps its own stores, and individuals
