@@ -20,8 +20,9 @@ Where the rows are simulated and kept:
   single-process pools forked after two shared memory maps of slots (rows,
   row prefixes) were made. This process manages the slots; a worker writes
   the rows and prefixes it simulates into theirs and reads any from the
-  maps, so a row or prefix simulated once serves every worker. The batch
-  goes out in one piece per lane, sized by the lanes' measured speeds
+  maps, so a row or prefix simulated once serves every worker (a few
+  prefixes shared across pieces are computed by each: see ``balance.groups``).
+  The batch goes out in one piece per lane, sized by the lanes' measured speeds
   (:mod:`~edm_sym.engines.abstraction.balance`).
 * ``client=`` (a ``dask.distributed.Client``): one lane per cluster worker.
   Workers on this machine open the same two maps (named, in ``/dev/shm``) and
