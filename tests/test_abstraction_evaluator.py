@@ -317,7 +317,7 @@ def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
 
 
 def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_speeds() -> None:
-    from edm_sym.engines.abstraction.balance import Feeder, group_costs, groups
+    from edm_sym.engines.abstraction.balance import Feeder, group_costs, groups, scoring_costs
     from edm_sym.engines.abstraction.prefixes import PrefixPlan
 
     # Lines 0-5; 1 and 4 are new; line 4's new prefix (slot 7) is also line 5's.
@@ -329,7 +329,7 @@ def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_spe
     plan = PrefixPlan(np.zeros(6, dtype=np.int64), slots, np.where(missing, 3, 0))
     parts = groups(members, plan, missing)
     assert sorted(parts) == [[0, 3], [1, 2], [4], [5]]
-    costs = group_costs(parts, members, plan, np.ones(6, dtype=bool), None)
+    costs = group_costs(parts, members, plan, scoring_costs(members, np.ones(6, dtype=bool), None))
     score = 2 * 2 * 0.6  # two scored individuals of two rows
     assert costs.tolist() == pytest.approx([3 + score, 6 + score, score / 2, score / 2])
     even = Feeder(parts, costs, [1.0, 1.0])

@@ -155,14 +155,13 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray,
 
 
 def group_costs(parts: Sequence[Sequence[int]], members: np.ndarray, plan: PrefixPlan,
-                score: np.ndarray, free: np.ndarray | None) -> np.ndarray:
+                per: np.ndarray) -> np.ndarray:
     """Estimated cost of each group, in elements run over the signal.
 
     A new row costs the elements it runs (from its longest stored prefix);
-    scoring costs :func:`scoring_costs`.
+    an individual's scoring ``per`` (:func:`scoring_costs`).
     """
     m = members.shape[1]
-    per = scoring_costs(members, score, free)
     group = np.empty(len(members), dtype=np.int64)
     for g, idx in enumerate(parts):
         group[idx] = g
@@ -223,7 +222,7 @@ class Speeds:
 
 def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,
          send: Callable[[int, list[int]], Any], receive: Callable[[int, list[int], Any], Any],
-         run: Callable[[list[int]], Any]) -> list:
+         run: Callable[[list[int]], Any], aside: Callable[[], None] = lambda: None) -> list:
     """Run a batch's pieces, one per lane: the remote ones first, then this process's.
 
     Parameters
@@ -240,6 +239,8 @@ def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,
         ``receive(lane, idx, future)``: the piece's result, once it is done.
     run : callable
         ``run(idx)``: run a piece in this process; its result.
+    aside : callable
+        Work of this process that needs no result, done once the pieces are sent.
 
     Returns
     -------
@@ -248,6 +249,7 @@ def feed(pieces: Sequence[list[int]], lanes: Sequence[int], here: int | None,
     """
     sent = [(lane, idx, send(lane, idx))
             for k, (lane, idx) in enumerate(zip(lanes, pieces, strict=True)) if k != here and idx]
+    aside()
     results = []
     if here is not None and pieces[here]:
         results.append(run(pieces[here]))

@@ -76,9 +76,9 @@ from edm_sym.engines.abstraction.lanes import (
 )
 from edm_sym.engines.abstraction.poles import (
     SEARCH_GRID,
-    TANGENT_CODES,
     may_have_pole,
     prefix_has_pole,
+    with_tangent,
 )
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
 from edm_sym.engines.abstraction.rowsim import (
@@ -313,8 +313,7 @@ class Evaluator:
         """Which lines of a gene table have a tangent pole in their input's range (cached)."""
         n = (table.shape[1] - 1) // 2
         pole = np.zeros(len(keys), dtype=bool)
-        # Only a row with a tangent can have a pole: the others are not looked at.
-        for r in np.flatnonzero(np.isin(table[:, 1:1 + n], _TANGENTS).any(axis=1)).tolist():
+        for r in np.flatnonzero(with_tangent(table[:, 1:1 + n])).tolist():
             pole[r] = self.has_pole(keys[r], table[r])
         return pole
 
@@ -441,8 +440,7 @@ class Evaluator:
         """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
 
         ``aside()`` is work of this process that needs no result: it runs
-        while the other lanes work (before this process's own piece, and
-        counted in its time, so the lanes' shares allow for it).
+        while the other lanes work (once their pieces are sent).
 
         With shared stores every lane reads every row, so ``local`` (rows
         wanted back) does not keep the batch in this process.
@@ -538,8 +536,7 @@ class Evaluator:
         per = scoring_costs(members, score, free)
         total = float(plan.cost[missing].sum() + per.sum())
         parts = groups(members, plan, missing, per, total / (self.SPLIT * len(lanes)))
-        feeder = Feeder(parts, group_costs(parts, members, plan, score, free),
-                        self._speed.of(lanes))
+        feeder = Feeder(parts, group_costs(parts, members, plan, per), self._speed.of(lanes))
         cost = {lane: load for lane, load in zip(lanes, feeder.loads, strict=True)}
         chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
@@ -570,12 +567,8 @@ class Evaluator:
             self._speed.timed(lane, cost[lane], seconds)
             return idx, chunks[lane][1], res
 
-        done: list[bool] = []
-
         def run(idx: list[int]) -> tuple:
             t0 = time.perf_counter()
-            aside()
-            done.append(True)
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
             res = run_chunk(self._local, chunk)
             self._speed.timed(lanes[here], cost[lanes[here]], time.perf_counter() - t0)
@@ -583,10 +576,7 @@ class Evaluator:
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
         here = local[0] if local else None
-        out = feed(feeder.pieces, lanes, here, send, receive, run)
-        if not done:
-            aside()
-        return out
+        return feed(feeder.pieces, lanes, here, send, receive, run, aside)
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
@@ -639,10 +629,6 @@ class Evaluator:
         st.tasks += 1
         if res.peak_rss:
             st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
-
-
-#: The tangents' element codes, as they are in a gene table.
-_TANGENTS = np.array(sorted(TANGENT_CODES), dtype=float)
 
 
 def _line_keys(table: np.ndarray) -> list[bytes]:

@@ -28,6 +28,7 @@ from edm_sym.core.elements import REGISTRY, Element
 TANGENTS = ("tan_phase", "tan_amp")
 #: Their codes.
 TANGENT_CODES = frozenset(c for c, el in REGISTRY.items() if el.name in TANGENTS)
+_TANGENT_ARRAY = np.array(sorted(TANGENT_CODES))
 #: Codes of the elements without state (a static prefix is made of them).
 STATIC_CODES = frozenset(c for c, el in REGISTRY.items() if el.kind == "static")
 #: Grid points over the input's range after the search (a step best is checked once).
@@ -44,6 +45,14 @@ def may_have_pole(codes: Sequence[int]) -> bool:
         if c in TANGENT_CODES:
             return True
     return False
+
+
+def with_tangent(codes: np.ndarray) -> np.ndarray:
+    """Which rows of an (R, n) array of element codes hold a tangent at all.
+
+    Only those can have a pole (:func:`may_have_pole` then looks closer).
+    """
+    return np.isin(codes, _TANGENT_ARRAY).any(axis=1)
 
 
 def prefix_has_pole(lo: float, hi: float, elements: Sequence[tuple[type[Element], float | None]],
