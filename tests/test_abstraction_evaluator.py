@@ -255,7 +255,7 @@ def test_a_prefix_made_in_one_lane_serves_every_lane(signals) -> None:
 
 def test_a_rows_estimated_cost_is_that_of_the_elements_it_runs() -> None:
     from edm_sym.core.elements import BY_NAME
-    from edm_sym.engines.abstraction.balance import ELEMENT_COST, ROW_COST, element_costs
+    from edm_sym.engines.abstraction.balance import ROW_COST, element_costs
     from edm_sym.engines.abstraction.cache import SlotStore
     from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_key
 
@@ -267,8 +267,8 @@ def test_a_rows_estimated_cost_is_that_of_the_elements_it_runs() -> None:
     store.commit(prefix_key(table[1], 3, 2), 0)
     plan = plan_prefixes(store, table, np.array([True, True]), element_costs(table))
     assert plan.start.tolist() == [2, 2]  # both start from the stored prefix
-    assert plan.cost.tolist() == pytest.approx([ELEMENT_COST["tan_phase"] + ROW_COST,
-                                                ELEMENT_COST["gain"] + ROW_COST])
+    assert plan.cost.tolist() == pytest.approx([BY_NAME["tan_phase"].cost + ROW_COST,
+                                                BY_NAME["gain"].cost + ROW_COST])
     # Counted alike, they would cost the same: a tangent costs over twenty gains.
     assert plan.cost[0] > 5 * plan.cost[1]
     plain = plan_prefixes(SlotStore(8, 4), table, np.array([True, False]))

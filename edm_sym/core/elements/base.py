@@ -189,6 +189,10 @@ class Element:
     #: ``f(sin x, cos x, a)`` giving the output from the input's sine and cosine
     #: (reading an input directly, the GA computes those once per input), or None.
     from_sin_cos: ClassVar[Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None] = None
+    #: Rough cost of simulating the element over a signal, about 100 us per 20 000 samples
+    #: in the GA's row kernel (measured on the development machine). It only balances the
+    #: GA's work among its workers; a kind's default fits most elements of that kind.
+    cost: ClassVar[float] = 0.3
 
     # -- units (the report traces each parameter's SI unit along its row) ------
     #: How the output's unit follows from the input's: ``"input"`` (the same unit:
@@ -235,6 +239,7 @@ class StaticElement(Element):
     """A memoryless element ``y = f(x, a)``, realised as a :class:`StaticMap`."""
 
     kind: ClassVar[str] = StaticMap.kind
+    cost: ClassVar[float] = 0.06
     _abstract: ClassVar[bool] = True
 
     @staticmethod
@@ -257,6 +262,7 @@ class LinearElement(Element):
     """
 
     kind: ClassVar[str] = LinearFilter.kind
+    cost: ClassVar[float] = 0.45
     homogeneous: ClassVar[bool] = True
     method: ClassVar[str] = "bilinear"
     _abstract: ClassVar[bool] = True
@@ -282,6 +288,7 @@ class DelayElement(Element):
     """A pure delay of ``samples(a, ts)`` whole samples, realised as a :class:`DelayLine`."""
 
     kind: ClassVar[str] = DelayLine.kind
+    cost: ClassVar[float] = 0.23
     homogeneous: ClassVar[bool] = True
     _abstract: ClassVar[bool] = True
 
@@ -303,6 +310,7 @@ class RelayElement(Element):
     """
 
     kind: ClassVar[str] = Relay.kind
+    cost: ClassVar[float] = 0.33
     _abstract: ClassVar[bool] = True
 
     @classmethod

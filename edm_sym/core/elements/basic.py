@@ -9,6 +9,7 @@ from edm_sym.core.elements.base import Param, ParamRange, StaticElement
 
 class Through(StaticElement):
     name = "through"
+    cost = 0.0
     code = 0
     title = "Through"
     category = "basic"

@@ -88,6 +88,7 @@ class Sign(StaticElement):
 
 class Logarithm(StaticElement):
     name = "log"
+    cost = 3.2
     code = 20
     unit_out = "one"
     title = "Logarithmic function"
@@ -105,6 +106,7 @@ class Logarithm(StaticElement):
 
 class Power(StaticElement):
     name = "power"
+    cost = 4.7
     code = 21
     unit_out = "power"
     title = "Power"
@@ -122,6 +124,7 @@ class Power(StaticElement):
 
 class SinePhase(StaticElement):
     name = "sin_phase"
+    cost = 0.6
     code = 22
     unit_in = "rad"
     unit_out = "one"
@@ -144,6 +147,7 @@ class SinePhase(StaticElement):
 
 class SineAmplitude(StaticElement):
     name = "sin_amp"
+    cost = 0.25
     code = 23
     unit_in = "rad"
     unit_out = "scaled"
@@ -170,6 +174,7 @@ TAN_GUARD = (f"tan limited to +-{TAN_LIMIT:g}, so its poles give a finite output
 
 class TangentPhase(StaticElement):
     name = "tan_phase"
+    cost = 5.6
     code = 24
     unit_in = "rad"
     unit_out = "one"
@@ -188,6 +193,7 @@ class TangentPhase(StaticElement):
 
 class TangentAmplitude(StaticElement):
     name = "tan_amp"
+    cost = 5.4
     code = 25
     unit_in = "rad"
     unit_out = "scaled"
@@ -205,6 +211,7 @@ class TangentAmplitude(StaticElement):
 
 class ArcSine(StaticElement):
     name = "asin"
+    cost = 1.9
     code = 26
     unit_in = "1"
     unit_out = "one"
@@ -220,6 +227,7 @@ class ArcSine(StaticElement):
 
 class ArcCosine(StaticElement):
     name = "acos"
+    cost = 2.4
     code = 27
     unit_in = "1"
     unit_out = "one"
@@ -235,6 +243,7 @@ class ArcCosine(StaticElement):
 
 class ArcTangent(StaticElement):
     name = "atan"
+    cost = 2.9
     code = 28
     unit_out = "one"
     title = "Arc tangent"
@@ -249,6 +258,7 @@ class ArcTangent(StaticElement):
 
 class HyperbolicTangent(StaticElement):
     name = "tanh"
+    cost = 1.5
     code = 29
     unit_out = "one"
     title = "Hyperbolic tangent"

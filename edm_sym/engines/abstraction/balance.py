@@ -6,7 +6,7 @@ same new row form one group, so no row is computed by two lanes, and so do
 individuals whose new rows make the same new prefix, up to a cost cap past
 which each lane computes that prefix itself (:func:`groups`). Each group
 gets an estimated cost (:func:`group_costs`: the elements its new rows run,
-each by its kind (:data:`ELEMENT_COST`), and the scoring of its
+each by its ``Element.cost``, and the scoring of its
 individuals), and a :class:`Feeder` cuts the groups into one piece per lane,
 dearest first, in proportion to the lanes' measured speeds (:class:`Speeds`).
 
@@ -35,22 +35,11 @@ SCORE_COST = 0.6
 FIT_COST = 0.8
 
 
-#: Estimated cost of an element over the signal, in the unit of :data:`SCORE_COST` (about
-#: 100 us on 20 000 samples), above a row's own :data:`ROW_COST`: measured per element on the
-#: development machine (the row kernel, 16 rows of one element on the auger log). The
-#: transcendental steps cost up to 25 times a gain; counting elements alike, a piece with
-#: a few tangents ran several times longer than its estimate.
-ELEMENT_COST = {
-    "through": 0.0, "power_gain": 0.01, "invert": 0.03, "gain": 0.05, "one_way": 0.05,
-    "offset": 0.06, "sign": 0.06, "saturation": 0.07, "dead_zone": 0.07, "derivative": 0.22,
-    "shift": 0.22, "dead_time": 0.23, "sin_amp": 0.25, "hysteresis": 0.33, "lpf": 0.36,
-    "integral": 0.39, "phase": 0.4, "hpf": 0.44, "lag": 0.44, "lead": 0.5, "notch": 0.52,
-    "sin_phase": 0.59, "tanh": 1.53, "asin": 1.92, "acos": 2.43, "atan": 2.89, "log": 3.15,
-    "power": 4.7, "tan_amp": 5.37, "tan_phase": 5.59,
-}
 #: A row's own cost (its program, its schedule, its output), in the same unit.
 ROW_COST = 0.2
-_CODE_COST = np.array([ELEMENT_COST.get(REGISTRY[c].name, 1.0) if c in REGISTRY else 1.0
+#: Each element code's ``Element.cost`` (the unit of :data:`SCORE_COST`): a tangent or a
+#: power costs 20-25 gains, so counting elements alike misjudged the pieces.
+_CODE_COST = np.array([REGISTRY[c].cost if c in REGISTRY else 1.0
                        for c in range(max(REGISTRY) + 1)])
 
 
