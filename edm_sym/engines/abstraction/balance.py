@@ -68,6 +68,30 @@ def scoring_costs(members: np.ndarray, score: np.ndarray, free: np.ndarray | Non
     return per
 
 
+def candidate_costs(members: np.ndarray, fits: np.ndarray, costs: np.ndarray, pos: np.ndarray
+                    ) -> np.ndarray:
+    """Estimated cost of each individual's gain-fit candidate, evaluated in its lane.
+
+    Each row it may change runs from its scaled element on (``pos``, from
+    the prefix it shares with its row), and the candidate is scored.
+
+    Parameters
+    ----------
+    members : numpy.ndarray
+        Shape (P, m): each individual's rows, as lines of the batch's table.
+    fits : numpy.ndarray
+        Shape (P, m) bool: the rows its candidate may change.
+    costs : numpy.ndarray
+        Shape (R, n): :func:`element_costs` of the table.
+    pos : numpy.ndarray
+        Shape (R,): each line's scaled element (-1: none).
+    """
+    rest = np.cumsum(costs[:, ::-1], axis=1)[:, ::-1]
+    tail = rest[np.arange(len(rest)), np.maximum(pos, 0)]
+    m = members.shape[1]
+    return np.where(fits.any(axis=1), SCORE_COST * m + (tail[members] * fits).sum(axis=1), 0.0)
+
+
 def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray,
            per: np.ndarray | None = None, cap: float = math.inf) -> list[list[int]]:
     """Individuals that must run in one chunk: they share a new row (or a new prefix).

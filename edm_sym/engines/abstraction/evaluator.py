@@ -63,6 +63,7 @@ from edm_sym.engines.abstraction.balance import (
     scoring_costs,
 )
 from edm_sym.engines.abstraction.cache import SlotStore
+from edm_sym.engines.abstraction.candidates import CandidatePlan
 from edm_sym.engines.abstraction.lanes import (
     DaskLane,
     ExecutorLane,
@@ -187,7 +188,8 @@ class Evaluator:
         self._weights: np.ndarray | float = 1.0
         self._wtoken = ""
         self._wblob = b""
-        self._memo: dict[bytes, tuple[float, Any, bool]] = {}
+        # Individual key -> (eq. 8, gain-fit scales, whether asked, its candidate's eq. 8).
+        self._memo: dict[bytes, tuple[float, Any, bool, float | None]] = {}
         self._dots: dict[bytes, float] = {}
         self.set_weights(1.0)
 
@@ -347,7 +349,9 @@ class Evaluator:
 
     def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
                  rows_out: list | None = None, free: np.ndarray | None = None,
-                 scales_out: list | None = None) -> np.ndarray:
+                 scales_out: list | None = None, gain_allowed: bool | None = None,
+                 fitted_out: list | None = None, known: np.ndarray | None = None
+                 ) -> np.ndarray:
         """Fitness of each individual.
 
         Parameters
@@ -368,6 +372,20 @@ class Evaluator:
         scales_out : list, optional
             With ``free``: filled with one entry per individual, its
             :func:`~edm_sym.engines.abstraction.polish.row_scales` (or None).
+        gain_allowed : bool, optional
+            With ``free`` and ``fitted_out``: evaluate each individual's
+            gain-fit candidate too, in the worker that fits it (the value says
+            whether a ``through`` may become a ``gain``, as for
+            :func:`~edm_sym.engines.abstraction.polish.scale_places`).
+        fitted_out : list, optional
+            Filled with one entry per individual: the eq. 8 of its gain-fit
+            candidate (NaN: it has none; None: not known, evaluate the
+            candidate like any individual). A tangent pole is not checked
+            here: pass the value as ``known`` when evaluating the candidate.
+        known : numpy.ndarray, optional
+            Shape (P,): eq. 8 values already computed (a worker's
+            ``fitted_out``; NaN: not known). They are taken as they are, but
+            for the tangent-pole check and the memo.
 
         Returns
         -------
@@ -384,16 +402,29 @@ class Evaluator:
         self.stats.individuals += p
         self.stats.row_requests += p * m
         want_scales = scales_out is not None and free is not None
+        gains = gain_allowed if want_scales and fitted_out is not None else None
         out = np.empty(p)
         scales: list = [None] * p
+        fitted: list = [None] * p
         ikeys = _line_keys(table.reshape(p, -1))
-        need = []
+        need, given = [], []
         for k in range(p):
             hit = self._memo.get(ikeys[k])
-            if hit is not None and (not want_scales or hit[2]):
-                out[k], scales[k] = hit[0], hit[1]
+            if hit is not None and (not want_scales or hit[2]) and (
+                    gains is None or hit[3] is not None):
+                out[k], scales[k], fitted[k] = hit[0], hit[1], hit[3]
+            elif known is not None and not np.isnan(known[k]):
+                out[k] = known[k]
+                given.append(k)
             else:
                 need.append(k)
+        if given:
+            if self.reject_poles:
+                lines = (np.array(given)[:, None] * m + np.arange(m)).reshape(-1)
+                pole = self.pole_rows(table[lines], [keys[i] for i in lines.tolist()])
+                out[given] = np.where(pole.reshape(-1, m).any(axis=1), np.inf, out[given])
+            for k in given:
+                self._memo[ikeys[k]] = (out[k], None, False, None)
         local = rows_out is not None
         send = list(range(p)) if local else need
         if send:
@@ -414,7 +445,8 @@ class Evaluator:
                 if self.reject_poles:
                     poles.append(self.pole_rows(utab, ukeys))
 
-            fit, sc, rows = self._dispatch(utab, ukeys, members, score, sub_free, local, aside)
+            fit, sc, rows, fits = self._dispatch(utab, ukeys, members, score, sub_free, local,
+                                                 aside, gains)
             if poles:
                 fit = np.where(poles[0][members].any(axis=1), np.inf, fit)
             if len(self._memo) > 50_000:
@@ -423,24 +455,29 @@ class Evaluator:
                 if score[a]:
                     out[k] = fit[a]
                     scales[k] = sc[a] if want_scales else None
-                    self._memo[ikeys[k]] = (out[k], scales[k], want_scales)
+                    fitted[k] = None if gains is None else fits[a]
+                    self._memo[ikeys[k]] = (out[k], scales[k], want_scales, fitted[k])
             if local:
                 rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[members[a, j]] for j in range(m)])
                                for a, k in enumerate(send)]
         if scales_out is not None:
             scales_out[:] = scales
+        if fitted_out is not None:
+            fitted_out[:] = fitted
         self.stats.eval_seconds += time.perf_counter() - t0
         return out
 
     # -- dispatch -------------------------------------------------------------------
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
                   score: np.ndarray, free: np.ndarray | None, local: bool,
-                  aside: Callable[[], None] = lambda: None
-                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None]:
+                  aside: Callable[[], None] = lambda: None, gains: bool | None = None
+                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None, np.ndarray]:
         """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
 
         ``aside()`` is work of this process that needs no result: it runs
-        while the other lanes work (once their pieces are sent).
+        while the other lanes work (once their pieces are sent). With
+        ``gains`` (and ``free``) the lanes also evaluate the gain-fit
+        candidates; the last value returned is their eq. 8 (NaN: none).
 
         With shared stores every lane reads every row, so ``local`` (rows
         wanted back) does not keep the batch in this process.
@@ -452,6 +489,7 @@ class Evaluator:
         if lanes == [0] and not self.lanes[0].local:
             lanes = []  # no local lane among a client's or an executor's: run here
         slots = missing = plan = None
+        keep = set(keys)
         if self.shared:
             slots = np.empty(len(keys), dtype=np.int64)
             missing = np.zeros(len(keys), dtype=bool)
@@ -463,14 +501,21 @@ class Evaluator:
                 else:
                     slots[r] = s
             if miss:
-                fresh = self.store.allocate(len(miss), set(keys))
+                fresh = self.store.allocate(len(miss), keep)
                 slots[miss] = fresh
                 missing[miss] = True
-            plan = plan_prefixes(self.prefixes, table, missing, element_costs(table))
+        fits = CandidatePlan(table, members, score, free, gains, self.store if self.shared else None,
+                     self.prefixes if self.shared else None, keep)
+        if self.shared:
+            costs = element_costs(table)
+            plan = plan_prefixes(self.prefixes, table, missing, costs, fits.reads)
+            fits.estimate(costs)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
+        fitted = np.full(count, np.nan)
         if self.shared and len(lanes) > 1:
-            results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside)
+            results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside,
+                                 fits)
         else:
             aside()
             if len(lanes) > 1:
@@ -482,7 +527,7 @@ class Evaluator:
             for lane, idx in parts:
                 if idx:
                     chunk, lines = self._chunk(table, members, score, free, slots, missing, plan,
-                                               idx)
+                                               idx, fits)
                     pending.append((lane, idx, lines, chunk))
             if lanes:
                 results = self._gather(pending)
@@ -494,6 +539,8 @@ class Evaluator:
                 fitness[i] = res.fitness[a]
                 if res.scales is not None:
                     scales[i] = res.scales[a]
+                if res.fitted is not None:
+                    fitted[i] = res.fitted[a]
             self._account(res, table.shape[1])
         rows = None
         if self.shared:
@@ -501,6 +548,7 @@ class Evaluator:
                 self.store.commit(keys[r], int(slots[r]))
             plan.commit(self.prefixes, [res.prefixes for _, _, res in results
                                         if res.prefixes is not None])
+            fits.commit([res for _, _, res in results])
             if local:
                 rows = [self.store.rows[s] for s in slots.tolist()]
         elif local:
@@ -508,11 +556,12 @@ class Evaluator:
             rows = [None] * len(keys)
             for line, s in zip(lines, res.slots, strict=True):
                 rows[line] = self._local.own.rows[s]
-        return fitness, scales, rows
+        return fitness, scales, rows, fitted
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
                free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None,
-               plan: PrefixPlan | None, idx: list[int]) -> tuple[Chunk, list[int]]:
+               plan: PrefixPlan | None, idx: list[int], fits: CandidatePlan
+               ) -> tuple[Chunk, list[int]]:
         """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
         sub = members[idx]
         lines, inverse = np.unique(sub.reshape(-1), return_inverse=True)
@@ -521,19 +570,20 @@ class Evaluator:
                       None if slots is None else slots[lines],
                       None if missing is None else missing[lines],
                       None if plan is None else plan.start[lines],
-                      None if plan is None else plan.slots[lines])
+                      None if plan is None else plan.slots[lines],
+                      fits.gains, *fits.of(idx, lines))
         return chunk, lines.tolist()
 
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
-              lanes: list[int], aside: Callable[[], None]) -> list:
+              lanes: list[int], aside: Callable[[], None], fits: CandidatePlan) -> list:
         """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
 
         A lane's speed is the estimated cost it gets through per second,
         averaged over its earlier pieces, so a lane slowed by anything (its
         round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
         """
-        per = scoring_costs(members, score, free)
+        per = scoring_costs(members, score, free) + fits.cost
         total = float(plan.cost[missing].sum() + per.sum())
         parts = groups(members, plan, missing, per, total / (self.SPLIT * len(lanes)))
         feeder = Feeder(parts, group_costs(parts, members, plan, per), self._speed.of(lanes))
@@ -544,7 +594,8 @@ class Evaluator:
 
         def send(lane: int, idx: list[int], again: bool = False) -> Any:
             if not again:
-                chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx)
+                chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx,
+                                           fits)
             sent_at[lane] = time.monotonic()
             # The weighting goes with every piece until the lane confirms it has it.
             wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
@@ -569,7 +620,8 @@ class Evaluator:
 
         def run(idx: list[int]) -> tuple:
             t0 = time.perf_counter()
-            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx)
+            chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx,
+                                       fits)
             res = run_chunk(self._local, chunk)
             self._speed.timed(lanes[here], cost[lanes[here]], time.perf_counter() - t0)
             return idx, lines, res

@@ -76,8 +76,55 @@ class PrefixPlan:
         store.release([s for s in self.new if s not in done])
 
 
+def stored_prefixes(store: SlotStore, table: np.ndarray, depth: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, set[bytes]]:
+    """Each line's longest stored prefix of at most ``depth[r]`` elements.
+
+    A gain-fit candidate differs from its row from element ``depth`` on, so
+    it can start where that row's stored prefix ends.
+
+    Parameters
+    ----------
+    store : SlotStore
+        The shared prefix store.
+    table : numpy.ndarray
+        Shape (R, 1 + 2 n): the batch's distinct rows.
+    depth : numpy.ndarray
+        Shape (R,) int: the deepest prefix wanted (0: none).
+
+    Returns
+    -------
+    start : numpy.ndarray
+        Shape (R,) int64: the prefix's length (0: none stored).
+    slots : numpy.ndarray
+        Shape (R,) int64: its slot (-1: none).
+    found : set of bytes
+        Their keys (for :func:`plan_prefixes`' ``keep``).
+    """
+    count = table.shape[0]
+    start = np.zeros(count, dtype=np.int64)
+    slots = np.full(count, -1, dtype=np.int64)
+    found: set[bytes] = set()
+    want = np.flatnonzero(depth > 0)
+    if not len(want):
+        return start, slots, found
+    sub = table[want]
+    deep = depth[want]
+    for k in range(int(deep.max()), 0, -1):
+        open_ = np.flatnonzero((deep >= k) & (start[want] == 0))
+        if not len(open_):
+            continue
+        keys = prefix_keys(sub[open_], k)
+        for a, key in zip(open_.tolist(), keys, strict=True):
+            slot = store.lookup(key)
+            if slot is not None:
+                start[want[a]], slots[want[a]] = k, slot
+                found.add(key)
+    return start, slots, found
+
+
 def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
-                  costs: np.ndarray | None = None) -> PrefixPlan:
+                  costs: np.ndarray | None = None, keep: Collection[bytes] = ()) -> PrefixPlan:
     """Each new row's longest stored prefix, and a slot for each prefix the batch makes.
 
     Parameters
@@ -91,6 +138,8 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
     costs : numpy.ndarray, optional
         Shape (R, n): the estimated cost of each element of each row (default
         1 each: :attr:`PrefixPlan.cost` counts the elements run).
+    keep : collection of bytes
+        Keys of stored prefixes the batch reads besides (they keep their slots).
 
     Returns
     -------
@@ -113,7 +162,7 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
         return plan
     sub = table[todo]
     keys = [None, *(prefix_keys(sub, k) for k in range(1, n))]
-    used: set[bytes] = set()
+    used: set[bytes] = set(keep)
     wants: dict[bytes, list[tuple[int, int]]] = {}
     budget = store.slots // 2
     for a, r in enumerate(todo.tolist()):
@@ -170,6 +219,17 @@ class ChunkPrefixes:
                 if mine[k] >= 0:
                     self._assigned[prefix_key(line, n, k)] = mine[k]
         self.written: list[int] = []
+
+    def reading(self, known: dict[bytes, int]) -> ChunkPrefixes:
+        """A view that reads these prefixes and this one's, and stores none.
+
+        Gain-fit candidates start from their rows' prefixes, written by this
+        chunk or stored before the batch (``known``); theirs are not kept.
+        """
+        view = ChunkPrefixes(self.rows, np.zeros((0, 1)), np.zeros(0, dtype=np.int64),
+                             np.zeros((0, 1), dtype=np.int64), self.slots)
+        view._known = {**known, **self._known}
+        return view
 
     def lookup(self, key: bytes) -> int | None:
         """The slot of a stored prefix (one the plan named, or one this chunk wrote), or None."""

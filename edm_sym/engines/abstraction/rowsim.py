@@ -40,8 +40,9 @@ from threadpoolctl import threadpool_limits
 from edm_sym.core.elements import REGISTRY, Element, ParamRange
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
-from edm_sym.engines.abstraction.polish import row_scales
-from edm_sym.engines.abstraction.prefixes import ChunkPrefixes
+from edm_sym.engines.abstraction.ga import Population
+from edm_sym.engines.abstraction.polish import gain_fit, row_scales, scale_places
+from edm_sym.engines.abstraction.prefixes import ChunkPrefixes, prefix_key
 from edm_sym.engines.abstraction.rows import simulate_into
 
 #: Codes of the elements that use their parameter (others ignore p).
@@ -127,6 +128,17 @@ class Chunk:
         With a shared prefix store: the table's lines of the batch's
         :class:`~edm_sym.engines.abstraction.prefixes.PrefixPlan` (where each
         row starts, where its new prefixes go).
+    gain_allowed : bool or None
+        With ``free``: also evaluate each scored individual's gain-fit
+        candidate (:func:`~edm_sym.engines.abstraction.polish.gain_fit`;
+        the value says whether a ``through`` may become a ``gain``). None: no
+        candidates.
+    spare : numpy.ndarray or None
+        With ``slots`` and ``gain_allowed``: free slots of the shared store for
+        the candidates' new rows (one per free row of a scored individual).
+    fit_start, fit_slots : numpy.ndarray or None
+        With ``spare``: per line, the longest prefix stored before the batch
+        that the line's candidates share (its length, 0: none; its slot).
     """
 
     table: np.ndarray
@@ -137,6 +149,10 @@ class Chunk:
     simulate: np.ndarray | None = None
     prefix_start: np.ndarray | None = None
     prefix_slots: np.ndarray | None = None
+    gain_allowed: bool | None = None
+    spare: np.ndarray | None = None
+    fit_start: np.ndarray | None = None
+    fit_slots: np.ndarray | None = None
 
 
 @dataclass
@@ -169,6 +185,12 @@ class ChunkResult:
     finished : float
         ``time.monotonic()`` when the task ended (one clock for the processes of
         one machine, so the main process can time a lane from its send).
+    fitted : numpy.ndarray or None
+        With ``Chunk.gain_allowed``: shape (P,) eq. 8 of each individual's
+        gain-fit candidate (NaN: it has none).
+    fit_lines, fit_slots : numpy.ndarray or None
+        With ``Chunk.spare``: the candidates' new rows (gene-table lines) and
+        the spare slots they were written to.
     """
 
     fitness: np.ndarray
@@ -182,6 +204,9 @@ class ChunkResult:
     elements: int = 0
     prefixes: np.ndarray | None = None
     finished: float = 0.0
+    fitted: np.ndarray | None = None
+    fit_lines: np.ndarray | None = None
+    fit_slots: np.ndarray | None = None
 
 
 @dataclass
@@ -360,7 +385,8 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
         store_rows, slots = worker.rows, np.asarray(chunk.slots, dtype=np.int64)
         todo = np.flatnonzero(chunk.simulate)
     else:
-        store = worker.store_for(len(table))
+        extra = 0 if chunk.gain_allowed is None else int(chunk.free[chunk.score].sum())
+        store = worker.store_for(len(table) + extra)  # room for the candidates' rows too
         slots = np.empty(len(table), dtype=np.int64)
         todo_list = []
         for r, key in enumerate(keys):
@@ -374,10 +400,9 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
             for r, slot in zip(todo_list, fresh, strict=True):
                 slots[r] = slot
         store_rows, todo = store.rows, np.array(todo_list, dtype=np.intp)
-    elements, written = 0, None
+    elements, written, pool = 0, None, None
     if len(todo):
         s0 = time.perf_counter()
-        pool = None
         if chunk.prefix_start is not None:
             pool = ChunkPrefixes(worker.prefix_rows, table[todo], chunk.prefix_start[todo],
                                  chunk.prefix_slots[todo], worker.prefix_rows.shape[0])
@@ -399,9 +424,91 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
             gram, gy = _gram(worker, [store_rows[s] for s in mine],
                              [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
+    fit = None
+    if chunk.gain_allowed is not None and scales is not None:
+        s0 = time.perf_counter()
+        fit = _candidates(worker, chunk, keys, slots, store_rows, scales, pool)
+        sim_seconds += time.perf_counter() - s0
+        simulated += fit[3]
+        elements += fit[4]
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
                        time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written,
-                       time.monotonic())
+                       time.monotonic(), *(fit[:3] if fit else ()))
+
+
+def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarray,
+                store_rows: np.ndarray, scales: list, pool: ChunkPrefixes | None
+                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, int, int]:
+    """Evaluate the gain-fit candidates of a chunk's scored individuals, where their rows are.
+
+    The candidates are made as the main process makes them
+    (:func:`~edm_sym.engines.abstraction.polish.gain_fit` on the same genes),
+    their new rows simulated from the prefixes they share with their
+    individuals' rows, and scored: the generation needs no second batch.
+
+    Returns
+    -------
+    fitted : numpy.ndarray
+        Shape (P,) eq. 8 of each candidate (NaN: none).
+    lines, spare : numpy.ndarray or None
+        With a shared store: the new rows and the spare slots they went to.
+    simulated, elements : int
+        Rows simulated and elements run.
+    """
+    table, members = chunk.table, chunk.members
+    n = (table.shape[1] - 1) // 2
+    fitted = np.full(members.shape[0], np.nan)
+    todo = [k for k, sc in enumerate(scales) if sc is not None]
+    if not todo:
+        return fitted, None, None, 0, 0
+    sub = members[todo]
+    pop = Population(table[sub, 0].astype(np.int64), table[sub, 1:1 + n].astype(np.int64),
+                     table[sub, 1 + n:].copy())
+    places = scale_places(pop.codes, chunk.gain_allowed)
+    idx, cand = gain_fit(pop, [scales[k] for k in todo], places, worker.ctx.ranges)
+    if not len(idx):
+        return fitted, None, None, 0, 0
+    c, m = cand.codes.shape[:2]
+    lines = row_table(cand.inputs.reshape(-1), cand.codes.reshape(-1, n), cand.ps.reshape(-1, n))
+    at = {key: int(s) for key, s in zip(keys, slots.tolist(), strict=True)}
+    new: list[int] = []  # lines of the candidates' new rows, in order
+    line_keys = [line.tobytes() for line in lines]
+    for i, key in enumerate(line_keys):
+        if key not in at:
+            at[key] = -1 - len(new)
+            new.append(i)
+    shared = chunk.spare is not None
+    if shared:
+        dest = np.asarray(chunk.spare[:len(new)], dtype=np.int64)
+        rows = store_rows
+        known = {}
+        if chunk.fit_start is not None:
+            for r in np.flatnonzero(chunk.fit_start > 0).tolist():
+                k0 = int(chunk.fit_start[r])
+                known[prefix_key(table[r], n, k0)] = int(chunk.fit_slots[r])
+        if pool is None:
+            pool = ChunkPrefixes(worker.prefix_rows, np.zeros((0, table.shape[1])),
+                                 np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
+                                 worker.prefix_rows.shape[0])
+        view = pool.reading(known)
+    else:
+        store = worker.own
+        dest = np.array(store.allocate(len(new), set(keys) | {line_keys[i] for i in new}),
+                        dtype=np.int64)
+        rows, view = store.rows, None
+    elements = simulate_into(worker, lines[new], rows, dest, view) if new else 0
+    for a, i in enumerate(new):
+        at[line_keys[i]] = int(dest[a])
+        if not shared:
+            worker.own.commit(line_keys[i], int(dest[a]))
+    target = worker.ctx.target
+    for q in range(c):
+        mine = np.array([at[line_keys[q * m + j]] for j in range(m)], dtype=np.int64)
+        fitted[todo[int(idx[q])]] = kernel.score(rows, mine, target, worker.weights,
+                                                 worker.scratch())
+    if shared:
+        return fitted, lines[new], dest, len(new), elements
+    return fitted, None, None, len(new), elements
 
 
 def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,

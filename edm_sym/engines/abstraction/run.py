@@ -289,21 +289,35 @@ class _Runner:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
         if not ops.ga.gain_fit:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
-        places = scale_places(pop.codes, GAIN in ops.allowed)
+        gain = GAIN in ops.allowed
+        places = scale_places(pop.codes, gain)
         scales: list = []
+        fitted: list = []
+        # The lanes make and evaluate the candidates where they fit them (one batch per
+        # generation); only those that are better, or not evaluated, are made again here.
         fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                                      scales_out=scales)
+                                      scales_out=scales, gain_allowed=gain, fitted_out=fitted)
         if keep_first:
             scales[0] = None
+        made = 0  # candidates evaluated in the lanes (counted as evaluations)
+        for k, f in enumerate(fitted):
+            if scales[k] is None or f is None:
+                continue
+            if not np.isnan(f):
+                made += 1
+            if not f < fit[k]:
+                scales[k] = None
         idx, cand = gain_fit(pop, scales, places, self.ranges)
         if len(idx):
-            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
+            known = np.array([np.nan if fitted[k] is None else fitted[k] for k in idx.tolist()])
+            made += int(np.isnan(known).sum())
+            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps, known=known)
             better = cfit < fit[idx]
             sel, src = idx[better], np.flatnonzero(better)
             pop.inputs[sel], pop.codes[sel], pop.ps[sel] = (
                 cand.inputs[src], cand.codes[src], cand.ps[src])
             fit[sel] = cfit[src]
-        return fit, len(idx)
+        return fit, made
 
     def _generation(self, cur: StepState, step: StepConfig, ops: Operators) -> StepState:
         ga = step.ga

@@ -1,0 +1,116 @@
+"""Where a batch's gain-fit candidates are evaluated: in the lane that fits them.
+
+The gain fit (:mod:`~edm_sym.engines.abstraction.polish`) makes at most one
+candidate per individual, which differs from it only in the scale of some
+rows. Evaluating the candidates in a second batch would cost each generation a
+second round trip to every lane, with the lanes idle while this process plans
+it. Instead the lane that scores an individual also makes its candidate (the
+same function on the same genes, so the same candidate), simulates its new
+rows and scores it.
+
+With the shared stores of the default pool, this process plans for that
+before the batch goes out (:class:`CandidatePlan`):
+
+* spare slots of the row store, one per row a candidate may change (a free
+  row of a scored individual), given to the chunk of that individual; the
+  lane answers which of them it wrote, and with which rows, and the others
+  are given back (:meth:`CandidatePlan.commit`);
+* for each free row, its longest prefix stored before the batch that its
+  candidates share (a candidate changes a row from its scaled element on), so
+  a candidate runs only the elements after it. Those prefixes keep their slots
+  during the batch (:func:`~edm_sym.engines.abstraction.prefixes.plan_prefixes`'
+  ``keep``); a lane also reads the prefixes it writes itself, never another
+  lane's, which may not be written yet.
+
+A candidate's eq. 8 is a pure function of its genes, as any individual's, so
+where it is computed changes nothing but the time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+
+import numpy as np
+
+from edm_sym.engines.abstraction.balance import candidate_costs
+from edm_sym.engines.abstraction.cache import SlotStore
+from edm_sym.engines.abstraction.polish import scale_places
+from edm_sym.engines.abstraction.prefixes import stored_prefixes
+
+
+class CandidatePlan:
+    """A batch's plan for its gain-fit candidates (see the module text).
+
+    Parameters
+    ----------
+    table : numpy.ndarray
+        Shape (R, 1 + 2 n): the batch's distinct rows.
+    members : numpy.ndarray
+        Shape (P, m): each individual's rows, as lines of ``table``.
+    score : numpy.ndarray
+        Shape (P,) bool: the individuals scored.
+    free : numpy.ndarray or None
+        Shape (P, m) bool: the rows the gain fit may scale.
+    gains : bool or None
+        Whether a ``through`` may become a ``gain``; None: no candidates.
+    store, prefixes : SlotStore or None
+        The shared row and prefix stores (None: each lane keeps its own).
+    keep : collection of bytes
+        The batch's row keys (spare slots never evict them).
+    """
+
+    def __init__(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
+                 free: np.ndarray | None, gains: bool | None, store: SlotStore | None,
+                 prefixes: SlotStore | None, keep: Collection[bytes]):
+        count = len(members)
+        self.gains = gains if free is not None else None
+        self.store = store
+        self.cost = np.zeros(count)
+        self.reads: set[bytes] = set()
+        self._spare: np.ndarray | None = None
+        self._start = self._slots = None
+        if self.gains is None:
+            return
+        n = (table.shape[1] - 1) // 2
+        self._fits = score[:, None] & free  # (P, m): a candidate may change these rows
+        self._pos = scale_places(table[:, 1:1 + n].astype(np.int64), self.gains)[0]
+        self._members = members
+        if store is None:
+            return
+        lines = np.zeros(len(table), dtype=bool)
+        lines[members[self._fits]] = True
+        depth = np.where(lines, np.maximum(self._pos, 0), 0)
+        self._start, self._slots, self.reads = stored_prefixes(prefixes, table, depth)
+        per = self._fits.sum(axis=1)
+        self._offsets = np.concatenate([[0], np.cumsum(per)])
+        self._spare = np.array(store.allocate(int(self._offsets[-1]), keep), dtype=np.int64)
+
+    def estimate(self, costs: np.ndarray) -> None:
+        """Set :attr:`cost`, each individual's candidate's estimated cost (``costs``: per element)."""
+        if self.gains is not None:
+            self.cost = candidate_costs(self._members, self._fits, costs, self._pos)
+
+    def of(self, idx: Sequence[int], lines: np.ndarray
+           ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+        """The chunk of individuals ``idx`` (table lines ``lines``): spare slots, prefix starts."""
+        if self._spare is None:
+            return None, None, None
+        off = self._offsets
+        spare = np.concatenate([self._spare[off[a]:off[a + 1]] for a in idx]
+                               or [np.zeros(0, dtype=np.int64)])
+        return spare, self._start[lines], self._slots[lines]
+
+    def commit(self, results: Sequence) -> None:
+        """Record the candidates' rows the lanes wrote (unless stored already); give back the rest."""
+        if self._spare is None:
+            return
+        kept: set[int] = set()
+        for res in results:
+            if res.fit_lines is None:
+                continue
+            for line, slot in zip(res.fit_lines, res.fit_slots.tolist(), strict=True):
+                key = line.tobytes()
+                if self.store.lookup(key) is None:
+                    self.store.commit(key, slot)
+                    kept.add(slot)
+        self.store.release([s for s in self._spare.tolist() if s not in kept])
