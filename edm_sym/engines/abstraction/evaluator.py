@@ -91,6 +91,7 @@ from edm_sym.engines.abstraction.rowsim import (
     default_workers,
     evaluate_chunk,
     forget,
+    line_keys,
     ping,
     row_table,
     run_chunk,
@@ -347,11 +348,18 @@ class Evaluator:
         table = row_table(inputs.reshape(-1), codes.reshape(-1, n), ps.reshape(-1, n))
         return [table[k * m:(k + 1) * m].tobytes() for k in range(p)]
 
+    def remember(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
+                 fitness: np.ndarray) -> None:
+        """Keep the eq. 8 of individuals evaluated elsewhere (gain-fit candidates)."""
+        if len(self._memo) > 50_000:
+            self._memo.clear()
+        for key, f in zip(self.individual_keys(inputs, codes, ps), fitness.tolist(), strict=True):
+            self._memo.setdefault(key, (f, None, False, None))
+
     def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
                  rows_out: list | None = None, free: np.ndarray | None = None,
                  scales_out: list | None = None, gain_allowed: bool | None = None,
-                 fitted_out: list | None = None, known: np.ndarray | None = None
-                 ) -> np.ndarray:
+                 fitted_out: list | None = None) -> np.ndarray:
         """Fitness of each individual.
 
         Parameters
@@ -378,14 +386,13 @@ class Evaluator:
             whether a ``through`` may become a ``gain``, as for
             :func:`~edm_sym.engines.abstraction.polish.scale_places`).
         fitted_out : list, optional
-            Filled with one entry per individual: the eq. 8 of its gain-fit
-            candidate (NaN: it has none; None: not known, evaluate the
-            candidate like any individual). A tangent pole is not checked
-            here: pass the value as ``known`` when evaluating the candidate.
-        known : numpy.ndarray, optional
-            Shape (P,): eq. 8 values already computed (a worker's
-            ``fitted_out``; NaN: not known). They are taken as they are, but
-            for the tangent-pole check and the memo.
+            Filled with one entry per individual: None where its candidate
+            is not known (evaluate it like any individual), else
+            ``(eq. 8, genes)``: the candidate's eq. 8 (NaN: it has none) and
+            the genes it changes, shape (K, 4) ``[row, element, code, p]``.
+            A candidate's rows have a tangent pole where its individual's
+            rows have one (the gain fit scales a row after its tangents), so
+            a candidate with a finite eq. 8 needs no other check.
 
         Returns
         -------
@@ -398,7 +405,7 @@ class Evaluator:
             self.start()
         p, m, n = codes.shape
         table = row_table(inputs.reshape(-1), codes.reshape(-1, n), ps.reshape(-1, n))
-        keys = _line_keys(table)
+        keys = line_keys(table)
         self.stats.individuals += p
         self.stats.row_requests += p * m
         want_scales = scales_out is not None and free is not None
@@ -406,25 +413,15 @@ class Evaluator:
         out = np.empty(p)
         scales: list = [None] * p
         fitted: list = [None] * p
-        ikeys = _line_keys(table.reshape(p, -1))
-        need, given = [], []
+        ikeys = line_keys(table.reshape(p, -1))
+        need = []
         for k in range(p):
             hit = self._memo.get(ikeys[k])
             if hit is not None and (not want_scales or hit[2]) and (
                     gains is None or hit[3] is not None):
                 out[k], scales[k], fitted[k] = hit[0], hit[1], hit[3]
-            elif known is not None and not np.isnan(known[k]):
-                out[k] = known[k]
-                given.append(k)
             else:
                 need.append(k)
-        if given:
-            if self.reject_poles:
-                lines = (np.array(given)[:, None] * m + np.arange(m)).reshape(-1)
-                pole = self.pole_rows(table[lines], [keys[i] for i in lines.tolist()])
-                out[given] = np.where(pole.reshape(-1, m).any(axis=1), np.inf, out[given])
-            for k in given:
-                self._memo[ikeys[k]] = (out[k], None, False, None)
         local = rows_out is not None
         send = list(range(p)) if local else need
         if send:
@@ -448,7 +445,12 @@ class Evaluator:
             fit, sc, rows, fits = self._dispatch(utab, ukeys, members, score, sub_free, local,
                                                  aside, gains)
             if poles:
-                fit = np.where(poles[0][members].any(axis=1), np.inf, fit)
+                pole = poles[0][members].any(axis=1)
+                fit = np.where(pole, np.inf, fit)
+                for a in np.flatnonzero(pole).tolist():
+                    # Its candidate scales rows after their tangents: it has the same poles.
+                    if not math.isnan(fits[a][0]):
+                        fits[a] = (math.inf, fits[a][1])
             if len(self._memo) > 50_000:
                 self._memo.clear()
             for a, k in enumerate(send):
@@ -512,7 +514,7 @@ class Evaluator:
             fits.estimate(costs)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
-        fitted = np.full(count, np.nan)
+        fitted: list = [(math.nan, _NO_GENES)] * count
         if self.shared and len(lanes) > 1:
             results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside,
                                  fits)
@@ -539,8 +541,10 @@ class Evaluator:
                 fitness[i] = res.fitness[a]
                 if res.scales is not None:
                     scales[i] = res.scales[a]
-                if res.fitted is not None:
-                    fitted[i] = res.fitted[a]
+            if res.fitted is not None:
+                owner = res.fit_genes[:, 0].astype(np.int64)
+                for a in np.flatnonzero(~np.isnan(res.fitted)).tolist():
+                    fitted[idx[a]] = (float(res.fitted[a]), res.fit_genes[owner == a, 1:])
             self._account(res, table.shape[1])
         rows = None
         if self.shared:
@@ -683,10 +687,8 @@ class Evaluator:
             st.peak_rss[res.pid] = max(st.peak_rss.get(res.pid, 0), res.peak_rss)
 
 
-def _line_keys(table: np.ndarray) -> list[bytes]:
-    """The bytes of each line of a 2-d float64 array (at once)."""
-    lines = np.ascontiguousarray(table)
-    return lines.view(np.dtype((np.void, lines.shape[1] * 8))).ravel().tolist()
+#: No genes changed (an individual without a gain-fit candidate).
+_NO_GENES = np.zeros((0, 4))
 
 
 def kernel_in_use() -> bool:

@@ -188,6 +188,9 @@ class ChunkResult:
     fitted : numpy.ndarray or None
         With ``Chunk.gain_allowed``: shape (P,) eq. 8 of each individual's
         gain-fit candidate (NaN: it has none).
+    fit_genes : numpy.ndarray or None
+        With ``fitted``: shape (K, 5), the genes the candidates change, one
+        per line ``[individual, row, element, code, p]``.
     fit_lines, fit_slots : numpy.ndarray or None
         With ``Chunk.spare``: the candidates' new rows (gene-table lines) and
         the spare slots they were written to.
@@ -205,6 +208,7 @@ class ChunkResult:
     prefixes: np.ndarray | None = None
     finished: float = 0.0
     fitted: np.ndarray | None = None
+    fit_genes: np.ndarray | None = None
     fit_lines: np.ndarray | None = None
     fit_slots: np.ndarray | None = None
 
@@ -424,24 +428,24 @@ def run_chunk(worker: Worker, chunk: Chunk) -> ChunkResult:
             gram, gy = _gram(worker, [store_rows[s] for s in mine],
                              [keys[r] for r in chunk.members[k]], target)
             scales[k] = row_scales(gram, gy, chunk.free[k], f, target.shape[0])
-    fit = None
+    fit: tuple = ()
     if chunk.gain_allowed is not None and scales is not None:
         s0 = time.perf_counter()
-        fit = _candidates(worker, chunk, keys, slots, store_rows, scales, pool)
+        *fit, more, ran = _candidates(worker, chunk, keys, slots, store_rows, scales, pool)
         sim_seconds += time.perf_counter() - s0
-        simulated += fit[3]
-        elements += fit[4]
+        simulated += more
+        elements += ran
     return ChunkResult(fitness, scales, slots, simulated, sim_seconds,
                        time.perf_counter() - t0, os.getpid(), peak_rss(), elements, written,
-                       time.monotonic(), *(fit[:3] if fit else ()))
+                       time.monotonic(), *fit)
 
 
 def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarray,
                 store_rows: np.ndarray, scales: list, pool: ChunkPrefixes | None
-                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, int, int]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None, int, int]:
     """Evaluate the gain-fit candidates of a chunk's scored individuals, where their rows are.
 
-    The candidates are made as the main process makes them
+    The candidates are made as the main process would make them
     (:func:`~edm_sym.engines.abstraction.polish.gain_fit` on the same genes),
     their new rows simulated from the prefixes they share with their
     individuals' rows, and scored: the generation needs no second batch.
@@ -450,6 +454,9 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
     -------
     fitted : numpy.ndarray
         Shape (P,) eq. 8 of each candidate (NaN: none).
+    genes : numpy.ndarray
+        Shape (K, 5): the genes each candidate changes, one per line
+        ``[individual, row, element, code, p]``.
     lines, spare : numpy.ndarray or None
         With a shared store: the new rows and the spare slots they went to.
     simulated, elements : int
@@ -458,34 +465,38 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
     table, members = chunk.table, chunk.members
     n = (table.shape[1] - 1) // 2
     fitted = np.full(members.shape[0], np.nan)
+    none = (fitted, np.zeros((0, 5)), None, None, 0, 0)
     todo = [k for k, sc in enumerate(scales) if sc is not None]
     if not todo:
-        return fitted, None, None, 0, 0
+        return none
     sub = members[todo]
     pop = Population(table[sub, 0].astype(np.int64), table[sub, 1:1 + n].astype(np.int64),
                      table[sub, 1 + n:].copy())
     places = scale_places(pop.codes, chunk.gain_allowed)
     idx, cand = gain_fit(pop, [scales[k] for k in todo], places, worker.ctx.ranges)
     if not len(idx):
-        return fitted, None, None, 0, 0
+        return none
+    # What each candidate changes (a ``through`` made a gain changes its code).
+    old_codes, old_ps = pop.codes[idx], pop.ps[idx]
+    q, j, i = np.nonzero((cand.codes != old_codes) | (cand.ps != old_ps))
+    owner = np.asarray(todo)[idx[q]]
+    genes = np.stack([owner, j, i, cand.codes[q, j, i], cand.ps[q, j, i]], axis=1).astype(float)
     c, m = cand.codes.shape[:2]
     lines = row_table(cand.inputs.reshape(-1), cand.codes.reshape(-1, n), cand.ps.reshape(-1, n))
     at = {key: int(s) for key, s in zip(keys, slots.tolist(), strict=True)}
-    new: list[int] = []  # lines of the candidates' new rows, in order
-    line_keys = [line.tobytes() for line in lines]
-    for i, key in enumerate(line_keys):
+    new: list[int] = []  # lines of the candidates' new rows
+    lkeys = line_keys(lines)
+    for r, key in enumerate(lkeys):
         if key not in at:
-            at[key] = -1 - len(new)
-            new.append(i)
+            at[key] = -1
+            new.append(r)
     shared = chunk.spare is not None
     if shared:
         dest = np.asarray(chunk.spare[:len(new)], dtype=np.int64)
         rows = store_rows
         known = {}
-        if chunk.fit_start is not None:
-            for r in np.flatnonzero(chunk.fit_start > 0).tolist():
-                k0 = int(chunk.fit_start[r])
-                known[prefix_key(table[r], n, k0)] = int(chunk.fit_slots[r])
+        for r in np.flatnonzero(chunk.fit_start > 0).tolist():
+            known[prefix_key(table[r], n, int(chunk.fit_start[r]))] = int(chunk.fit_slots[r])
         if pool is None:
             pool = ChunkPrefixes(worker.prefix_rows, np.zeros((0, table.shape[1])),
                                  np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
@@ -493,22 +504,28 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
         view = pool.reading(known)
     else:
         store = worker.own
-        dest = np.array(store.allocate(len(new), set(keys) | {line_keys[i] for i in new}),
+        dest = np.array(store.allocate(len(new), set(keys) | {lkeys[r] for r in new}),
                         dtype=np.int64)
         rows, view = store.rows, None
     elements = simulate_into(worker, lines[new], rows, dest, view) if new else 0
-    for a, i in enumerate(new):
-        at[line_keys[i]] = int(dest[a])
+    for a, r in enumerate(new):
+        at[lkeys[r]] = int(dest[a])
         if not shared:
-            worker.own.commit(line_keys[i], int(dest[a]))
+            worker.own.commit(lkeys[r], int(dest[a]))
     target = worker.ctx.target
-    for q in range(c):
-        mine = np.array([at[line_keys[q * m + j]] for j in range(m)], dtype=np.int64)
-        fitted[todo[int(idx[q])]] = kernel.score(rows, mine, target, worker.weights,
+    for k in range(c):
+        mine = np.array([at[key] for key in lkeys[k * m:(k + 1) * m]], dtype=np.int64)
+        fitted[todo[int(idx[k])]] = kernel.score(rows, mine, target, worker.weights,
                                                  worker.scratch())
     if shared:
-        return fitted, lines[new], dest, len(new), elements
-    return fitted, None, None, len(new), elements
+        return fitted, genes, lines[new], dest, len(new), elements
+    return fitted, genes, None, None, len(new), elements
+
+
+def line_keys(table: np.ndarray) -> list[bytes]:
+    """The bytes of each line of a 2-d float64 array (at once): the lines' keys."""
+    lines = np.ascontiguousarray(table)
+    return lines.view(np.dtype((np.void, lines.shape[1] * 8))).ravel().tolist()
 
 
 def evaluate_chunk(token: str, blob: bytes | None, wtoken: str, wblob: bytes | None,

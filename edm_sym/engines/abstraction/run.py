@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -293,27 +294,37 @@ class _Runner:
         places = scale_places(pop.codes, gain)
         scales: list = []
         fitted: list = []
-        # The lanes make and evaluate the candidates where they fit them (one batch per
-        # generation); only those that are better, or not evaluated, are made again here.
+        # The lanes make and evaluate the candidates where they fit them: one batch per
+        # generation. A candidate they did not evaluate is made here and evaluated after.
         fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
                                       scales_out=scales, gain_allowed=gain, fitted_out=fitted)
         if keep_first:
             scales[0] = None
-        made = 0  # candidates evaluated in the lanes (counted as evaluations)
-        for k, f in enumerate(fitted):
-            if scales[k] is None or f is None:
+        made, better, later = 0, [], [None] * len(pop)
+        for k, entry in enumerate(fitted):
+            if scales[k] is None:
                 continue
-            if not np.isnan(f):
+            if entry is None:
+                later[k] = scales[k]
+            elif not math.isnan(entry[0]):
                 made += 1
-            if not f < fit[k]:
-                scales[k] = None
-        idx, cand = gain_fit(pop, scales, places, self.ranges)
+                if entry[0] < fit[k]:
+                    better.append(k)
+        for k in better:
+            f, genes = fitted[k]
+            j, i = genes[:, 0].astype(np.intp), genes[:, 1].astype(np.intp)
+            pop.codes[k, j, i] = genes[:, 2].astype(np.int64)
+            pop.ps[k, j, i] = genes[:, 3]
+            fit[k] = f
+        if better:
+            self.evaluator.remember(pop.inputs[better], pop.codes[better], pop.ps[better],
+                                    fit[better])
+        idx, cand = gain_fit(pop, later, places, self.ranges)
         if len(idx):
-            known = np.array([np.nan if fitted[k] is None else fitted[k] for k in idx.tolist()])
-            made += int(np.isnan(known).sum())
-            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps, known=known)
-            better = cfit < fit[idx]
-            sel, src = idx[better], np.flatnonzero(better)
+            made += len(idx)
+            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
+            ok = cfit < fit[idx]
+            sel, src = idx[ok], np.flatnonzero(ok)
             pop.inputs[sel], pop.codes[sel], pop.ps[sel] = (
                 cand.inputs[src], cand.codes[src], cand.ps[src])
             fit[sel] = cfit[src]
