@@ -11,11 +11,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.signal import cont2discrete
 
-from edm_sym.core.elements import LinearElement, all_elements, default_ranges, element
+from edm_sym.core.elements import REGISTRY, LinearElement, all_elements, default_ranges, element
 from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.polish import gain_fit, scale_places
+from edm_sym.engines.abstraction.poles import prefix_has_pole, with_tangent
 from edm_sym.engines.abstraction.rows import simulate_table
 from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
@@ -345,3 +347,88 @@ def test_groups_keep_a_new_row_or_prefix_in_one_piece_and_pieces_follow_lane_spe
     # Within the cap it does.
     assert sorted(groups(members, plan, missing, per, cap=10.0)) == [[0, 3], [1, 2], [4], [5]]
 
+
+
+_FITTED = ("gain", "power_gain", "sin_amp", "tan_amp", "tan_phase", "through", "lpf", "saturation",
+           "sign", "dead_zone", "dead_time", "tanh")
+
+
+def _fit_population(seed: int, p: int = 40):  # noqa: ANN202
+    ops = Operators(GaSettings(through_rate=0.3, elements=_FITTED), 3)
+    return ops.random_population(np.random.default_rng(seed), p, 3, 4), ops
+
+
+@pytest.mark.parametrize("mode", ["this process", "forked pool", "thread executor"])
+def test_the_lanes_evaluate_each_gain_fit_candidate_as_the_main_process_would(
+        signals, mode: str) -> None:
+    # The candidate a lane makes, evaluates and sends back as changed genes is the
+    # one gain_fit makes from the scales, with the same eq. 8 bit for bit (poles too).
+    x, y = signals
+    ranges = default_ranges(TS, N * TS)
+    lam = np.where(np.arange(N) < N // 3, 2.0, 1.0)
+    pops = [_fit_population(s)[0] for s in range(4)]
+    want = []
+    with Evaluator(x, y, TS, ranges, workers=1, reject_poles=True) as ref:
+        ref.set_weights(lam)
+        for pop in pops:
+            places = scale_places(pop.codes, gain_allowed=True)
+            scales: list = []
+            fit = ref.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                               scales_out=scales)
+            idx, cand = gain_fit(pop, scales, places, ranges)
+            want.append((fit, idx, cand, ref.evaluate(cand.inputs, cand.codes, cand.ps)))
+    pool = ThreadPoolExecutor(2) if mode == "thread executor" else None
+    workers = 1 if mode == "this process" else 2
+    with Evaluator(x, y, TS, ranges, workers=workers, executor=pool, cache_bytes=1,
+                   reject_poles=True) as ev:
+        ev.set_weights(lam)
+        for pop, (fit, idx, cand, cfit) in zip(pops, want, strict=True):
+            places = scale_places(pop.codes, gain_allowed=True)
+            fitted: list = []
+            got = ev.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                              scales_out=[], gain_allowed=True, fitted_out=fitted)
+            assert np.array_equal(got, fit)
+            made = [k for k, f in enumerate(fitted) if not np.isnan(f[0])]
+            assert made == idx.tolist()
+            assert np.isinf(cfit).any() and np.isfinite(cfit).sum() > 10
+            for q, k in enumerate(made):
+                f, genes = fitted[k]
+                assert f == cfit[q] or (np.isinf(f) and np.isinf(cfit[q]))
+                codes, ps = pop.codes[k].copy(), pop.ps[k].copy()
+                j, i = genes[:, 0].astype(int), genes[:, 1].astype(int)
+                codes[j, i], ps[j, i] = genes[:, 2], genes[:, 3]
+                assert np.array_equal(codes, cand.codes[q]) and np.array_equal(ps, cand.ps[q])
+        if ev.shared:  # every spare slot came back: none lost, none given twice
+            assert len(ev.store) + len(set(ev.store._free)) == ev.store.slots
+            assert len(ev.store._free) == len(set(ev.store._free))
+    if pool is not None:
+        pool.shutdown()
+
+
+def test_the_gain_fit_never_moves_a_tangent_pole() -> None:
+    # Why a lane's candidate needs no pole check of its own: the gain fit scales a
+    # row's last gain-like element, after which only homogeneous elements follow, so
+    # every tangent sees the same argument as in the individual's row.
+    ranges = default_ranges(TS, N * TS)
+    pop, _ = _fit_population(7, p=400)
+    places = scale_places(pop.codes, gain_allowed=True)
+    rng = np.random.default_rng(1)
+    checked = 0
+    for k in range(len(pop)):
+        for j in range(3):
+            pos, through = int(places[0][k, j]), bool(places[1][k, j])
+            codes = pop.codes[k, j].tolist()
+            if pos < 0 or not with_tangent(np.array([codes]))[0]:
+                continue
+            els = [(REGISTRY[c], ranges[REGISTRY[c].name].decode(float(p))
+                    if REGISTRY[c].param is not None else None)
+                   for c, p in zip(codes, pop.ps[k, j], strict=True)]
+            scaled = list(els)
+            c = float(rng.uniform(-5, 5))
+            scaled[pos] = ((element("gain"), c) if through
+                           else (els[pos][0], els[pos][1] * c))
+            for lo, hi in ((-3.0, 3.0), (-40.0, 25.0)):
+                assert (prefix_has_pole(lo, hi, els, TS, 2001)
+                        == prefix_has_pole(lo, hi, scaled, TS, 2001))
+            checked += 1
+    assert checked > 20

@@ -466,6 +466,10 @@ class Evaluator:
             scales_out[:] = scales
         if fitted_out is not None:
             fitted_out[:] = fitted
+            # The candidates count as individuals evaluated, their rows as rows asked for.
+            made = sum(1 for f in fitted if f is not None and not math.isnan(f[0]))
+            self.stats.individuals += made
+            self.stats.row_requests += made * m
         self.stats.eval_seconds += time.perf_counter() - t0
         return out
 
