@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import multiprocessing
 import os
 import resource
 import time
@@ -292,12 +293,32 @@ def _spread(values: list[float], fmt: str = ".2f") -> str:
             if len(values) > 1 else f"{values[0]:{fmt}}")
 
 
+def _alone(generations: int) -> float:
+    """Wall time of a one-worker run (in a process of its own)."""
+    return _auger_run(generations, workers=1)["elapsed"]
+
+
+def machine_bound(generations: int, copies: int, alone: float) -> tuple[float, list[float]]:
+    """The speed-up ``copies`` cores allow this workload: that many independent runs at once.
+
+    Each of ``copies`` one-worker runs of the same generations runs in a
+    process of its own, all at the same time; they share nothing but the
+    machine (its memory bandwidth, caches and whatever else the cores share).
+    ``copies * alone / mean(their times)`` bounds the speed-up of any parallel
+    evaluation of the same work: no serial part, no waiting, no transfer.
+    """
+    with multiprocessing.get_context("fork").Pool(copies) as pool:
+        times = pool.map(_alone, [generations] * copies)
+    return copies * alone / float(np.mean(times)), times
+
+
 def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_local: int,
-                  repeat: int = 1) -> None:
+                  repeat: int = 1, bound: bool = False) -> None:
     """One worker against ``workers``, a LocalCluster and a scheduler, on the same generations.
 
     With ``repeat`` > 1 the whole comparison runs again, and a summary gives
-    each figure as median [min-max] over the repeats.
+    each figure as median [min-max] over the repeats. With ``bound`` each
+    comparison also measures what the machine allows (:func:`machine_bound`).
     """
     figures: dict[str, dict[str, list[float]]] = {}
 
@@ -316,6 +337,12 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
         print(f"log of {one['samples']} samples")
         _print_scaling("1 worker (this process)", one, 1, None)
         keep("1 worker", one, one)
+        if bound and workers > 1:
+            limit, times = machine_bound(generations, workers, one["elapsed"])
+            print(f"{workers} independent 1-worker runs at once  "
+                  f"{', '.join(f'{t:.1f}' for t in times)} s each (alone {one['elapsed']:.1f} s):"
+                  f" the machine allows at most {limit:.2f}x")
+            figures.setdefault("machine bound", {}).setdefault("bound", []).append(limit)
         if workers > 1:
             run = _auger_run(generations, workers=workers)
             _print_scaling(f"{workers} workers (this process + {workers - 1} forked)", run,
@@ -342,6 +369,10 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
     if repeat > 1:
         print(f"== summary over {repeat} runs: median [min-max]")
         for title, fig in figures.items():
+            if title == "machine bound":
+                print(f"{title:28s} {workers} independent runs at once allow "
+                      f"{_spread(fig['bound'])}x")
+                continue
             print(f"{title:28s} evaluations/s {_spread(fig['rate'], '.0f')}  speed-up "
                   f"{_spread(fig['speed-up'])}  GA outside evaluation "
                   f"{_spread(fig['outside %'], '.1f')} %  elements run "
@@ -386,6 +417,9 @@ def main() -> None:
                     help="generations of the auger schedule per scaling run (default 300)")
     ap.add_argument("--repeat", type=int, default=1,
                     help="run the scaling comparison this many times; a median [min-max] summary")
+    ap.add_argument("--bound", action="store_true",
+                    help="also run --workers independent 1-worker runs at once: the speed-up "
+                         "this machine allows the workload")
     ap.add_argument("--skip-batched", action="store_true", help="no batched-evaluation figures")
     ap.add_argument("--skip-scaling", action="store_true", help="no scaling runs")
     ap.add_argument("--synthetic", action="store_true",
@@ -402,7 +436,8 @@ def main() -> None:
     if not args.skip_batched:
         bench_batched(log)
     if not args.skip_scaling:
-        bench_scaling(args.generations, workers, args.scheduler, args.dask_local, args.repeat)
+        bench_scaling(args.generations, workers, args.scheduler, args.dask_local, args.repeat,
+                      args.bound)
     if args.synthetic:
         bench_ga(log, workers)
     if args.plant:
