@@ -12,12 +12,14 @@ Prints, with ratios measured in the same run rather than verdicts:
    dask scheduler (``--scheduler ADDRESS``); for each, evaluations per
    second, speed-up and parallel efficiency against one worker, row cache
    hit rate, the share of wall time the GA spends outside evaluation, and
-   the peak resident memory of each worker process;
+   the peak resident memory of each worker process; with ``--bound``, also
+   N independent one-worker runs at once: the speed-up this machine allows
+   the same work when nothing is serial and nothing is shared;
 3. optionally (``--plant``) the default schedule on the auger preset under a
    time limit and the RMSE of the result on the evaluation log.
 
 Run ``python benchmarks/bench_ga.py [--workers N] [--scheduler ADDRESS]
-[--dask-local K] [--generations G] [--repeat R] [--skip-batched] [--plant]``
+[--dask-local K] [--generations G] [--repeat R] [--bound] [--skip-batched] [--plant]``
 (``--repeat``: the scaling comparison R times, then each figure as median
 [min-max]). The machine's
 load (``os.getloadavg``) is printed with the figures: on a shared machine

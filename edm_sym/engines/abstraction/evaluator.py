@@ -10,8 +10,9 @@ changes.
 A batch of individuals is cut into chunks for the lanes
 (:mod:`edm_sym.engines.abstraction.lanes`); a worker simulates the rows it
 lacks and sends back a few numbers per individual (eq. 8 and, for the gain
-fit, the least-squares scales of its rows), never a row. The run's data
-goes to each worker once, the weighting once per step.
+fit, the least-squares scales of its rows and the eq. 8 of the candidate it
+made with them: :mod:`~edm_sym.engines.abstraction.candidates`), never a
+row. The run's data goes to each worker once, the weighting once per step.
 
 Where the rows are simulated and kept:
 
@@ -189,8 +190,9 @@ class Evaluator:
         self._weights: np.ndarray | float = 1.0
         self._wtoken = ""
         self._wblob = b""
-        # Individual key -> (eq. 8, gain-fit scales, whether asked, its candidate's eq. 8).
-        self._memo: dict[bytes, tuple[float, Any, bool, float | None]] = {}
+        # Individual key -> (eq. 8, gain-fit scales, whether asked for, its candidate:
+        # (eq. 8, changed genes) or None when not asked for).
+        self._memo: dict[bytes, tuple[float, Any, bool, tuple | None]] = {}
         self._dots: dict[bytes, float] = {}
         self.set_weights(1.0)
 
@@ -477,13 +479,14 @@ class Evaluator:
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
                   score: np.ndarray, free: np.ndarray | None, local: bool,
                   aside: Callable[[], None] = lambda: None, gains: bool | None = None
-                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None, np.ndarray]:
+                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None, list]:
         """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
 
         ``aside()`` is work of this process that needs no result: it runs
         while the other lanes work (once their pieces are sent). With
         ``gains`` (and ``free``) the lanes also evaluate the gain-fit
-        candidates; the last value returned is their eq. 8 (NaN: none).
+        candidates; the last value returned is, per individual, its
+        candidate's eq. 8 (NaN: none) and the genes it changes.
 
         With shared stores every lane reads every row, so ``local`` (rows
         wanted back) does not keep the batch in this process.
@@ -510,18 +513,19 @@ class Evaluator:
                 fresh = self.store.allocate(len(miss), keep)
                 slots[miss] = fresh
                 missing[miss] = True
-        fits = CandidatePlan(table, members, score, free, gains, self.store if self.shared else None,
-                     self.prefixes if self.shared else None, keep)
+        cplan = CandidatePlan(table, members, score, free, gains,
+                              self.store if self.shared else None,
+                              self.prefixes if self.shared else None, keep)
         if self.shared:
             costs = element_costs(table)
-            plan = plan_prefixes(self.prefixes, table, missing, costs, fits.reads)
-            fits.estimate(costs)
+            plan = plan_prefixes(self.prefixes, table, missing, costs, cplan.reads)
+            cplan.estimate(costs)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         fitted: list = [(math.nan, _NO_GENES)] * count
         if self.shared and len(lanes) > 1:
             results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside,
-                                 fits)
+                                 cplan)
         else:
             aside()
             if len(lanes) > 1:
@@ -533,7 +537,7 @@ class Evaluator:
             for lane, idx in parts:
                 if idx:
                     chunk, lines = self._chunk(table, members, score, free, slots, missing, plan,
-                                               idx, fits)
+                                               idx, cplan)
                     pending.append((lane, idx, lines, chunk))
             if lanes:
                 results = self._gather(pending)
@@ -556,7 +560,7 @@ class Evaluator:
                 self.store.commit(keys[r], int(slots[r]))
             plan.commit(self.prefixes, [res.prefixes for _, _, res in results
                                         if res.prefixes is not None])
-            fits.commit([res for _, _, res in results])
+            cplan.commit([res for _, _, res in results])
             if local:
                 rows = [self.store.rows[s] for s in slots.tolist()]
         elif local:
@@ -568,7 +572,7 @@ class Evaluator:
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
                free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None,
-               plan: PrefixPlan | None, idx: list[int], fits: CandidatePlan
+               plan: PrefixPlan | None, idx: list[int], cplan: CandidatePlan
                ) -> tuple[Chunk, list[int]]:
         """The chunk of individuals ``idx``: their rows, renumbered; which table lines they are."""
         sub = members[idx]
@@ -579,19 +583,19 @@ class Evaluator:
                       None if missing is None else missing[lines],
                       None if plan is None else plan.start[lines],
                       None if plan is None else plan.slots[lines],
-                      fits.gains, *fits.of(idx, lines))
+                      cplan.gains, *cplan.of(idx, lines))
         return chunk, lines.tolist()
 
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
-              lanes: list[int], aside: Callable[[], None], fits: CandidatePlan) -> list:
+              lanes: list[int], aside: Callable[[], None], cplan: CandidatePlan) -> list:
         """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
 
         A lane's speed is the estimated cost it gets through per second,
         averaged over its earlier pieces, so a lane slowed by anything (its
         round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
         """
-        per = scoring_costs(members, score, free) + fits.cost
+        per = scoring_costs(members, score, free) + cplan.cost
         total = float(plan.cost[missing].sum() + per.sum())
         parts = groups(members, plan, missing, per, total / (self.SPLIT * len(lanes)))
         feeder = Feeder(parts, group_costs(parts, members, plan, per), self._speed.of(lanes))
@@ -604,7 +608,7 @@ class Evaluator:
         def send(lane: int, idx: list[int], again: bool = False) -> Any:
             if not again:
                 chunks[lane] = self._chunk(table, members, score, free, slots, missing, plan, idx,
-                                           fits)
+                                           cplan)
             sent_at[lane] = time.monotonic()
             # The weighting goes with every piece until the lane confirms it has it.
             wblob = None if self._sent_w[lane] == self._wtoken and not again else self._wblob
@@ -629,7 +633,7 @@ class Evaluator:
 
         def run(idx: list[int]) -> tuple:
             chunk, lines = self._chunk(table, members, score, free, slots, missing, plan, idx,
-                                       fits)
+                                       cplan)
             res = run_chunk(self._local, chunk)
             # From the first send, as the other lanes are timed: the sends and the work
             # aside count against this lane, so its piece leaves room for them.

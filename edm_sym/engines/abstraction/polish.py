@@ -16,8 +16,10 @@ but a wrong scale survives at once, which makes structures (a sign with a
 level, a viscous gain) much easier to find; it draws no random numbers.
 
 The small least-squares problem is solved where the rows are, in the worker
-that evaluated the individual (:func:`row_scales`); the main process only
-writes the candidates (:func:`gain_fit`).
+that evaluated the individual (:func:`row_scales`), and that worker also
+makes the candidate (:func:`gain_fit`) and evaluates it
+(:mod:`~edm_sym.engines.abstraction.candidates`); the main process only
+writes the genes of the candidates that are better into the population.
 """
 
 from __future__ import annotations

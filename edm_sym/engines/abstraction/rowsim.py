@@ -16,6 +16,7 @@ as indices into a table of their distinct rows. The worker simulates the rows
 its store lacks (with the numba row kernel, :mod:`edm_sym.engines.kernel`,
 when it is installed, else the reference realisations) and returns each
 individual's eq. 8 and, on request, the gain fit's least-squares row scales
+and the eq. 8 of the candidate made with them, with the genes it changes
 (:class:`ChunkResult`): a few numbers per individual, never a row.
 
 Every number returned is a pure function of the genes, the data and the
@@ -486,11 +487,15 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
     at = {key: int(s) for key, s in zip(keys, slots.tolist(), strict=True)}
     new: list[int] = []  # lines of the candidates' new rows
     lkeys = line_keys(lines)
+    shared = chunk.spare is not None
     for r, key in enumerate(lkeys):
         if key not in at:
-            at[key] = -1
-            new.append(r)
-    shared = chunk.spare is not None
+            # A row of this worker's own store serves; the shared store's index is the
+            # main process's (a row found there again is simply not kept twice).
+            slot = None if shared else worker.own.lookup(key)
+            at[key] = -1 if slot is None else slot
+            if slot is None:
+                new.append(r)
     if shared:
         dest = np.asarray(chunk.spare[:len(new)], dtype=np.int64)
         rows = store_rows
@@ -504,7 +509,7 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
         view = pool.reading(known)
     else:
         store = worker.own
-        dest = np.array(store.allocate(len(new), set(keys) | {lkeys[r] for r in new}),
+        dest = np.array(store.allocate(len(new), set(keys) | set(lkeys)),
                         dtype=np.int64)
         rows, view = store.rows, None
     elements = simulate_into(worker, lines[new], rows, dest, view) if new else 0
