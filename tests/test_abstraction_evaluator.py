@@ -16,8 +16,9 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators
-from edm_sym.engines.abstraction.polish import gain_fit, scale_places
 from edm_sym.engines.abstraction.poles import prefix_has_pole, with_tangent
+from edm_sym.engines.abstraction.polish import gain_fit, scale_places
+from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_keys
 from edm_sym.engines.abstraction.rows import simulate_table
 from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
@@ -432,3 +433,25 @@ def test_the_gain_fit_never_moves_a_tangent_pole() -> None:
                         == prefix_has_pole(lo, hi, scaled, TS, 2001))
             checked += 1
     assert checked > 20
+
+
+def test_prefixes_read_by_a_batch_never_leave_its_new_prefixes_without_room() -> None:
+    # A small prefix store (a long log, a small cache_mb) full of prefixes the batch
+    # reads (rows' starts, the gain-fit candidates' reads): the new prefixes get what
+    # is left, here nothing, and the plan does not fail.
+    n = 4
+    store = SlotStore(8, 10)
+    table = np.zeros((8, 1 + 2 * n))
+    table[:, 1:1 + n] = element("lpf").code
+    table[:, 1 + n:] = np.random.default_rng(0).random((8, n))
+    read = prefix_keys(table, 3)
+    for key in read:
+        store.commit(key, store.allocate(1, ())[0])
+    other = table.copy()
+    other[:, 1 + n + 1] += 0.5  # parts from the stored rows at element 1: nothing stored to read
+    plan = plan_prefixes(store, other, np.ones(8, dtype=bool), keep=set(read))
+    assert not plan.new and not plan.start.any()
+    assert all(store.lookup(key) is not None for key in read)
+    fewer = set(read[:4])  # four slots to spare: one row's three new prefixes fit
+    plan = plan_prefixes(store, other, np.ones(8, dtype=bool), keep=fewer)
+    assert len(plan.new) == 3 and all(store.lookup(key) is not None for key in fewer)

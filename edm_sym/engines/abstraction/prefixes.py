@@ -139,7 +139,8 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
         Shape (R, n): the estimated cost of each element of each row (default
         1 each: :attr:`PrefixPlan.cost` counts the elements run).
     keep : collection of bytes
-        Keys of stored prefixes the batch reads besides (they keep their slots).
+        Keys of stored prefixes the batch reads besides (they keep their
+        slots; the new prefixes get at most the rest of the store).
 
     Returns
     -------
@@ -164,16 +165,18 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
     keys = [None, *(prefix_keys(sub, k) for k in range(1, n))]
     used: set[bytes] = set(keep)
     wants: dict[bytes, list[tuple[int, int]]] = {}
-    budget = store.slots // 2
-    for a, r in enumerate(todo.tolist()):
-        found = 0
+    rows = todo.tolist()
+    for a, r in enumerate(rows):
         for k in range(n - 1, 0, -1):
             slot = store.lookup(keys[k][a])
             if slot is not None:
-                found = k
                 start[r], slots[r, k] = k, slot
                 used.add(keys[k][a])
                 break
+    # The prefixes read keep their slots: the new ones get at most the others.
+    budget = min(store.slots // 2, store.slots - len(used))
+    for a, r in enumerate(rows):
+        found = int(start[r])
         cost[r] = rest[r, found]
         mine = [keys[k][a] for k in range(found + 1, n)]
         fresh = [key for key in mine if key not in wants]
