@@ -57,11 +57,16 @@ class CandidatePlan:
         The shared row and prefix stores (None: each lane keeps its own).
     keep : collection of bytes
         The batch's row keys (spare slots never evict them).
+    costs : numpy.ndarray, optional
+        With the shared stores: the estimated cost of each element of each
+        line (:func:`~edm_sym.engines.abstraction.balance.element_costs`),
+        which sets :attr:`cost`, each candidate's, for cutting the batch.
     """
 
     def __init__(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
                  free: np.ndarray | None, gains: bool | None, store: SlotStore | None,
-                 prefixes: SlotStore | None, keep: Collection[bytes]):
+                 prefixes: SlotStore | None, keep: Collection[bytes],
+                 costs: np.ndarray | None = None):
         count = len(members)
         self.gains = gains if free is not None else None
         self.store = store
@@ -73,22 +78,18 @@ class CandidatePlan:
             return
         n = (table.shape[1] - 1) // 2
         self._fits = score[:, None] & free  # (P, m): a candidate may change these rows
-        self._pos = scale_places(table[:, 1:1 + n].astype(np.int64), self.gains)[0]
-        self._members = members
+        pos = scale_places(table[:, 1:1 + n].astype(np.int64), self.gains)[0]
+        if costs is not None:
+            self.cost = candidate_costs(members, self._fits, costs, pos)
         if store is None:
             return
         lines = np.zeros(len(table), dtype=bool)
         lines[members[self._fits]] = True
-        depth = np.where(lines, np.maximum(self._pos, 0), 0)
+        depth = np.where(lines, np.maximum(pos, 0), 0)
         self._start, self._slots, self.reads = stored_prefixes(prefixes, table, depth)
         per = self._fits.sum(axis=1)
         self._offsets = np.concatenate([[0], np.cumsum(per)])
         self._spare = np.array(store.allocate(int(self._offsets[-1]), keep), dtype=np.int64)
-
-    def estimate(self, costs: np.ndarray) -> None:
-        """Set :attr:`cost`, each individual's candidate's estimated cost (``costs``: per element)."""
-        if self.gains is not None:
-            self.cost = candidate_costs(self._members, self._fits, costs, self._pos)
 
     def of(self, idx: Sequence[int], lines: np.ndarray
            ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:

@@ -388,9 +388,8 @@ class Evaluator:
             whether a ``through`` may become a ``gain``, as for
             :func:`~edm_sym.engines.abstraction.polish.scale_places`).
         fitted_out : list, optional
-            Filled with one entry per individual: None where its candidate
-            is not known (evaluate it like any individual), else
-            ``(eq. 8, genes)``: the candidate's eq. 8 (NaN: it has none) and
+            With ``gain_allowed``: filled with one entry per individual,
+            ``(eq. 8, genes)``: its candidate's eq. 8 (NaN: it has none) and
             the genes it changes, shape (K, 4) ``[row, element, code, p]``.
             A candidate's rows have a tangent pole where its individual's
             rows have one (the gain fit scales a row after its tangents), so
@@ -513,13 +512,12 @@ class Evaluator:
                 fresh = self.store.allocate(len(miss), keep)
                 slots[miss] = fresh
                 missing[miss] = True
+        costs = element_costs(table) if self.shared else None
         cplan = CandidatePlan(table, members, score, free, gains,
                               self.store if self.shared else None,
-                              self.prefixes if self.shared else None, keep)
+                              self.prefixes if self.shared else None, keep, costs)
         if self.shared:
-            costs = element_costs(table)
             plan = plan_prefixes(self.prefixes, table, missing, costs, cplan.reads)
-            cplan.estimate(costs)
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         fitted: list = [(math.nan, _NO_GENES)] * count

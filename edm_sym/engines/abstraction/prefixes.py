@@ -223,16 +223,21 @@ class ChunkPrefixes:
                     self._assigned[prefix_key(line, n, k)] = mine[k]
         self.written: list[int] = []
 
-    def reading(self, known: dict[bytes, int]) -> ChunkPrefixes:
-        """A view that reads these prefixes and this one's, and stores none.
+    @classmethod
+    def reader(cls, rows: np.ndarray, known: dict[bytes, int]) -> ChunkPrefixes:
+        """A view of the shared store that reads the prefixes ``known`` (key: slot), stores none.
 
-        Gain-fit candidates start from their rows' prefixes, written by this
-        chunk or stored before the batch (``known``); theirs are not kept.
+        Gain-fit candidates start from their rows' prefixes, stored before the
+        batch or written by their chunk (:meth:`reading`); theirs are not kept.
         """
-        view = ChunkPrefixes(self.rows, np.zeros((0, 1)), np.zeros(0, dtype=np.int64),
-                             np.zeros((0, 1), dtype=np.int64), self.slots)
-        view._known = {**known, **self._known}
+        view = cls(rows, np.zeros((0, 1)), np.zeros(0, dtype=np.int64),
+                   np.zeros((0, 1), dtype=np.int64), rows.shape[0])
+        view._known = dict(known)
         return view
+
+    def reading(self, known: dict[bytes, int]) -> ChunkPrefixes:
+        """:meth:`reader` of ``known`` and the prefixes this chunk knows (those it wrote too)."""
+        return ChunkPrefixes.reader(self.rows, {**known, **self._known})
 
     def lookup(self, key: bytes) -> int | None:
         """The slot of a stored prefix (one the plan named, or one this chunk wrote), or None."""

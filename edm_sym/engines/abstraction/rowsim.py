@@ -502,11 +502,8 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
         known = {}
         for r in np.flatnonzero(chunk.fit_start > 0).tolist():
             known[prefix_key(table[r], n, int(chunk.fit_start[r]))] = int(chunk.fit_slots[r])
-        if pool is None:
-            pool = ChunkPrefixes(worker.prefix_rows, np.zeros((0, table.shape[1])),
-                                 np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
-                                 worker.prefix_rows.shape[0])
-        view = pool.reading(known)
+        view = (ChunkPrefixes.reader(worker.prefix_rows, known) if pool is None
+                else pool.reading(known))
     else:
         store = worker.own
         dest = np.array(store.allocate(len(new), set(keys) | set(lkeys)),

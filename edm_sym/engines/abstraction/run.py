@@ -45,7 +45,7 @@ from edm_sym.engines.abstraction.checkpoint import (
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.engines.abstraction.local_search import step_candidates, tune_parameters
-from edm_sym.engines.abstraction.polish import GAIN, gain_fit, scale_places
+from edm_sym.engines.abstraction.polish import GAIN, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.validation import (
@@ -295,20 +295,16 @@ class _Runner:
         scales: list = []
         fitted: list = []
         # The lanes make and evaluate the candidates where they fit them: one batch per
-        # generation. A candidate they did not evaluate is made here and evaluated after.
+        # generation; only the genes of the better ones are written here.
         fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
                                       scales_out=scales, gain_allowed=gain, fitted_out=fitted)
         if keep_first:
             scales[0] = None
-        made, better, later = 0, [], [None] * len(pop)
-        for k, entry in enumerate(fitted):
-            if scales[k] is None:
-                continue
-            if entry is None:
-                later[k] = scales[k]
-            elif not math.isnan(entry[0]):
+        made, better = 0, []
+        for k, (f, _) in enumerate(fitted):
+            if scales[k] is not None and not math.isnan(f):
                 made += 1
-                if entry[0] < fit[k]:
+                if f < fit[k]:
                     better.append(k)
         for k in better:
             f, genes = fitted[k]
@@ -319,15 +315,6 @@ class _Runner:
         if better:
             self.evaluator.remember(pop.inputs[better], pop.codes[better], pop.ps[better],
                                     fit[better])
-        idx, cand = gain_fit(pop, later, places, self.ranges)
-        if len(idx):
-            made += len(idx)
-            cfit = self.evaluator.evaluate(cand.inputs, cand.codes, cand.ps)
-            ok = cfit < fit[idx]
-            sel, src = idx[ok], np.flatnonzero(ok)
-            pop.inputs[sel], pop.codes[sel], pop.ps[sel] = (
-                cand.inputs[src], cand.codes[src], cand.ps[src])
-            fit[sel] = cfit[src]
         return fit, made
 
     def _generation(self, cur: StepState, step: StepConfig, ops: Operators) -> StepState:
