@@ -269,6 +269,7 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
             "evaluations": st.individuals, "rate": st.individuals / info.elapsed,
             "hit_rate": st.hit_rate, "own_share": 1.0 - st.eval_seconds / info.elapsed,
             "sim_seconds": st.sim_seconds, "task_seconds": st.task_seconds,
+            "spread_seconds": st.spread_seconds, "wait_seconds": st.wait_seconds,
             "rows": st.rows_simulated, "elements": st.elements_simulated,
             "peak_rss": dict(st.peak_rss), "main_rss": main_rss}
 
@@ -287,6 +288,25 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
           f"(this process {run['main_rss'] / mib:.0f})")
     print(f"{'':34s} rows simulated {run['rows']}, elements run {run['elements']}; summed over "
           f"workers: simulating {run['sim_seconds']:.1f} s, in tasks {run['task_seconds']:.1f} s")
+    if base is not None:
+        alone = run["elapsed"] - run["spread_seconds"]
+        print(f"{'':34s} this process alone {alone:.1f} s ({100 * alone / run['elapsed']:.0f} %: "
+              f"GA, planning, single evaluations), waiting for the others "
+              f"{run['wait_seconds']:.1f} s; tasks "
+              f"{100 * (run['task_seconds'] / base['task_seconds'] - 1):+.0f} % over one worker; "
+              f"ceiling with this alone time {ceiling(run, base, lanes):.2f}x")
+
+
+def ceiling(run: dict, base: dict, lanes: int) -> float:
+    """The speed-up ``run`` could reach with its serial time and one worker's tasks split evenly.
+
+    ``run``'s wall time outside its batches' parallel spans (this process
+    alone: the GA, each batch's planning, single evaluations) plus one
+    worker's task time over ``lanes``: Amdahl's bound for this run, with no
+    waiting and no task slower than on one worker.
+    """
+    alone = run["elapsed"] - run["spread_seconds"]
+    return base["elapsed"] / (alone + base["task_seconds"] / lanes)
 
 
 def _spread(values: list[float], fmt: str = ".2f") -> str:
@@ -324,12 +344,14 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
     """
     figures: dict[str, dict[str, list[float]]] = {}
 
-    def keep(title: str, run: dict, one: dict) -> None:
+    def keep(title: str, run: dict, one: dict, lanes: int = 1) -> None:
         fig = figures.setdefault(title, {})
         fig.setdefault("rate", []).append(run["rate"])
         fig.setdefault("speed-up", []).append(run["rate"] / one["rate"])
         fig.setdefault("outside %", []).append(100 * run["own_share"])
         fig.setdefault("elements", []).append(run["elements"])
+        if run is not one:
+            fig.setdefault("ceiling", []).append(ceiling(run, one, lanes))
 
     for k in range(repeat):
         print(f"== scaling: auger schedule, seed 1, its first {generations} generations "
@@ -349,7 +371,7 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
             run = _auger_run(generations, workers=workers)
             _print_scaling(f"{workers} workers (this process + {workers - 1} forked)", run,
                            workers, one)
-            keep(f"{workers} workers", run, one)
+            keep(f"{workers} workers", run, one, workers)
         if dask_local:
             import distributed
 
@@ -359,7 +381,7 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                     distributed.Client(cluster) as client:
                 run = _auger_run(generations, scheduler=client)
             _print_scaling(f"dask LocalCluster, {dask_local} workers", run, dask_local, one)
-            keep(f"dask LocalCluster {dask_local}", run, one)
+            keep(f"dask LocalCluster {dask_local}", run, one, dask_local)
         if scheduler:
             import distributed
 
@@ -367,7 +389,7 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                 count = len(client.scheduler_info()["workers"])
                 run = _auger_run(generations, scheduler=client)
             _print_scaling(f"dask scheduler {scheduler}, {count} workers", run, count, one)
-            keep(f"dask scheduler, {count} workers", run, one)
+            keep(f"dask scheduler, {count} workers", run, one, count)
     if repeat > 1:
         print(f"== summary over {repeat} runs: median [min-max]")
         for title, fig in figures.items():
@@ -378,7 +400,8 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
             print(f"{title:28s} evaluations/s {_spread(fig['rate'], '.0f')}  speed-up "
                   f"{_spread(fig['speed-up'])}  GA outside evaluation "
                   f"{_spread(fig['outside %'], '.1f')} %  elements run "
-                  f"{_spread(fig['elements'], '.0f')}")
+                  f"{_spread(fig['elements'], '.0f')}"
+                  + (f"  ceiling {_spread(fig['ceiling'])}x" if "ceiling" in fig else ""))
 
 
 def bench_plant(time_limit: float, workers: int) -> None:

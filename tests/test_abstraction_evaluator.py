@@ -301,6 +301,25 @@ def test_a_new_prefix_shared_by_the_whole_batch_is_split_between_lanes(signals) 
     assert got[1][1] < got[2][1] <= got[1][1] + 3
 
 
+@pytest.mark.parametrize("lanes", ["one", "pool", "threads"])
+def test_the_time_lanes_share_is_counted_within_the_evaluation(signals, lanes: str) -> None:
+    # bench_ga's "this process alone" is the wall time outside the spans in which
+    # other lanes hold pieces; one lane has none.
+    x, y = signals
+    pop = _population(5, p=32)
+    with ThreadPoolExecutor(2) as pool:
+        kw = {"one": {"workers": 1}, "pool": {"workers": 2},
+              "threads": {"workers": 2, "executor": pool}}[lanes]
+        with Evaluator(x, y, TS, default_ranges(TS, N * TS), **kw) as ev:
+            ev.evaluate(pop.inputs, pop.codes, pop.ps)
+            st = ev.stats
+    if lanes == "one":
+        assert st.spread_seconds == 0.0 and st.wait_seconds == 0.0
+    else:
+        assert 0.0 < st.spread_seconds <= st.eval_seconds
+        assert 0.0 <= st.wait_seconds <= st.spread_seconds
+
+
 def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
     # The local search wants the rows back: with the forked pool they are in the
     # shared store, so the batch still runs on both lanes, with the same bits.

@@ -615,7 +615,9 @@ class Evaluator:
                                            chunks[lane][0])
 
         def receive(lane: int, idx: list[int], future: Any) -> tuple:
+            t0 = time.perf_counter()
             res = future.result()
+            self.stats.wait_seconds += time.perf_counter() - t0
             if res in (NEED_CONTEXT, NEED_WEIGHTS):  # a restarted worker, or a call overtaken
                 res = send(lane, idx, again=True).result()
             self._sent_w[lane] = self._wtoken
@@ -641,7 +643,10 @@ class Evaluator:
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]
         here = local[0] if local else None
-        return feed(feeder.pieces, lanes, here, send, receive, run, aside)
+        results = feed(feeder.pieces, lanes, here, send, receive, run, aside)
+        if sent_at:
+            self.stats.spread_seconds += time.monotonic() - min(sent_at.values())
+        return results
 
     def _gather(self, pending: list) -> list:
         """Submit every chunk (this process's last), then collect in submission order.
@@ -652,6 +657,7 @@ class Evaluator:
         """
         out: list = [None] * len(pending)
         todo = list(range(len(pending)))
+        first = None  # when the first piece went to another lane
         for attempt in range(3):
             futures = {}
             order = sorted(todo, key=lambda i: self.lanes[pending[i][0]].local)
@@ -665,12 +671,17 @@ class Evaluator:
                          else self._wblob)
                 if not ln.pinned and attempt == 0:
                     blob = wblob = None
+                if first is None and not ln.local:
+                    first = time.monotonic()
                 futures[i] = ln.submit(evaluate_chunk, self._token, blob, self._wtoken, wblob,
                                        chunk)
             todo = []
             for i in sorted(futures):
                 lane, idx, lines, _ = pending[i]
+                t0 = time.perf_counter()
                 res = futures[i].result()
+                if not self.lanes[lane].local:
+                    self.stats.wait_seconds += time.perf_counter() - t0
                 if res in (NEED_CONTEXT, NEED_WEIGHTS):
                     todo.append(i)
                     continue
@@ -679,6 +690,8 @@ class Evaluator:
                     self._sent_w[lane] = self._wtoken
                 out[i] = (idx, lines, res)
             if not todo:
+                if first is not None:
+                    self.stats.spread_seconds += time.monotonic() - first
                 return out
         raise RuntimeError("a worker did not take the run's data")
 

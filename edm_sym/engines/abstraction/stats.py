@@ -17,6 +17,14 @@ class EvalStats:
     ``task_seconds`` the time the workers spent simulating rows and running
     tasks, summed over workers; ``peak_rss`` the peak resident memory of
     each process that ran a task, by process id.
+
+    How much of a run the lanes share, for judging a speed-up:
+    ``spread_seconds`` is the wall time from a batch's first piece sent to
+    another lane until its last answer, summed over batches (the time the
+    run can use more than one core); ``wait_seconds`` the part of it this
+    process spent waiting for those answers once its own piece was done.
+    The rest of a run's wall time is this process alone: the GA, the local
+    search's single evaluations and the planning of each batch.
     """
 
     individuals: int = 0
@@ -28,6 +36,8 @@ class EvalStats:
     sim_seconds: float = 0.0
     task_seconds: float = 0.0
     eval_seconds: float = 0.0
+    spread_seconds: float = 0.0
+    wait_seconds: float = 0.0
     tasks: int = 0
     peak_rss: dict = field(default_factory=dict)
 
