@@ -15,7 +15,7 @@ from edm_sym.core.elements import REGISTRY, LinearElement, all_elements, default
 from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
-from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.ga import Operators, Population
 from edm_sym.engines.abstraction.poles import prefix_has_pole, with_tangent
 from edm_sym.engines.abstraction.polish import gain_fit, scale_places
 from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_keys
@@ -423,6 +423,36 @@ def test_the_lanes_evaluate_each_gain_fit_candidate_as_the_main_process_would(
             assert len(ev.store._free) == len(set(ev.store._free))
     if pool is not None:
         pool.shutdown()
+
+
+def test_a_candidate_that_is_another_individuals_new_row_loses_no_slot(signals) -> None:
+    # Each lane's piece is recorded as it comes in: a candidate whose rows are also
+    # new rows of the batch (here each candidate is in the batch as an individual
+    # too) must neither keep its spare slot nor hide that row from the lane that
+    # writes it. Every slot of both stores is then stored or free, once.
+    x, y = signals
+    ranges = default_ranges(TS, N * TS)
+    pops = [_fit_population(s)[0] for s in (11, 12)]
+    batches = []
+    with Evaluator(x, y, TS, ranges, workers=1) as ref:
+        for pop in pops:
+            places = scale_places(pop.codes, gain_allowed=True)
+            scales: list = []
+            ref.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0, scales_out=scales)
+            _, cand = gain_fit(pop, scales, places, ranges)
+            both = Population.concat([pop, cand])
+            batches.append((both, ref.evaluate(both.inputs, both.codes, both.ps)))
+    with Evaluator(x, y, TS, ranges, workers=2) as ev:
+        assert ev.shared
+        for both, want in batches:
+            places = scale_places(both.codes, gain_allowed=True)
+            got = ev.evaluate(both.inputs, both.codes, both.ps, free=places[0] >= 0,
+                              scales_out=[], gain_allowed=True, fitted_out=[])
+            assert np.array_equal(got, want)
+            for store in (ev.store, ev.prefixes):
+                assert len(store) + len(set(store._free)) == store.slots
+                assert len(store._free) == len(set(store._free))
+        assert len(ev.stats.peak_rss) == 2  # both lanes had pieces
 
 
 def test_the_gain_fit_never_moves_a_tangent_pole() -> None:

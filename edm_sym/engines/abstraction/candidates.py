@@ -13,8 +13,9 @@ before the batch goes out (:class:`CandidatePlan`):
 
 * spare slots of the row store, one per row a candidate may change (a free
   row of a scored individual), given to the chunk of that individual; the
-  lane answers which of them it wrote, and with which rows, and the others
-  are given back (:meth:`CandidatePlan.commit`);
+  lane answers which of them it wrote, and with which rows, recorded as its
+  piece comes in (:meth:`CandidatePlan.record`), and the others are given
+  back once every piece is in (:meth:`CandidatePlan.release`);
 * for each free row, its longest prefix stored before the batch that its
   candidates share (a candidate changes a row from its scaled element on), so
   a candidate runs only the elements after it. Those prefixes keep their slots
@@ -29,6 +30,7 @@ where it is computed changes nothing but the time.
 from __future__ import annotations
 
 from collections.abc import Collection, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -73,6 +75,8 @@ class CandidatePlan:
         self.cost = np.zeros(count)
         self.reads: set[bytes] = set()
         self._spare: np.ndarray | None = None
+        self._kept: set[int] = set()
+        self._batch = keep  # the batch's row keys: a missing one is recorded by its lane
         self._start = self._slots = None
         if self.gains is None:
             return
@@ -101,17 +105,17 @@ class CandidatePlan:
                                or [np.zeros(0, dtype=np.int64)])
         return spare, self._start[lines], self._slots[lines]
 
-    def commit(self, results: Sequence) -> None:
-        """Record the candidates' rows the lanes wrote (unless stored already); give back the rest."""
-        if self._spare is None:
+    def record(self, res: Any) -> None:
+        """Record the candidates' rows one lane wrote (unless stored already)."""
+        if self._spare is None or res.fit_lines is None:
             return
-        kept: set[int] = set()
-        for res in results:
-            if res.fit_lines is None:
-                continue
-            for line, slot in zip(res.fit_lines, res.fit_slots.tolist(), strict=True):
-                key = line.tobytes()
-                if self.store.lookup(key) is None:
-                    self.store.commit(key, slot)
-                    kept.add(slot)
-        self.store.release([s for s in self._spare.tolist() if s not in kept])
+        for line, slot in zip(res.fit_lines, res.fit_slots.tolist(), strict=True):
+            key = line.tobytes()
+            if key not in self._batch and self.store.lookup(key) is None:
+                self.store.commit(key, slot)
+                self._kept.add(slot)
+
+    def release(self) -> None:
+        """Give back the spare slots no candidate row kept (once every piece is in)."""
+        if self._spare is not None:
+            self.store.release([s for s in self._spare.tolist() if s not in self._kept])

@@ -521,9 +521,32 @@ class Evaluator:
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         fitted: list = [(math.nan, _NO_GENES)] * count
+        settled: set[int] = set()
+
+        def settle(idx: list[int], lines: list[int], res: ChunkResult) -> None:
+            # A piece's answers, and what it wrote into the shared stores, recorded as
+            # soon as it is in (this process's own while the other lanes still work).
+            for a, i in enumerate(idx):
+                fitness[i] = res.fitness[a]
+                if res.scales is not None:
+                    scales[i] = res.scales[a]
+            if res.fitted is not None:
+                owner = res.fit_genes[:, 0].astype(np.int64)
+                for a in np.flatnonzero(~np.isnan(res.fitted)).tolist():
+                    fitted[idx[a]] = (float(res.fitted[a]), res.fit_genes[owner == a, 1:])
+            self._account(res, table.shape[1])
+            if self.shared:
+                for r in lines:
+                    if missing[r]:
+                        self.store.commit(keys[r], int(slots[r]))
+                if res.prefixes is not None:
+                    plan.record(self.prefixes, res.prefixes)
+                cplan.record(res)
+            settled.add(id(res))
+
         if self.shared and len(lanes) > 1:
             results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside,
-                                 cplan)
+                                 cplan, settle)
         else:
             aside()
             if len(lanes) > 1:
@@ -542,23 +565,13 @@ class Evaluator:
             else:
                 results = [(idx, lines, run_chunk(self._local, chunk))
                            for _, idx, lines, chunk in pending]
-        for idx, _lines, res in results:
-            for a, i in enumerate(idx):
-                fitness[i] = res.fitness[a]
-                if res.scales is not None:
-                    scales[i] = res.scales[a]
-            if res.fitted is not None:
-                owner = res.fit_genes[:, 0].astype(np.int64)
-                for a in np.flatnonzero(~np.isnan(res.fitted)).tolist():
-                    fitted[idx[a]] = (float(res.fitted[a]), res.fit_genes[owner == a, 1:])
-            self._account(res, table.shape[1])
+        for idx, lines, res in results:
+            if id(res) not in settled:
+                settle(idx, lines, res)
         rows = None
         if self.shared:
-            for r in np.flatnonzero(missing):
-                self.store.commit(keys[r], int(slots[r]))
-            plan.commit(self.prefixes, [res.prefixes for _, _, res in results
-                                        if res.prefixes is not None])
-            cplan.commit([res for _, _, res in results])
+            plan.release(self.prefixes)
+            cplan.release()
             if local:
                 rows = [self.store.rows[s] for s in slots.tolist()]
         elif local:
@@ -586,12 +599,14 @@ class Evaluator:
 
     def _feed(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
               free: np.ndarray | None, slots: np.ndarray, missing: np.ndarray, plan: PrefixPlan,
-              lanes: list[int], aside: Callable[[], None], cplan: CandidatePlan) -> list:
+              lanes: list[int], aside: Callable[[], None], cplan: CandidatePlan,
+              settle: Callable[[list[int], list[int], ChunkResult], None]) -> list:
         """Run a batch on the shared-store lanes, a piece each in proportion to their speeds.
 
         A lane's speed is the estimated cost it gets through per second,
         averaged over its earlier pieces, so a lane slowed by anything (its
         round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
+        This process settles its own piece (``settle``) before it waits for the others.
         """
         per = scoring_costs(members, score, free) + cplan.cost
         total = float(plan.cost[missing].sum() + per.sum())
@@ -639,6 +654,7 @@ class Evaluator:
             # aside count against this lane, so its piece leaves room for them.
             took = time.monotonic() - min(sent_at.values(), default=begun)
             self._speed.timed(lanes[here], cost[lanes[here]], took)
+            settle(idx, lines, res)
             return idx, lines, res
 
         local = [k for k, lane in enumerate(lanes) if self.lanes[lane].local]

@@ -12,7 +12,7 @@ finds each new row's longest stored prefix and gives every prefix the batch
 will make a slot of its own (a prefix two new rows share once, so the lanes
 never compute one twice); the lane that simulates the row reads and writes
 them through a :class:`ChunkPrefixes` and answers which slots it wrote, which
-the main process then records (:meth:`PrefixPlan.commit`).
+the main process then records as each piece comes in (:meth:`PrefixPlan.record`).
 
 Both kinds of store answer the same calls (``lookup``, ``get``, ``place``,
 ``commit``, ``storing``), so :func:`~edm_sym.engines.abstraction.rowsim.simulate_into`
@@ -65,15 +65,17 @@ class PrefixPlan:
     slots: np.ndarray
     cost: np.ndarray
     new: dict[int, bytes] = field(default_factory=dict)
+    written: set[int] = field(default_factory=set)
 
-    def commit(self, store: SlotStore, written: Sequence[np.ndarray]) -> None:
-        """Record the new prefixes the lanes wrote (slots); give back the others."""
-        done = set()
-        for part in written:
-            for s in part.tolist():
-                done.add(s)
-                store.commit(self.new[s], s)
-        store.release([s for s in self.new if s not in done])
+    def record(self, store: SlotStore, written: np.ndarray) -> None:
+        """Record the new prefixes one lane wrote (slots), as soon as its piece is in."""
+        for s in written.tolist():
+            self.written.add(s)
+            store.commit(self.new[s], s)
+
+    def release(self, store: SlotStore) -> None:
+        """Give back the slots of the new prefixes no lane wrote (once every piece is in)."""
+        store.release([s for s in self.new if s not in self.written])
 
 
 def stored_prefixes(store: SlotStore, table: np.ndarray, depth: np.ndarray
