@@ -149,15 +149,19 @@ def groups(members: np.ndarray, plan: PrefixPlan, missing: np.ndarray,
                 j = row_owner.setdefault(r, i)
                 if j != i:
                     join(i, j)
+    row_cost = plan.cost.tolist()
     for r in new:
-        cost[find(row_owner[r])] += float(plan.cost[r])
+        cost[find(row_owner[r])] += row_cost[r]
     made: dict[int, int] = {}  # a new prefix's slot -> one individual that makes it
+    slots, start = plan.slots.tolist(), plan.start.tolist()
     for r in new:
-        for s in plan.slots[r, plan.start[r] + 1:].tolist():
+        i = row_owner[r]
+        for s in slots[r][start[r] + 1:]:
             if s < 0:
                 continue
-            i = row_owner[r]
             j = made.setdefault(s, i)
+            if j == i:
+                continue
             a, b = find(i), find(j)
             if a != b and cost[a] + cost[b] <= cap:
                 join(a, b)

@@ -123,18 +123,22 @@ class SlotStore:
         RuntimeError
             When the store is too small for a batch.
         """
-        out = []
-        while len(out) < count:
-            if self._free:
-                out.append(self._free.pop())
-                continue
+        take = min(count, len(self._free))
+        out = self._free[len(self._free) - take:][::-1]  # free slots first, last freed first
+        del self._free[len(self._free) - take:]
+        if take < count:
+            # Then the least recently used rows outside ``keep``, oldest first.
+            victims = []
             for key in self._lru:
                 if key not in keep:
-                    out.append(self._lru.pop(key))
-                    break
+                    victims.append(key)
+                    if len(victims) == count - take:
+                        break
             else:
+                self._free.extend(out[::-1])  # nothing taken after all
                 raise RuntimeError(f"row store of {self.slots} slots is too small for a "
                                    f"batch of {count} new rows")
+            out.extend(self._lru.pop(key) for key in victims)
         return out
 
     def place(self, keys: Collection[bytes], keep: Collection[bytes]) -> list[int]:

@@ -168,23 +168,26 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
     used: set[bytes] = set(keep)
     wants: dict[bytes, list[tuple[int, int]]] = {}
     rows = todo.tolist()
+    lookup = store.lookup
+    found = [0] * len(rows)
     for a, r in enumerate(rows):
         for k in range(n - 1, 0, -1):
-            slot = store.lookup(keys[k][a])
+            slot = lookup(keys[k][a])
             if slot is not None:
-                start[r], slots[r, k] = k, slot
+                found[a] = k
+                slots[r, k] = slot
                 used.add(keys[k][a])
                 break
+    start[todo] = found
+    cost[todo] = rest[todo, start[todo]]
     # The prefixes read keep their slots: the new ones get at most the others.
     budget = min(store.slots // 2, store.slots - len(used))
     for a, r in enumerate(rows):
-        found = int(start[r])
-        cost[r] = rest[r, found]
-        mine = [keys[k][a] for k in range(found + 1, n)]
-        fresh = [key for key in mine if key not in wants]
-        if len(wants) + len(fresh) > budget:
+        mine = [(keys[k][a], k) for k in range(found[a] + 1, n)]
+        fresh = sum(1 for key, _ in mine if key not in wants)
+        if len(wants) + fresh > budget:
             continue
-        for k, key in zip(range(found + 1, n), mine, strict=True):
+        for key, k in mine:
             wants.setdefault(key, []).append((r, k))
     if wants:
         order = list(wants)
