@@ -499,15 +499,11 @@ class Evaluator:
         slots = missing = plan = None
         keep = set(keys)
         if self.shared:
-            slots = np.empty(len(keys), dtype=np.int64)
+            lookup = self.store.lookup
+            found = [lookup(key) for key in keys]
+            miss = [r for r, s in enumerate(found) if s is None]
+            slots = np.array([-1 if s is None else s for s in found], dtype=np.int64)
             missing = np.zeros(len(keys), dtype=bool)
-            miss = []
-            for r, key in enumerate(keys):
-                s = self.store.lookup(key)
-                if s is None:
-                    miss.append(r)
-                else:
-                    slots[r] = s
             if miss:
                 fresh = self.store.allocate(len(miss), keep)
                 slots[miss] = fresh
@@ -522,6 +518,8 @@ class Evaluator:
         scales: list = [None] * count
         fitted: list = [(math.nan, _NO_GENES)] * count
         settled: set[int] = set()
+        new_row = missing.tolist() if self.shared else None
+        slot_of = slots.tolist() if self.shared else None
 
         def settle(idx: list[int], lines: list[int], res: ChunkResult) -> None:
             # A piece's answers, and what it wrote into the shared stores, recorded as
@@ -531,14 +529,18 @@ class Evaluator:
                 if res.scales is not None:
                     scales[i] = res.scales[a]
             if res.fitted is not None:
+                # Each candidate's genes, in the order the lane listed them.
                 owner = res.fit_genes[:, 0].astype(np.int64)
+                order = np.argsort(owner, kind="stable")
+                bounds = np.searchsorted(owner[order], np.arange(len(idx) + 1)).tolist()
+                genes = res.fit_genes[order, 1:]
                 for a in np.flatnonzero(~np.isnan(res.fitted)).tolist():
-                    fitted[idx[a]] = (float(res.fitted[a]), res.fit_genes[owner == a, 1:])
+                    fitted[idx[a]] = (float(res.fitted[a]), genes[bounds[a]:bounds[a + 1]])
             self._account(res, table.shape[1])
             if self.shared:
                 for r in lines:
-                    if missing[r]:
-                        self.store.commit(keys[r], int(slots[r]))
+                    if new_row[r]:
+                        self.store.commit(keys[r], slot_of[r])
                 if res.prefixes is not None:
                     plan.record(self.prefixes, res.prefixes)
                 cplan.record(res)

@@ -112,16 +112,22 @@ def stored_prefixes(store: SlotStore, table: np.ndarray, depth: np.ndarray
         return start, slots, found
     sub = table[want]
     deep = depth[want]
+    lookup = store.lookup
+    got = np.zeros(len(want), dtype=np.int64)  # per wanted line: its prefix's length (0: none)
+    at = np.full(len(want), -1, dtype=np.int64)
     for k in range(int(deep.max()), 0, -1):
-        open_ = np.flatnonzero((deep >= k) & (start[want] == 0))
+        open_ = np.flatnonzero((deep >= k) & (got == 0))
         if not len(open_):
             continue
-        keys = prefix_keys(sub[open_], k)
-        for a, key in zip(open_.tolist(), keys, strict=True):
-            slot = store.lookup(key)
+        hits, where = [], []
+        for a, key in zip(open_.tolist(), prefix_keys(sub[open_], k), strict=True):
+            slot = lookup(key)
             if slot is not None:
-                start[want[a]], slots[want[a]] = k, slot
+                hits.append(a)
+                where.append(slot)
                 found.add(key)
+        got[hits], at[hits] = k, where
+    start[want], slots[want] = got, at
     return start, slots, found
 
 
