@@ -3,8 +3,9 @@
 A checkpoint holds the finished steps, the current step's population with its
 fitness values and counters, and the random generator's state, so a resumed
 run draws exactly the numbers the uninterrupted run would have drawn. It is
-written atomically after every generation (never half-written) and holds data
-only: loading it evaluates nothing.
+written atomically at a generation boundary (every few seconds, at each step's
+end and when the run stops; never half-written) and holds data only: loading
+it evaluates nothing.
 """
 
 from __future__ import annotations
