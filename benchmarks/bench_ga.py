@@ -271,7 +271,8 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
             "evaluations": st.individuals, "rate": st.individuals / info.elapsed,
             "hit_rate": st.hit_rate, "own_share": 1.0 - st.eval_seconds / info.elapsed,
             "sim_seconds": st.sim_seconds, "task_seconds": st.task_seconds,
-            "spread_seconds": st.spread_seconds, "wait_seconds": st.wait_seconds,
+            # This process alone: outside its batches' spans on other lanes.
+            "alone_seconds": info.elapsed - st.spread_seconds, "wait_seconds": st.wait_seconds,
             "rows": st.rows_simulated, "elements": st.elements_simulated,
             "peak_rss": dict(st.peak_rss), "main_rss": main_rss}
 
@@ -291,7 +292,7 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
     print(f"{'':34s} rows simulated {run['rows']}, elements run {run['elements']}; summed over "
           f"workers: simulating {run['sim_seconds']:.1f} s, in tasks {run['task_seconds']:.1f} s")
     if base is not None:
-        alone = run["elapsed"] - run["spread_seconds"]
+        alone = run["alone_seconds"]
         print(f"{'':34s} this process alone {alone:.1f} s ({100 * alone / run['elapsed']:.0f} %: "
               f"GA, planning, single evaluations), waiting for the others "
               f"{run['wait_seconds']:.1f} s; tasks "
@@ -307,8 +308,7 @@ def ceiling(run: dict, base: dict, lanes: int) -> float:
     worker's task time over ``lanes``: Amdahl's bound for this run, with no
     waiting and no task slower than on one worker.
     """
-    alone = run["elapsed"] - run["spread_seconds"]
-    return base["elapsed"] / (alone + base["task_seconds"] / lanes)
+    return base["elapsed"] / (run["alone_seconds"] + base["task_seconds"] / lanes)
 
 
 def _spread(values: list[float], fmt: str = ".2f") -> str:

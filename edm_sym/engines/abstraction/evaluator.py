@@ -517,13 +517,13 @@ class Evaluator:
         fitness = np.full(count, np.nan)
         scales: list = [None] * count
         fitted: list = [(math.nan, _NO_GENES)] * count
-        settled: set[int] = set()
         new_row = missing.tolist() if self.shared else None
         slot_of = slots.tolist() if self.shared else None
 
         def settle(idx: list[int], lines: list[int], res: ChunkResult) -> None:
             # A piece's answers, and what it wrote into the shared stores, recorded as
-            # soon as it is in (this process's own while the other lanes still work).
+            # soon as it is in (on the shared stores: this process's own piece while the
+            # other lanes still work, each other piece as it arrives).
             for a, i in enumerate(idx):
                 fitness[i] = res.fitness[a]
                 if res.scales is not None:
@@ -544,11 +544,10 @@ class Evaluator:
                 if res.prefixes is not None:
                     plan.record(self.prefixes, res.prefixes)
                 cplan.record(res)
-            settled.add(id(res))
 
         if self.shared and len(lanes) > 1:
             results = self._feed(table, members, score, free, slots, missing, plan, lanes, aside,
-                                 cplan, settle)
+                                 cplan, settle)  # each piece settled as it comes in
         else:
             aside()
             if len(lanes) > 1:
@@ -567,8 +566,7 @@ class Evaluator:
             else:
                 results = [(idx, lines, run_chunk(self._local, chunk))
                            for _, idx, lines, chunk in pending]
-        for idx, lines, res in results:
-            if id(res) not in settled:
+            for idx, lines, res in results:
                 settle(idx, lines, res)
         rows = None
         if self.shared:
@@ -608,7 +606,8 @@ class Evaluator:
         A lane's speed is the estimated cost it gets through per second,
         averaged over its earlier pieces, so a lane slowed by anything (its
         round trips, another program) gets less (:class:`Feeder`, :func:`feed`).
-        This process settles its own piece (``settle``) before it waits for the others.
+        Each piece is settled (``settle``) as soon as it is in: this process's own
+        before it waits for the others.
         """
         per = scoring_costs(members, score, free) + cplan.cost
         total = float(plan.cost[missing].sum() + per.sum())
@@ -646,6 +645,7 @@ class Evaluator:
                 if seconds <= took < 10.0 * seconds + 1.0:
                     seconds = took
             self._speed.timed(lane, cost[lane], seconds)
+            settle(idx, chunks[lane][1], res)
             return idx, chunks[lane][1], res
 
         def run(idx: list[int]) -> tuple:
