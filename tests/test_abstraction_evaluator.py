@@ -101,6 +101,57 @@ def test_the_slot_store_evicts_least_recent_rows_but_never_kept_ones() -> None:
         store.allocate(1, keep={b"a", b"b", b"d"})
 
 
+def _longest_prefixes_one_by_one(store: SlotStore, table: np.ndarray, rows: list[int]
+                                 ) -> list[tuple[int, int]]:
+    """Each row's longest stored prefix by a lookup per length, longest first (the plain way)."""
+    n = (table.shape[1] - 1) // 2
+    out = []
+    for r in rows:
+        for k in range(n - 1, 0, -1):
+            slot = store.lookup(prefix_keys(table[r:r + 1], k)[0])
+            if slot is not None:
+                out.append((k, slot))
+                break
+        else:
+            out.append((0, -1))
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_batched_lookups_and_prefix_plans_match_one_lookup_at_a_time(seed: int) -> None:
+    # The planning looks up thousands of keys per batch at once (peek, then touch the
+    # ones found): it must find the same slots and leave the same least-recent order
+    # as one lookup per key, which decides what a later batch evicts.
+    rng = np.random.default_rng(seed)
+    n = 4
+    table = np.zeros((24, 1 + 2 * n))
+    table[:, 0] = rng.integers(0, 2, 24)
+    table[:, 1:1 + n] = rng.choice([element("lpf").code, element("gain").code], (24, n))
+    table[:, 1 + n:] = rng.choice([0.25, 0.5], (24, n))  # few values: prefixes repeat
+    stores = [SlotStore(40, 1), SlotStore(40, 1)]
+    stored = [key for k in range(1, n) for key in prefix_keys(table[rng.random(24) < 0.5], k)]
+    for key in rng.permutation(len(stored)).tolist():
+        for store in stores:
+            if store.lookup(stored[key]) is None:
+                store.commit(stored[key], store.allocate(1, ())[0])
+    keys = [stored[k] for k in rng.integers(0, len(stored), 30).tolist()] + [b"none"]
+    assert stores[0].lookup_many(keys) == [-1 if (s := stores[1].lookup(k)) is None else s
+                                           for k in keys]
+    assert list(stores[0]._lru.items()) == list(stores[1]._lru.items())
+    simulate = rng.random(24) < 0.7
+    plain = _longest_prefixes_one_by_one(stores[1], table, np.flatnonzero(simulate).tolist())
+    plan = plan_prefixes(stores[0], table, simulate)
+    rows = np.flatnonzero(simulate)
+    assert plan.start[rows].tolist() == [k for k, _ in plain]
+    assert [plan.slots[r, k] if k else -1 for r, (k, _) in zip(rows, plain, strict=True)] == [
+        s for _, s in plain]
+    assert not plan.start[~simulate].any()
+    # The plan then makes room for the new prefixes: the rows it just read stay.
+    read = {prefix_keys(table[r:r + 1], k)[0] for r, (k, _) in zip(rows, plain, strict=True) if k}
+    assert all(stores[0].lookup(key) is not None for key in read)
+
+
 @pytest.mark.parametrize("mode", ["forked pool", "thread executor"])
 def test_parallel_evaluation_gives_the_same_bits(signals, mode: str) -> None:
     x, y = signals

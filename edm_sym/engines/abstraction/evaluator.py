@@ -499,15 +499,11 @@ class Evaluator:
         slots = missing = plan = None
         keep = set(keys)
         if self.shared:
-            lookup = self.store.lookup
-            found = [lookup(key) for key in keys]
-            miss = [r for r, s in enumerate(found) if s is None]
-            slots = np.array([-1 if s is None else s for s in found], dtype=np.int64)
-            missing = np.zeros(len(keys), dtype=bool)
-            if miss:
-                fresh = self.store.allocate(len(miss), keep)
-                slots[miss] = fresh
-                missing[miss] = True
+            slots = np.array(self.store.lookup_many(keys), dtype=np.int64)
+            missing = slots < 0
+            miss = np.flatnonzero(missing)
+            if len(miss):
+                slots[miss] = self.store.allocate(len(miss), keep)
         costs = element_costs(table) if self.shared else None
         cplan = CandidatePlan(table, members, score, free, gains,
                               self.store if self.shared else None,

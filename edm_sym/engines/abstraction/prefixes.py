@@ -112,21 +112,19 @@ def stored_prefixes(store: SlotStore, table: np.ndarray, depth: np.ndarray
         return start, slots, found
     sub = table[want]
     deep = depth[want]
-    lookup = store.lookup
     got = np.zeros(len(want), dtype=np.int64)  # per wanted line: its prefix's length (0: none)
     at = np.full(len(want), -1, dtype=np.int64)
     for k in range(int(deep.max()), 0, -1):
         open_ = np.flatnonzero((deep >= k) & (got == 0))
         if not len(open_):
             continue
-        hits, where = [], []
-        for a, key in zip(open_.tolist(), prefix_keys(sub[open_], k), strict=True):
-            slot = lookup(key)
-            if slot is not None:
-                hits.append(a)
-                where.append(slot)
-                found.add(key)
-        got[hits], at[hits] = k, where
+        keys = prefix_keys(sub[open_], k)
+        where = np.array(store.peek(keys), dtype=np.int64)
+        hit = np.flatnonzero(where >= 0)
+        hits = [keys[a] for a in hit.tolist()]
+        store.touch(hits)  # as a lookup of each key in turn would
+        found.update(hits)
+        got[open_[hit]], at[open_[hit]] = k, where[hit]
     start[want], slots[want] = got, at
     return start, slots, found
 
@@ -174,27 +172,32 @@ def plan_prefixes(store: SlotStore, table: np.ndarray, simulate: np.ndarray,
     used: set[bytes] = set(keep)
     wants: dict[bytes, list[tuple[int, int]]] = {}
     rows = todo.tolist()
-    lookup = store.lookup
-    found = [0] * len(rows)
-    for a, r in enumerate(rows):
-        for k in range(n - 1, 0, -1):
-            slot = lookup(keys[k][a])
-            if slot is not None:
-                found[a] = k
-                slots[r, k] = slot
-                used.add(keys[k][a])
-                break
-    start[todo] = found
-    cost[todo] = rest[todo, start[todo]]
+    # Each row's longest stored prefix: every length looked up at once, the longest
+    # found kept, and only those refreshed, in row order (as a lookup per row would).
+    deepest = np.zeros(len(rows), dtype=np.int64)
+    at = np.full(len(rows), -1, dtype=np.int64)
+    for k in range(1, n):
+        where = np.array(store.peek(keys[k]), dtype=np.int64)
+        hit = where >= 0
+        deepest[hit], at[hit] = k, where[hit]
+    hit = np.flatnonzero(deepest).tolist()
+    found = deepest.tolist()
+    read = [keys[found[a]][a] for a in hit]
+    store.touch(read)
+    used.update(read)
+    slots[todo[hit], deepest[hit]] = at[hit]
+    start[todo] = deepest
+    cost[todo] = rest[todo, deepest]
     # The prefixes read keep their slots: the new ones get at most the others.
     budget = min(store.slots // 2, store.slots - len(used))
+    roomy = sum(n - 1 - f for f in found) <= budget  # every row's new prefixes fit
     for a, r in enumerate(rows):
-        mine = [(keys[k][a], k) for k in range(found[a] + 1, n)]
-        fresh = sum(1 for key, _ in mine if key not in wants)
-        if len(wants) + fresh > budget:
-            continue
-        for key, k in mine:
-            wants.setdefault(key, []).append((r, k))
+        if not roomy:
+            fresh = sum(1 for k in range(found[a] + 1, n) if keys[k][a] not in wants)
+            if len(wants) + fresh > budget:
+                continue
+        for k in range(found[a] + 1, n):
+            wants.setdefault(keys[k][a], []).append((r, k))
     if wants:
         order = list(wants)
         for key, slot in zip(order, store.place(order, used), strict=True):
