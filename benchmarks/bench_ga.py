@@ -273,6 +273,7 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
             "sim_seconds": st.sim_seconds, "task_seconds": st.task_seconds,
             # This process alone: outside its batches' spans on other lanes.
             "alone_seconds": info.elapsed - st.spread_seconds, "wait_seconds": st.wait_seconds,
+            "idle_seconds": st.idle_seconds,
             "rows": st.rows_simulated, "elements": st.elements_simulated,
             "peak_rss": dict(st.peak_rss), "main_rss": main_rss}
 
@@ -298,6 +299,11 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
               f"{run['wait_seconds']:.1f} s; tasks "
               f"{100 * (run['task_seconds'] / base['task_seconds'] - 1):+.0f} % over one worker; "
               f"ceiling with this alone time {ceiling(run, base, lanes):.2f}x")
+        if run["idle_seconds"]:
+            print(f"{'':34s} lanes idle at a batch's end while another still worked (the "
+                  f"imbalance of the cut), summed over lanes: {run['idle_seconds']:.1f} s "
+                  f"({100 * run['idle_seconds'] / (lanes * run['elapsed']):.0f} % of "
+                  f"{lanes} lanes' wall time)")
 
 
 def ceiling(run: dict, base: dict, lanes: int) -> float:
@@ -354,6 +360,9 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
         fig.setdefault("elements", []).append(run["elements"])
         if run is not one:
             fig.setdefault("ceiling", []).append(ceiling(run, one, lanes))
+        if run["idle_seconds"]:
+            fig.setdefault("idle %", []).append(100 * run["idle_seconds"]
+                                                / (lanes * run["elapsed"]))
 
     # Every configuration is timed warm: this process once here (its row kernel loaded,
     # its first batches run), a dask cluster by a short run on it before its timed run
@@ -409,7 +418,9 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                   f"{_spread(fig['speed-up'])}  GA outside evaluation "
                   f"{_spread(fig['outside %'], '.1f')} %  elements run "
                   f"{_spread(fig['elements'], '.0f')}"
-                  + (f"  ceiling {_spread(fig['ceiling'])}x" if "ceiling" in fig else ""))
+                  + (f"  ceiling {_spread(fig['ceiling'])}x" if "ceiling" in fig else "")
+                  + (f"  lanes idle {_spread(fig['idle %'], '.1f')} %" if "idle %" in fig
+                     else ""))
 
 
 def bench_plant(time_limit: float, workers: int) -> None:

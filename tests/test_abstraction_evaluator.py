@@ -365,10 +365,15 @@ def test_the_time_lanes_share_is_counted_within_the_evaluation(signals, lanes: s
             ev.evaluate(pop.inputs, pop.codes, pop.ps)
             st = ev.stats
     if lanes == "one":
-        assert st.spread_seconds == 0.0 and st.wait_seconds == 0.0
+        assert st.spread_seconds == 0.0 and st.wait_seconds == 0.0 and st.idle_seconds == 0.0
     else:
         assert 0.0 < st.spread_seconds <= st.eval_seconds
         assert 0.0 <= st.wait_seconds <= st.spread_seconds
+    if lanes == "pool":
+        # Two lanes on one clock: one of them ends first and waits (not more than the span).
+        assert 0.0 < st.idle_seconds <= st.spread_seconds
+    elif lanes == "threads":
+        assert st.idle_seconds == 0.0  # an executor's tasks are not timed on this clock
 
 
 def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:

@@ -613,6 +613,7 @@ class Evaluator:
         chunks: dict[int, tuple[Chunk, list[int]]] = {}
 
         sent_at: dict[int, float] = {}
+        ends: list[float] = []  # when each lane ended its piece (this machine's clock)
         begun = time.monotonic()
 
         def send(lane: int, idx: list[int], again: bool = False) -> Any:
@@ -641,6 +642,8 @@ class Evaluator:
                 if seconds <= took < 10.0 * seconds + 1.0:
                     seconds = took
             self._speed.timed(lane, cost[lane], seconds)
+            if self.lanes[lane].same_clock:
+                ends.append(res.finished)
             settle(idx, chunks[lane][1], res)
             return idx, chunks[lane][1], res
 
@@ -650,8 +653,10 @@ class Evaluator:
             res = run_chunk(self._local, chunk)
             # From the first send, as the other lanes are timed: the sends and the work
             # aside count against this lane, so its piece leaves room for them.
-            took = time.monotonic() - min(sent_at.values(), default=begun)
-            self._speed.timed(lanes[here], cost[lanes[here]], took)
+            ended = time.monotonic()
+            self._speed.timed(lanes[here], cost[lanes[here]], ended - min(sent_at.values(),
+                                                                         default=begun))
+            ends.append(ended)
             settle(idx, lines, res)
             return idx, lines, res
 
@@ -660,6 +665,8 @@ class Evaluator:
         results = feed(feeder.pieces, lanes, here, send, receive, run, aside)
         if sent_at:
             self.stats.spread_seconds += time.monotonic() - min(sent_at.values())
+        if len(ends) == len(results) > 1:
+            self.stats.idle_seconds += sum(max(ends) - end for end in ends)
         return results
 
     def _gather(self, pending: list) -> list:

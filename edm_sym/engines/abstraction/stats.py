@@ -25,6 +25,10 @@ class EvalStats:
     process spent waiting for those answers once its own piece was done.
     The rest of a run's wall time is this process alone: the GA, the local
     search's single evaluations and the planning of each batch.
+    ``idle_seconds`` is the imbalance the cut of each batch left: summed
+    over its lanes, the time each lane sat finished while the last one still
+    worked (batches whose lanes all share this machine's clock: this process
+    and the lanes with shared stores).
     """
 
     individuals: int = 0
@@ -38,6 +42,7 @@ class EvalStats:
     eval_seconds: float = 0.0
     spread_seconds: float = 0.0
     wait_seconds: float = 0.0
+    idle_seconds: float = 0.0
     tasks: int = 0
     peak_rss: dict = field(default_factory=dict)
 
