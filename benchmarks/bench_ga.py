@@ -302,8 +302,7 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
         if run["idle_seconds"]:
             print(f"{'':34s} lanes idle at a batch's end while another still worked (the "
                   f"imbalance of the cut), summed over lanes: {run['idle_seconds']:.1f} s "
-                  f"({100 * run['idle_seconds'] / (lanes * run['elapsed']):.0f} % of "
-                  f"{lanes} lanes' wall time)")
+                  f"({idle_share(run, lanes):.0f} % of {lanes} lanes' wall time)")
 
 
 def ceiling(run: dict, base: dict, lanes: int) -> float:
@@ -315,6 +314,11 @@ def ceiling(run: dict, base: dict, lanes: int) -> float:
     waiting and no task slower than on one worker.
     """
     return base["elapsed"] / (run["alone_seconds"] + base["task_seconds"] / lanes)
+
+
+def idle_share(run: dict, lanes: int) -> float:
+    """The lanes' idle time at batches' ends, in % of ``lanes`` times the run's wall time."""
+    return 100 * run["idle_seconds"] / (lanes * run["elapsed"])
 
 
 def _spread(values: list[float], fmt: str = ".2f") -> str:
@@ -361,8 +365,7 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
         if run is not one:
             fig.setdefault("ceiling", []).append(ceiling(run, one, lanes))
         if run["idle_seconds"]:
-            fig.setdefault("idle %", []).append(100 * run["idle_seconds"]
-                                                / (lanes * run["elapsed"]))
+            fig.setdefault("idle %", []).append(idle_share(run, lanes))
 
     # Every configuration is timed warm: this process once here (its row kernel loaded,
     # its first batches run), a dask cluster by a short run on it before its timed run

@@ -127,8 +127,9 @@ class SlotStore:
 
     def touch(self, keys: Sequence[bytes]) -> None:
         """Refresh stored keys, in this order (each becomes the most recent)."""
-        for _ in map(self._lru.move_to_end, keys):
-            pass
+        refresh = self._lru.move_to_end
+        for key in keys:
+            refresh(key)
 
     def lookup_many(self, keys: Sequence[bytes]) -> list[int]:
         """:meth:`lookup` of each key in turn (-1 where there is none)."""

@@ -119,11 +119,9 @@ def stored_prefixes(store: SlotStore, table: np.ndarray, depth: np.ndarray
         if not len(open_):
             continue
         keys = prefix_keys(sub[open_], k)
-        where = np.array(store.peek(keys), dtype=np.int64)
+        where = np.array(store.lookup_many(keys), dtype=np.int64)
         hit = np.flatnonzero(where >= 0)
-        hits = [keys[a] for a in hit.tolist()]
-        store.touch(hits)  # as a lookup of each key in turn would
-        found.update(hits)
+        found.update(keys[a] for a in hit.tolist())
         got[open_[hit]], at[open_[hit]] = k, where[hit]
     start[want], slots[want] = got, at
     return start, slots, found
