@@ -278,7 +278,8 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
             "peak_rss": dict(st.peak_rss), "main_rss": main_rss}
 
 
-def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None:
+def _print_scaling(title: str, run: dict, lanes: int, base: dict | None,
+                   limit: float | None = None) -> None:
     mib = 2.0**20
     line = (f"{title:34s} {run['rate']:8.1f} evaluations/s  "
             f"({run['evaluations']} in {run['elapsed']:.1f} s)")
@@ -303,6 +304,11 @@ def _print_scaling(title: str, run: dict, lanes: int, base: dict | None) -> None
             print(f"{'':34s} lanes idle at a batch's end while another still worked (the "
                   f"imbalance of the cut), summed over lanes: {run['idle_seconds']:.1f} s "
                   f"({idle_share(run, lanes):.0f} % of {lanes} lanes' wall time)")
+        if limit is not None:
+            print(f"{'':34s} on this machine (--bound {limit:.2f}x): at most "
+                  f"{machine_ceiling(run, base, limit):.2f}x with this alone time, "
+                  f"{serial_free(run, base, lanes, limit):.2f}x with no serial work at all "
+                  f"and this imbalance")
 
 
 def ceiling(run: dict, base: dict, lanes: int) -> float:
@@ -314,6 +320,28 @@ def ceiling(run: dict, base: dict, lanes: int) -> float:
     waiting and no task slower than on one worker.
     """
     return base["elapsed"] / (run["alone_seconds"] + base["task_seconds"] / lanes)
+
+
+def machine_ceiling(run: dict, base: dict, limit: float) -> float:
+    """:func:`ceiling` with one worker's tasks at the pace the machine allows (``limit``).
+
+    ``limit`` is :func:`machine_bound`'s speed-up of independent runs: the
+    lanes' tasks can go no faster than ``limit`` times one worker's, whatever
+    the code does, and this process's alone time comes on top.
+    """
+    return base["elapsed"] / (run["alone_seconds"] + base["task_seconds"] / limit)
+
+
+def serial_free(run: dict, base: dict, lanes: int, limit: float) -> float:
+    """The speed-up left if this process's serial work took no time, in either run.
+
+    The lanes then run only batches: one worker's tasks at the machine's
+    pace (``limit``), plus ``run``'s measured idle time at the batches' ends
+    (the imbalance left by the lanes' speeds varying from batch to batch),
+    against one worker's tasks alone.
+    """
+    work = lanes * base["task_seconds"] / limit
+    return lanes * base["task_seconds"] / (work + run["idle_seconds"])
 
 
 def idle_share(run: dict, lanes: int) -> float:
@@ -356,7 +384,8 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
     """
     figures: dict[str, dict[str, list[float]]] = {}
 
-    def keep(title: str, run: dict, one: dict, lanes: int = 1) -> None:
+    def keep(title: str, run: dict, one: dict, lanes: int = 1,
+             limit: float | None = None) -> None:
         fig = figures.setdefault(title, {})
         fig.setdefault("rate", []).append(run["rate"])
         fig.setdefault("speed-up", []).append(run["rate"] / one["rate"])
@@ -364,6 +393,9 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
         fig.setdefault("elements", []).append(run["elements"])
         if run is not one:
             fig.setdefault("ceiling", []).append(ceiling(run, one, lanes))
+            if limit is not None:
+                fig.setdefault("on this machine", []).append(machine_ceiling(run, one, limit))
+                fig.setdefault("serial-free", []).append(serial_free(run, one, lanes, limit))
         if run["idle_seconds"]:
             fig.setdefault("idle %", []).append(idle_share(run, lanes))
 
@@ -376,6 +408,7 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
               f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
               + (f", run {k + 1} of {repeat}" if repeat > 1 else ""))
         one = _auger_run(generations, workers=1)
+        limit = None  # what the machine allows `workers` lanes (--bound)
         print(f"log of {one['samples']} samples")
         _print_scaling("1 worker (this process)", one, 1, None)
         keep("1 worker", one, one)
@@ -388,8 +421,8 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
         if workers > 1:
             run = _auger_run(generations, workers=workers)
             _print_scaling(f"{workers} workers (this process + {workers - 1} forked)", run,
-                           workers, one)
-            keep(f"{workers} workers", run, one, workers)
+                           workers, one, limit)
+            keep(f"{workers} workers", run, one, workers, limit)
         if dask_local:
             import distributed
 
@@ -399,8 +432,10 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                     distributed.Client(cluster) as client:
                 _auger_run(WARM_UP, scheduler=client)
                 run = _auger_run(generations, scheduler=client)
-            _print_scaling(f"dask LocalCluster, {dask_local} workers", run, dask_local, one)
-            keep(f"dask LocalCluster {dask_local}", run, one, dask_local)
+            # The bound holds for as many lanes as it ran copies.
+            same = limit if dask_local == workers else None
+            _print_scaling(f"dask LocalCluster, {dask_local} workers", run, dask_local, one, same)
+            keep(f"dask LocalCluster {dask_local}", run, one, dask_local, same)
         if scheduler:
             import distributed
 
@@ -423,6 +458,9 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                   f"{_spread(fig['elements'], '.0f')}"
                   + (f"  ceiling {_spread(fig['ceiling'])}x" if "ceiling" in fig else "")
                   + (f"  lanes idle {_spread(fig['idle %'], '.1f')} %" if "idle %" in fig
+                     else "")
+                  + (f"  on this machine at most {_spread(fig['on this machine'])}x, with no "
+                     f"serial work {_spread(fig['serial-free'])}x" if "serial-free" in fig
                      else ""))
 
 
