@@ -117,9 +117,32 @@ def _longest_prefixes_one_by_one(store: SlotStore, table: np.ndarray, rows: list
     return out
 
 
+def _new_prefixes_one_by_one(store: SlotStore, table: np.ndarray, rows: list[int],
+                             start: list[int], read: set[bytes]) -> dict[tuple[int, int], int]:
+    """The slot of each new prefix (row, length), planned row by row (the plain way).
+
+    Row by row, shortest first, each prefix not yet wanted is wanted, as long
+    as a row's new ones fit in the budget (half the store, and no slot of a
+    prefix read); then the wanted ones get slots in that order.
+    """
+    n = (table.shape[1] - 1) // 2
+    budget = min(store.slots // 2, store.slots - len(read))
+    wants: dict[bytes, list[tuple[int, int]]] = {}
+    for r, k0 in zip(rows, start, strict=True):
+        mine = [(prefix_keys(table[r:r + 1], k)[0], k) for k in range(k0 + 1, n)]
+        if len(wants) + len({key for key, _ in mine if key not in wants}) > budget:
+            continue
+        for key, k in mine:
+            wants.setdefault(key, []).append((r, k))
+    order = list(wants)
+    given = store.place(order, read) if order else []
+    return {rk: slot for key, slot in zip(order, given, strict=True) for rk in wants[key]}
+
+
 @settings(max_examples=60, deadline=None)
-@given(st.integers(0, 2**32 - 1))
-def test_batched_lookups_and_prefix_plans_match_one_lookup_at_a_time(seed: int) -> None:
+@given(st.integers(0, 2**32 - 1), st.sampled_from([40, 400]))
+def test_batched_lookups_and_prefix_plans_match_one_lookup_at_a_time(seed: int,
+                                                                     size: int) -> None:
     # The planning looks up thousands of keys per batch at once (peek, then touch the
     # ones found): it must find the same slots and leave the same least-recent order
     # as one lookup per key, which decides what a later batch evicts.
@@ -129,7 +152,8 @@ def test_batched_lookups_and_prefix_plans_match_one_lookup_at_a_time(seed: int) 
     table[:, 0] = rng.integers(0, 2, 24)
     table[:, 1:1 + n] = rng.choice([element("lpf").code, element("gain").code], (24, n))
     table[:, 1 + n:] = rng.choice([0.25, 0.5], (24, n))  # few values: prefixes repeat
-    stores = [SlotStore(40, 1), SlotStore(40, 1)]
+    # 40 slots: not every row's new prefixes fit (the budget decides row by row); 400: all do.
+    stores = [SlotStore(size, 1), SlotStore(size, 1)]
     stored = [key for k in range(1, n) for key in prefix_keys(table[rng.random(24) < 0.5], k)]
     for key in rng.permutation(len(stored)).tolist():
         for store in stores:
@@ -149,6 +173,15 @@ def test_batched_lookups_and_prefix_plans_match_one_lookup_at_a_time(seed: int) 
     assert not plan.start[~simulate].any()
     # The plan then makes room for the new prefixes: the rows it just read stay.
     read = {prefix_keys(table[r:r + 1], k)[0] for r, (k, _) in zip(rows, plain, strict=True) if k}
+    # The new prefixes: the same slots, in the same order, as planned row by row, a
+    # prefix two rows share in one slot, and each slot's key recorded.
+    new = _new_prefixes_one_by_one(stores[1], table, rows.tolist(), [k for k, _ in plain], read)
+    got = {(r, k): int(plan.slots[r, k]) for r in rows.tolist() for k in range(n)
+           if k > plan.start[r] and plan.slots[r, k] >= 0}
+    assert got == new
+    assert plan.new == {slot: prefix_keys(table[r:r + 1], k)[0] for (r, k), slot in new.items()}
+    assert list(stores[0]._lru.items()) == list(stores[1]._lru.items())
+    assert stores[0]._free == stores[1]._free
     assert all(stores[0].lookup(key) is not None for key in read)
 
 
