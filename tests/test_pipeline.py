@@ -93,6 +93,33 @@ def test_a_time_limit_that_is_no_duration_is_refused(tmp_path: Path, value: str,
     assert not (tmp_path / "result.json").exists()
 
 
+@pytest.mark.parametrize("old,new,where", [
+    ('target = "c"', 'target = "foo"', "export.target"),
+    ('target = "c"', 'target = "c"\nprefix = "9 bad"', "export.prefix"),
+    ('target = "c"', 'target = "c"\nreal = "half"', "export.real"),
+    ('target = "c"', 'target = "c"\npdf = "yes"', "export.pdf"),
+    ("time_limit = 5", 'time_limit = 5\nmethod = "foo"', "lugre.method"),
+    ("time_limit = 5", "time_limit = -3", "lugre.time_limit"),
+    ("time_limit = 5", 'time_limit = 5\nweighting = "x"', "lugre.weighting"),
+    ('velocity = "omega"', "velocity = 3", "lugre.velocity"),
+])
+def test_a_bad_lugre_or_export_value_is_refused_before_any_work(
+        tmp_path: Path, old: str, new: str, where: str, capsys) -> None:
+    # The last stages' settings are checked with the file, not after the long work:
+    # the files of an earlier run stay as they were.
+    for kept in ("result.json", "lugre.json", "evaluation.json"):
+        (tmp_path / kept).write_text("an earlier run's\n")
+    p = _write(tmp_path, PIPELINE.replace(old, new))
+    with pytest.raises(ConfigError, match=where):
+        load_pipeline(p)
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"pipeline.toml: {where}" in err, err
+    for kept in ("result.json", "lugre.json", "evaluation.json"):
+        assert (tmp_path / kept).read_text() == "an earlier run's\n"
+    assert not (tmp_path / "gen").exists()
+
+
 def test_a_data_file_where_the_pipeline_writes_is_refused_before_any_work(tmp_path: Path, capsys) -> None:
     from edm_sym.core.data import write_csv
     from edm_sym.engines.plant import simulate_plant

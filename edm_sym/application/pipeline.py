@@ -172,6 +172,10 @@ def load_pipeline(path: str | Path) -> Pipeline:
     seed = _get(f"{name}: abstraction", abst, "seed", int, 0)
     if not 0 <= seed < 2**32:
         raise ConfigError(f"{name}: abstraction.seed", f"expected an integer >= 0 and < 2**32, found {seed}")
+    # The later stages' settings are checked now, before any of the long work.
+    if "lugre" in doc:
+        _check_lugre(name, doc["lugre"])
+    _check_export(name, doc.get("export", {}))
     return Pipeline(
         folder=path.resolve().parent,
         abstraction_data=abstraction_data,
@@ -188,6 +192,49 @@ def load_pipeline(path: str | Path) -> Pipeline:
     )
 
 
+
+
+def _check_lugre(name: str, table: Mapping[str, Any]) -> None:
+    """Refuse a bad ``[lugre]`` value, naming the file and key (before anything runs)."""
+    from edm_sym.engines.abstraction.weighting import parse_weighting
+    from edm_sym.engines.lugre import METHODS
+
+    where = f"{name}: lugre"
+    _get(where, table, "velocity", str)
+    method = _get(where, table, "method", str, "scipy")
+    if method not in METHODS and method != "both":
+        raise ConfigError(f"{where}.method", f"expected one of "
+                          f"{', '.join(sorted([*METHODS, 'both']))}, found {method!r}")
+    seed = _get(where, table, "seed", int, 0)
+    if not 0 <= seed < 2**32:
+        raise ConfigError(f"{where}.seed", f"expected an integer >= 0 and < 2**32, found {seed}")
+    limit = _get(where, table, "time_limit", (int, float), None)
+    if limit is not None and not (math.isfinite(limit) and limit >= 0):
+        raise ConfigError(f"{where}.time_limit", f"expected a number of seconds >= 0, found {limit}")
+    if "weighting" in table:
+        parse_weighting(f"{where}.weighting", table["weighting"])
+
+
+def _check_export(name: str, table: Mapping[str, Any]) -> None:
+    """Refuse a bad ``[export]`` value, naming the file and key (before anything runs)."""
+    from edm_sym.outputs.printing import REALS
+    from edm_sym.outputs.render import TARGET_NAMES
+    from edm_sym.outputs.render.context import prefix_problem
+
+    where = f"{name}: export"
+    target = _get(where, table, "target", str, "all")
+    if target not in TARGET_NAMES:
+        raise ConfigError(f"{where}.target",
+                          f"expected one of {', '.join(TARGET_NAMES)}, found {target!r}")
+    prefix = _get(where, table, "prefix", str, "edm_comp")
+    problem = prefix_problem(prefix)
+    if problem:
+        raise ConfigError(f"{where}.prefix", f"{problem}, found {prefix!r}")
+    real = _get(where, table, "real", str, "double")
+    if real not in REALS:
+        raise ConfigError(f"{where}.real", f"expected one of {', '.join(REALS)}, found {real!r}")
+    _get(where, table, "pdf", bool, False)
+    _get(where, table, "out_dir", str, "")
 
 
 def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
@@ -256,7 +303,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
     ckpt = result_file.with_name(result_file.name + ".checkpoint")
     check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
-                   out_dir / "edm_comp.h"], [path, pipe.config, *data_files], option="pipeline output")
+                   out_dir / f"{ex.get('prefix', 'edm_comp')}.h"], [path, pipe.config, *data_files],
+                  option="pipeline output")
     # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
     keep_result = reuse and result_file.exists() and \
         load_result(result_file).provenance.get("stop_reason") != "interrupted"
