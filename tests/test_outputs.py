@@ -159,12 +159,31 @@ def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
     short.write_text("t,q,f\n0,0,0\n0.001,0,0\n")
     cfg = tmp_path / "c.toml"
     cfg.write_text("cache_mb = inf\n")
+    text = files["result"].read_text()
+    assert '"sample_time": 0.001' in text
+    bad = {"tiny_ts.json": text.replace('"sample_time": 0.001', '"sample_time": 1e-300'),
+           "huge_number.json": text.replace('"sample_time": 0.001', '"sample_time": 1e999'),
+           "null.json": "null\n"}
+    for name, body in bad.items():
+        (tmp_path / name).write_text(body)
     cases = [
         (["simulate", str(files["result"]), str(huge), "-o", str(tmp_path / "a.csv")], "huge.csv: row 2"),
         (["observe", str(short), "--position", "q", "--force", "f", "--nominal-inertia", "1e-3",
           "-o", str(tmp_path / "b.csv")], "short.csv: column 'q'"),
         (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
-          "--nominal-inertia", "1e-3", "--force-gain", "inf", "-o", str(tmp_path / "c.csv")], "force_gain"),
+          "--nominal-inertia", "1e-3", "--force-gain", "inf", "-o", str(tmp_path / "c.csv")],
+         "edm observe: --force-gain"),
+        (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
+          "--nominal-inertia", "-1", "-o", str(tmp_path / "c.csv")], "edm observe: --nominal-inertia"),
+        (["observe", str(files["data"]), "--force", "tau_ext", "--nominal-inertia", "1",
+          "-o", str(tmp_path / "c.csv")], "edm observe: --position"),
+        (["lugre", str(files["data"]), "--target", "tau_ext", "-o", str(tmp_path / "l.json")],
+         "edm lugre: --velocity"),
+        (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega,tau_ext",
+          "-o", str(tmp_path / "g.json")], "--inputs: expected input columns other than the target"),
+        (["describe", str(tmp_path / "tiny_ts.json")], "tiny_ts.json: sample_time, record_length"),
+        (["describe", str(tmp_path / "huge_number.json")], "1e999 is out of range"),
+        (["describe", str(tmp_path / "null.json")], "expected a JSON object, found null"),
         (["observe", str(files["data"]), "--position", "theta_w", "--force", "tau_ext",
           "--nominal-inertia", "nan", "-o", str(tmp_path / "d.csv")], "--nominal-inertia"),
         (["abstract", str(files["data"]), "--target", "tau_ext", "--inputs", "omega",
@@ -176,8 +195,8 @@ def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
         assert main(argv) == 2, argv
         err = _one_line(capsys)
         assert where in err and len(err) < 400, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml", "huge.csv", "log.csv", "r.json",
-                                                           "short.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["c.toml", "huge.csv", "log.csv", "r.json", "short.csv", *bad])
 
 
 @pytest.mark.parametrize("prefix,why", [
@@ -258,3 +277,14 @@ def test_a_failing_pdf_leaves_the_other_targets_and_names_its_own(tmp_path: Path
     for name in ("edm_comp.h", "edm_comp.c", "edm_comp.py", "edm_comp_report.tex"):
         assert (out / name).exists(), name
     assert not (out / "edm_comp_report.pdf").exists()
+
+
+def test_the_target_is_no_input_of_its_own_model(files) -> None:
+    # Through the API too: a model of the target from itself would fit it exactly.
+    from edm_sym.core.errors import ConfigError
+    from edm_sym.engines.abstraction import abstract
+    from edm_sym.engines.sources import load_data
+
+    log = load_data(files["data"])
+    with pytest.raises(ConfigError, match="inputs: expected input columns other than the target"):
+        abstract(log, target="tau_ext", inputs=["omega", "tau_ext"])

@@ -102,8 +102,9 @@ def test_a_time_limit_that_is_no_duration_is_refused(tmp_path: Path, value: str,
     ("time_limit = 5", "time_limit = -3", "lugre.time_limit"),
     ("time_limit = 5", 'time_limit = 5\nweighting = "x"', "lugre.weighting"),
     ('velocity = "omega"', "velocity = 3", "lugre.velocity"),
+    ('inputs = ["omega", "theta_w"]', 'inputs = ["omega", "tau_ext"]', "abstraction.inputs"),
 ])
-def test_a_bad_lugre_or_export_value_is_refused_before_any_work(
+def test_a_bad_value_of_a_later_stage_is_refused_before_any_work(
         tmp_path: Path, old: str, new: str, where: str, capsys) -> None:
     # The last stages' settings are checked with the file, not after the long work:
     # the files of an earlier run stay as they were.

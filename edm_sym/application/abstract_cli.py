@@ -17,7 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from edm_sym.core.errors import ConfigError
+from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError
 
 if TYPE_CHECKING:
     from edm_sym.core.result import EdmResult
@@ -179,6 +179,8 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
             raise ConfigError("--inputs", "expected the input columns (--inputs COL,COL, --role "
                                           "COL=position|velocity|acceleration|input or [columns] "
                                           "in the config), found none")
+    if target in inputs:
+        raise ConfigError("--inputs", TARGET_AS_INPUT.format(target=target))
     return columns, target, inputs
 
 

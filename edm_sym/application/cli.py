@@ -442,8 +442,14 @@ def _cmd_observe(args: argparse.Namespace) -> int:
     except ValueError:
         gain = args.force_gain
     given = _columns(args)
-    position = _option_or_role(args.position, given, "position", "--position")
-    opts = ObserverOptions(position, args.force, args.nominal_inertia, gain, args.cutoff)
+    position = _option_or_role(args.position, given, "position", "--position", "edm observe")
+    try:
+        opts = ObserverOptions(position, args.force, args.nominal_inertia, gain, args.cutoff)
+    except ValueError as exc:  # named by the option that gave the value, not the field
+        field, _, problem = str(exc).partition(": ")
+        option = {"nominal_inertia": "--nominal-inertia", "cutoff_hz": "--cutoff",
+                  "force_gain": "--force-gain"}.get(field, field)
+        raise UsageError(f"edm observe: {option}: {problem}") from None
     check_outputs([args.output], [args.data])
     view = observer_view(load_data(args.data, ts=args.ts, columns=given), opts)
     write_csv(args.output, view.columns)
@@ -455,14 +461,16 @@ def _cmd_observe(args: argparse.Namespace) -> int:
     return 0
 
 
-def _option_or_role(value: str | None, given, role: str, option: str) -> str:  # noqa: ANN001
+def _option_or_role(value: str | None, given, role: str, option: str,  # noqa: ANN001
+                    prog: str) -> str:
     """A column named by its option, or by ``--role COL=ROLE``; both must agree."""
     named = given.column_of(role)
     if value is not None and named is not None and value != named:
-        raise UsageError(f"{option}: expected the column given --role {named}={role}, found {value!r}")
+        raise UsageError(f"{prog}: {option}: expected the column given --role {named}={role}, "
+                         f"found {value!r}")
     if value is None and named is None:
-        raise UsageError(f"{option}: expected the {role} column ({option} COL or --role COL={role}), "
-                         "found neither")
+        raise UsageError(f"{prog}: {option}: expected the {role} column ({option} COL or --role "
+                         f"COL={role}), found neither")
     return value or named
 
 
@@ -474,8 +482,8 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.engines.sources import load_data
 
     given = _columns(args)
-    target = _option_or_role(args.target, given, "target", "--target")
-    velocity = _option_or_role(args.velocity, given, "velocity", "--velocity")
+    target = _option_or_role(args.target, given, "target", "--target", "edm lugre")
+    velocity = _option_or_role(args.velocity, given, "velocity", "--velocity", "edm lugre")
     check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
     with ProgressReporter("edm lugre", quiet=args.quiet) as reporter:

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec
-from edm_sym.core.errors import TOO_DEEP, ConfigError, DataFormatError
+from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError
 from edm_sym.core.fileio import check_outputs, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
@@ -165,6 +165,8 @@ def load_pipeline(path: str | Path) -> Pipeline:
     if not inputs or not all(isinstance(i, str) for i in inputs):
         raise ConfigError(f"{name}: abstraction.inputs", f"expected column names (or columns "
                           f"with an input role in [columns]), found {inputs!r}")
+    if target in inputs:
+        raise ConfigError(f"{name}: abstraction.inputs", TARGET_AS_INPUT.format(target=target))
     limit = _get(f"{name}: abstraction", abst, "time_limit", (int, float), None)
     if limit is not None and not (math.isfinite(limit) and limit > 0):
         raise ConfigError(f"{name}: abstraction.time_limit",

@@ -8,6 +8,9 @@ from __future__ import annotations
 
 #: The problem of a JSON or TOML document too deeply nested for Python's parsers.
 TOO_DEEP = "expected a document nested at most about a thousand levels deep, found deeper nesting"
+#: The target among the inputs: a model would reproduce it from itself (fitness 0).
+TARGET_AS_INPUT = ("expected input columns other than the target, found the target {target!r} "
+                   "(a model of it from itself fits trivially)")
 
 
 class EdmError(Exception):

@@ -11,6 +11,7 @@ is an input (also through a link) or that cannot be written.
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 import tempfile
@@ -157,6 +158,26 @@ def _finite_only(token: str) -> float:
     raise ValueError(f"{token} is not allowed (numbers must be finite)")
 
 
+def json_kind(value: Any) -> str:
+    """The JSON name of a parsed value's type (for messages: ``null``, not ``NoneType``)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, int | float):
+        return "a number"
+    if isinstance(value, str):
+        return "a string"
+    return "an array" if isinstance(value, list) else "an object"
+
+
+def _finite_float(token: str) -> float:
+    value = float(token)
+    if not math.isfinite(value):  # 1e999: a literal beyond the largest double
+        raise ValueError(f"{token} is out of range (numbers must be finite doubles)")
+    return value
+
+
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     seen: dict[str, Any] = {}
     for key, value in pairs:
@@ -190,7 +211,8 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
     except UnicodeDecodeError as exc:
         raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     try:
-        doc = json.loads(text, parse_constant=_finite_only, object_pairs_hook=_no_duplicates)
+        doc = json.loads(text, parse_constant=_finite_only, parse_float=_finite_float,
+                         object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as exc:
         raise error(f"{name}: line {exc.lineno} column {exc.colno}",
                     f"expected JSON, found invalid JSON ({exc.msg})") from None

@@ -23,7 +23,7 @@ from edm_sym.core.bounds import bound_flags
 from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.core.errors import DataFormatError, ResultFormatError
-from edm_sym.core.fileio import read_json, write_atomic
+from edm_sym.core.fileio import json_kind, read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.units import AXES, AxisUnits, axis_units
 from edm_sym.core.validation import json_path, schema_problem
@@ -363,7 +363,7 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     """
     if not isinstance(doc, dict):
         raise ResultFormatError(f"{name}: (top level)",
-                                f"expected a JSON object, found {type(doc).__name__}")
+                                f"expected a JSON object, found {json_kind(doc)}")
     for key, want in (("format", FORMAT), ("version", VERSION)):
         if key in doc and doc[key] != want:
             raise ResultFormatError(f"{name}: {key}",
@@ -401,7 +401,13 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     fitness = doc.get("fitness")
     if fitness is not None and not math.isfinite(fitness):
         raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
-    comp = Compensator(matrix, float(doc["sample_time"]), ranges, float(doc["record_length"]))
+    ts, length = float(doc["sample_time"]), float(doc["record_length"])
+    try:
+        comp = Compensator(matrix, ts, ranges, length)
+    except ValueError as exc:  # the default ranges follow from both (1e-300 s, say, breaks them)
+        raise ResultFormatError(f"{name}: sample_time, record_length",
+                                f"expected a sample time and record length that give usable "
+                                f"parameter ranges, found {ts:g} s and {length:g} s ({exc})") from None
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
                      report_inputs=dict(doc.get("report_inputs", {})),
                      validation=dict(doc.get("validation", {})),

@@ -21,7 +21,7 @@ import numpy as np
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ResultFormatError
-from edm_sym.core.fileio import read_json
+from edm_sym.core.fileio import json_kind, read_json
 from edm_sym.core.result import EdmResult, load_result
 
 __all__ = ["FORMATS", "CompensationModel", "EdmModel", "LuGreModel", "ModelRun", "load_model", "model_of"]
@@ -162,7 +162,7 @@ def file_format(path: str | Path) -> str:
     doc, _ = read_json(path, ResultFormatError)
     if not isinstance(doc, dict):
         raise ResultFormatError(f"{path.name}: (top level)",
-                                f"expected a JSON object, found {type(doc).__name__}")
+                                f"expected a JSON object, found {json_kind(doc)}")
     kind = doc.get("format")
     if kind not in FORMATS:
         raise ResultFormatError(f"{path.name}: format",

@@ -32,7 +32,7 @@ from threadpoolctl import threadpool_limits
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
-from edm_sym.core.errors import ConfigError, DataFormatError, NumericsWarning
+from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
 from edm_sym.core.units import axis_units
@@ -515,6 +515,8 @@ def abstract(
         problem = input_name_problem(name, inputs[:k])
         if problem:
             raise ConfigError(f"inputs: {name!r}", problem)
+    if target in inputs:
+        raise ConfigError("inputs", TARGET_AS_INPUT.format(target=target))
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
