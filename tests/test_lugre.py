@@ -342,7 +342,9 @@ def test_methods_are_dispatched_through_the_registry():
     try:
         with pytest.raises(ValueError, match="already registered"):
             register_method("test-fixed")(fixed)
-        result = identify_lugre(np.ones(10), np.ones(10), TS, method="test-fixed", seed=4)
+        # (a velocity that varies: a constant one is refused before any method runs)
+        result = identify_lugre(np.ones(10), np.linspace(0.5, 1.5, 10), TS, method="test-fixed",
+                                seed=4)
     finally:
         del METHODS["test-fixed"]
     assert calls == [(10, 4)]
@@ -355,6 +357,9 @@ def test_methods_are_dispatched_through_the_registry():
         ({"target": np.ones(9)}, "target: expected a 1-D array of 10"),
         ({"target": np.r_[np.ones(9), np.nan]}, r"target\[9\]"),
         ({"velocity": np.zeros(10), "target": np.ones(10)}, "all samples are zero"),
+        ({"velocity": np.full(10, 0.3)}, "expected a varying velocity"),
+        ({"velocity": np.linspace(-1, 1, 7), "target": np.ones(7)},
+         "more samples than the model's 7 parameters"),
         ({"weights": -np.ones(10)}, "weights"),
         ({"ts": -1.0}, "ts"),
         ({"seed": 1.5}, "seed"),

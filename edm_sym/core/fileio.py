@@ -11,7 +11,6 @@ is an input (also through a link) or that cannot be written.
 from __future__ import annotations
 
 import json
-import math
 import os
 import stat
 import tempfile
@@ -171,13 +170,6 @@ def json_kind(value: Any) -> str:
     return "an array" if isinstance(value, list) else "an object"
 
 
-def _finite_float(token: str) -> float:
-    value = float(token)
-    if not math.isfinite(value):  # 1e999: a literal beyond the largest double
-        raise ValueError(f"{token} is out of range (numbers must be finite doubles)")
-    return value
-
-
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     seen: dict[str, Any] = {}
     for key, value in pairs:
@@ -211,8 +203,7 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
     except UnicodeDecodeError as exc:
         raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     try:
-        doc = json.loads(text, parse_constant=_finite_only, parse_float=_finite_float,
-                         object_pairs_hook=_no_duplicates)
+        doc = json.loads(text, parse_constant=_finite_only, object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as exc:
         raise error(f"{name}: line {exc.lineno} column {exc.colno}",
                     f"expected JSON, found invalid JSON ({exc.msg})") from None

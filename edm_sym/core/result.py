@@ -402,6 +402,9 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     if fitness is not None and not math.isfinite(fitness):
         raise ResultFormatError(f"{name}: fitness", f"expected a finite number, found {fitness}")
     ts, length = float(doc["sample_time"]), float(doc["record_length"])
+    for key, value in (("sample_time", ts), ("record_length", length)):
+        if not math.isfinite(value):  # 1e999 reads as infinity
+            raise ResultFormatError(f"{name}: {key}", f"expected a finite number, found {value}")
     try:
         comp = Compensator(matrix, ts, ranges, length)
     except ValueError as exc:  # the default ranges follow from both (1e-300 s, say, breaks them)

@@ -538,10 +538,14 @@ def identify_lugre(
         raise ConfigError("time_limit", f"expected a non-negative number of seconds, found {time_limit!r}")
     v = _as_velocity(velocity)
     ts_f = _check_ts(ts)
-    if len(v) < 2:
-        raise DataFormatError("velocity", f"expected at least 2 samples, found {len(v)}")
+    if len(v) <= len(LuGreParams.__dataclass_fields__):
+        raise DataFormatError("velocity", f"expected more samples than the model's "
+                              f"{len(LuGreParams.__dataclass_fields__)} parameters, found {len(v)}")
     if not np.any(v != 0.0):
         raise DataFormatError("velocity", "all samples are zero; the friction model cannot be identified")
+    if np.all(v == v[0]):
+        raise DataFormatError("velocity", f"expected a varying velocity (the friction curve needs "
+                              f"several speeds), found {v[0]:g} on all {len(v)} samples")
     y = _as_series("target", target, len(v))
     w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
     if np.any(w < 0.0) or not np.any(w > 0.0):
