@@ -164,6 +164,8 @@ BAD_DATA = [
     ("repeated_time.csv", "t,omega\n0,1\n0.001,1\n0.001,1\n0.002,1\n", "row 4, column 't'"),
     ("decreasing_time.csv", "t,omega\n0,1\n0.001,1\n0.0005,1\n0.002,1\n", "row 4, column 't'"),
     ("gap.csv", "t,omega\n0,1\n0.001,1\n0.002,1\n0.005,1\n0.006,1\n", "row 5, column 't'"),
+    # Python's float() reads 1_0 as 10; a CSV number has no digit separators.
+    ("underscore.csv", "t,omega\n0,1\n0.001,1_0\n0.002,1\n", "row 3, column 'omega'"),
 ]
 
 
@@ -218,3 +220,15 @@ def test_usage_error_is_one_line_exit_2(capsys) -> None:
     assert main(["plant", "--excitation", "abstraction"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--preset" in err
+
+
+@pytest.mark.parametrize("seed,problem", [("-1", "expected an integer >= 0, found -1"),
+                                          ("1_0", "expected an integer, found '1_0'"),
+                                          ("x", "expected an integer, found 'x'")])
+def test_a_plant_spec_with_a_bad_seed_is_refused_naming_the_spec(seed: str, problem: str) -> None:
+    from edm_sym.engines.sources import load_data as load_any
+
+    with pytest.raises(DataFormatError) as info:
+        load_any(f"plant:auger/evaluation@{seed}")
+    assert info.value.where == f"plant:auger/evaluation@{seed}: seed"
+    assert problem in info.value.problem

@@ -429,6 +429,8 @@ def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
         row = []
         for col, cell in zip(header, cells, strict=True):
             try:
+                if "_" in cell:  # Python's float() reads 1_06.28 as 106.28: no CSV number
+                    raise ValueError(cell)
                 v = float(cell)
             except ValueError:
                 raise DataFormatError(f"{name}: row {lineno}, column {col!r}",

@@ -51,9 +51,13 @@ def plant_log(spec: str) -> DataLog:
         raise DataFormatError(f"{spec}: excitation",
                               f"expected one of {', '.join(EXCITATIONS)}, found {excitation!r}")
     try:
+        if "_" in seed_text:  # int() reads 1_0 as 10
+            raise ValueError(seed_text)
         seed = int(seed_text) if seed_text else 0
     except ValueError:
         raise DataFormatError(f"{spec}: seed", f"expected an integer, found {seed_text!r}") from None
+    if seed < 0:
+        raise DataFormatError(f"{spec}: seed", f"expected an integer >= 0, found {seed}")
     cols = dict(simulate_plant(preset, excitation, seed=seed).columns)
     digest = hashlib.sha256()
     for key, col in cols.items():
