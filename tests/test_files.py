@@ -232,3 +232,19 @@ def test_a_plant_spec_with_a_bad_seed_is_refused_naming_the_spec(seed: str, prob
         load_any(f"plant:auger/evaluation@{seed}")
     assert info.value.where == f"plant:auger/evaluation@{seed}: seed"
     assert problem in info.value.problem
+
+
+@pytest.mark.parametrize("value,found", [
+    (np.ones((50, 3)), "a 2-D array of shape (50, 3)"),
+    (np.ones(50) + 1j, "a complex array of shape (50,)"),
+    (np.array(["a"] * 50), "an array of text of shape (50,)"),
+])
+def test_an_npz_array_that_is_no_column_is_named_as_what_it_is(tmp_path: Path, value,
+                                                                found: str) -> None:
+    path = tmp_path / "log.npz"
+    np.savez(path, t=np.arange(50) * TS, omega=value, tau_ext=np.ones(50))
+    with pytest.raises(DataFormatError) as info:
+        load_data(path, require=["omega", "tau_ext"])
+    assert info.value.where == "log.npz: column 'omega'"
+    assert info.value.problem == f"expected a 1-D array of real numbers, found {found}"
+    assert set(load_data(path).columns) == {"t", "tau_ext"}  # not asked for: left aside

@@ -356,10 +356,11 @@ def load_data(
         raise DataFormatError(name, "expected a header row and data, found an empty file")
     suffix = path.suffix.lower()
     scalars: dict[str, float] = {}
+    skipped: dict[str, str] = {}  # arrays of a .npz/.mat that are no column, and what they are
     if suffix == ".npz":
-        arrays, scalars = _read_arrays(name, _load_npz(name, raw))
+        arrays, scalars, skipped = _read_arrays(name, _load_npz(name, raw))
     elif suffix == ".mat":
-        arrays, scalars = _read_arrays(name, _load_mat(name, raw))
+        arrays, scalars, skipped = _read_arrays(name, _load_mat(name, raw))
     else:
         arrays = _read_csv(name, raw)
     log = with_roles(DataLog(arrays, 1.0, name, hashlib.sha256(raw).hexdigest(), scalars), columns)
@@ -370,6 +371,9 @@ def load_data(
     log_ts = _sample_time(name, arrays, time, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
     log = replace(log, ts=log_ts)
     for col in require:
+        if col in skipped and col not in log.columns:
+            raise DataFormatError(f"{name}: column {col!r}",
+                                  f"expected a 1-D array of real numbers, found {skipped[col]}")
         log.column(col)
     return log
 
@@ -503,16 +507,22 @@ def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
 
 def _read_arrays(
     name: str, arrays: Mapping[str, np.ndarray]
-) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, str]]:
     columns: dict[str, np.ndarray] = {}
     scalars: dict[str, float] = {}
+    skipped: dict[str, str] = {}
     for key, arr in arrays.items():
-        if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
-            continue
-        if arr.size == 1:
+        if np.iscomplexobj(arr):
+            skipped[key] = f"a complex array of shape {arr.shape}"
+        elif not np.issubdtype(arr.dtype, np.number):
+            kind = "text" if arr.dtype.kind in "US" else str(arr.dtype)
+            skipped[key] = f"an array of {kind} of shape {arr.shape}"
+        elif arr.size == 1:
             scalars[key] = float(arr.reshape(()))
         elif arr.ndim == 1 or (arr.ndim == 2 and 1 in arr.shape):
             columns[key] = np.ascontiguousarray(arr.reshape(-1), dtype=float)
+        else:
+            skipped[key] = f"a {arr.ndim}-D array of shape {arr.shape}"
     if not columns:
         raise DataFormatError(name, "expected one or more 1-D numeric arrays, found none")
     n = max(len(c) for c in columns.values())
@@ -524,7 +534,7 @@ def _read_arrays(
         if bad.size:
             raise DataFormatError(f"{name}: row {bad[0] + 1}, column {key!r}",
                                   f"expected a finite number, found {col[bad[0]]}")
-    return columns, scalars
+    return columns, scalars, skipped
 
 
 def _sample_time(
