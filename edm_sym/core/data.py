@@ -278,6 +278,24 @@ class DataLog:
                                       f"expected a varying signal for an input, found "
                                       f"{col[0]:g} on all {len(col)} rows")
 
+    def require_finite(self, names: Iterable[str]) -> None:
+        """Refuse NaN or an infinity in the columns ``names`` (naming the first, by row).
+
+        Logs read from files are checked as they are read; this is for logs
+        made in memory (``DataLog(columns, ts)``).
+
+        Raises
+        ------
+        DataFormatError
+            Naming the log, the row and the column.
+        """
+        for name in names:
+            col = self.column(name)
+            bad = np.flatnonzero(~np.isfinite(col))
+            if bad.size:
+                raise DataFormatError(f"{self.source}: row {bad[0] + 1}, column {name!r}",
+                                      f"expected a finite number, found {col[bad[0]]}")
+
     @property
     def record_length(self) -> float:
         """T_sum = N Ts [s]."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -326,9 +327,20 @@ def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles |
     """The log on the result's grid: its recorded time column and roles under the given ones,
     its sample time if the log has none, the drift tolerance of docs/data.md."""
     if isinstance(spec, DataLog):
+        from edm_sym.engines.simulate import checked_inputs
+
         log = spec
-        log.stack(result.inputs)
-        log.column(result.target, role="target column")
+        checked_inputs(result.compensator, log)  # present, finite, one length, the model's Ts
+        target = log.column(result.target, role="target column")
+        bad = np.flatnonzero(~np.isfinite(target))
+        if len(target) != len(log) or bad.size:
+            raise DataFormatError(f"{log.source}: column {result.target!r}",
+                                  f"expected {len(log)} finite numbers, found "
+                                  + (f"{target[bad[0]]} at row {bad[0] + 1}" if bad.size
+                                     else f"{len(target)} samples"))
+    elif not isinstance(spec, str | os.PathLike):
+        raise DataFormatError("data", f"expected a DataLog, a file or a plant: spec, found "
+                              f"{type(spec).__name__}")
     else:
         roles = columns.over(result.column_roles()) if columns is not None else result.column_roles()
         log = load_data(spec, ts=ts, require=[*result.inputs, result.target],

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from edm_sym.core.budget import check, simulation_estimate
-from edm_sym.core.data import DataLog
+from edm_sym.core.data import TIME_RTOL, DataLog
+from edm_sym.core.errors import DataFormatError, ResultFormatError
 from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator, Row
 
@@ -86,6 +87,49 @@ def input_array(
     return np.vstack([np.asarray(data[n], dtype=float) for n in inputs])
 
 
+def checked_inputs(comp: Compensator, data: DataLog | Mapping[str, np.ndarray]) -> np.ndarray:
+    """The model's input columns of ``data`` as (n_inputs, N), refusing what would mislead.
+
+    Raises
+    ------
+    DataFormatError
+        Naming the log and column (and row): a missing input, columns of other
+        shapes or lengths, no sample, a value that is not finite (NaN would
+        spread through every filter after it), or a log whose sample time is
+        not the model's (within :data:`~edm_sym.core.data.TIME_RTOL`).
+    """
+    if not isinstance(data, DataLog | Mapping):
+        raise DataFormatError("data", f"expected a DataLog or a mapping of column names to "
+                              f"arrays, found {type(data).__name__}")
+    source = getattr(data, "source", None) or "data"
+    have = data.columns if isinstance(data, DataLog) else data
+    if isinstance(data, DataLog) and abs(data.ts - comp.sample_time) > TIME_RTOL * comp.sample_time:
+        raise DataFormatError(f"{source}: sample time",
+                              f"expected {comp.sample_time:g} s as in the model (within "
+                              f"{TIME_RTOL:g} relative), found {data.ts:g} s; resample the log "
+                              "(edm_sym.core.data.match_sample_time)")
+    cols = []
+    for name in comp.matrix.inputs:
+        if name not in have:
+            raise DataFormatError(f"{source}: column {name!r}", f"expected the model's input "
+                                  f"column, found only: {', '.join(map(str, have)) or 'none'}")
+        col = np.asarray(have[name])
+        if col.ndim != 1 or not np.issubdtype(col.dtype, np.number) or np.iscomplexobj(col):
+            raise DataFormatError(f"{source}: column {name!r}", f"expected a 1-D array of real "
+                                  f"numbers, found {col.dtype} of shape {col.shape}")
+        if cols and len(col) != len(cols[0]):
+            raise DataFormatError(f"{source}: column {name!r}", f"expected {len(cols[0])} samples "
+                                  f"like column {comp.matrix.inputs[0]!r}, found {len(col)}")
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise DataFormatError(f"{source}: row {bad[0] + 1}, column {name!r}",
+                                  f"expected a finite number, found {col[bad[0]]}")
+        cols.append(col.astype(float, copy=False))
+    if not len(cols[0]):
+        raise DataFormatError(source, "expected samples, found an empty log")
+    return np.vstack(cols)
+
+
 def simulate(result, data) -> Simulation:  # noqa: ANN001  (duck-typed on purpose)
     """Simulate a compensator over a data log.
 
@@ -103,15 +147,21 @@ def simulate(result, data) -> Simulation:  # noqa: ANN001  (duck-typed on purpos
 
     Raises
     ------
+    DataFormatError
+        A missing input column, columns of other shapes or lengths, an empty
+        log, a value that is not finite, or a DataLog whose sample time is not
+        the model's (:func:`checked_inputs`).
     BudgetError
         When the rows' outputs would not fit in the memory available.
     """
-    comp = result if isinstance(result, Compensator) else result.compensator
-    names = comp.matrix.inputs
-    n = len(data) if isinstance(data, DataLog) else len(np.asarray(data[names[0]]))
-    check(simulation_estimate(n_samples=n, n_rows=len(comp.matrix.rows), n_inputs=len(names)),
+    comp = result if isinstance(result, Compensator) else getattr(result, "compensator", None)
+    if not isinstance(comp, Compensator):
+        raise ResultFormatError("result", f"expected an EdmResult or a Compensator, found "
+                                f"{type(result).__name__}")
+    x = checked_inputs(comp, data)
+    check(simulation_estimate(n_samples=x.shape[1], n_rows=len(comp.matrix.rows),
+                              n_inputs=x.shape[0]),
           getattr(data, "source", None) or "data", "use a shorter log or a result with fewer rows")
-    x = input_array(names, data)
     rows = simulate_rows(comp, comp.matrix.rows, x)
     return Simulation(rows, rows.sum(axis=0))
 

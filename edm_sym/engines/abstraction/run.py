@@ -505,6 +505,16 @@ def abstract(
     """
     from edm_sym.core.version import __version__
 
+    if not isinstance(data, DataLog):
+        raise DataFormatError("data", f"expected a DataLog (edm_sym.load_data), found "
+                              f"{type(data).__name__}")
+    if config is not None and not isinstance(config, AbstractionConfig):
+        raise ConfigError("config", f"expected an AbstractionConfig (load_config(path)), found "
+                          f"{type(config).__name__}")
+    if time_limit is not None and (isinstance(time_limit, bool)
+                                   or not isinstance(time_limit, int | float | np.floating)
+                                   or not math.isfinite(time_limit) or time_limit < 0):
+        raise ConfigError("time_limit", f"expected a number of seconds >= 0, found {time_limit!r}")
     cfg = config if config is not None else default_config()
     inputs = tuple(inputs)
     if not inputs:
@@ -536,6 +546,12 @@ def abstract(
     _require_samples(data, hold.n_train if hold.mask is None
                      else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
     data.require_varying(inputs)
+    data.require_finite([*inputs, target])
+    y_all = data.column(target, role="target column")
+    if np.all(y_all == y_all[0]):
+        raise DataFormatError(f"{data.source}: column {target!r}",
+                              f"expected a varying target (a constant one leaves nothing to "
+                              f"model), found {y_all[0]:g} on all {len(y_all)} rows")
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training

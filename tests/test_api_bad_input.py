@@ -1,0 +1,116 @@
+"""The Python API refuses what would mislead, naming the argument, the column and the row.
+
+Logs read from files are checked as they are read (tests/test_files.py); these
+are logs and arguments made in memory, where a NaN or a wrong sample time used
+to pass silently: a NaN spread through every filter after it, a log at 2 ms
+was simulated as if at 1 ms, a NaN input was dropped by the search.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import edm_sym
+from edm_sym.core.data import DataLog
+from edm_sym.core.errors import ConfigError, DataFormatError, ResultFormatError
+from edm_sym.engines.abstraction import abstract, load_config
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
+TINY = load_config(Path(__file__).resolve().parent / "data" / "estimator_tiny.toml")
+
+
+@pytest.fixture(scope="module")
+def result():
+    return edm_sym.load_result(EXAMPLE)
+
+
+@pytest.fixture(scope="module")
+def columns(result) -> dict[str, np.ndarray]:
+    t = np.arange(2000) * result.sample_time
+    cols = {"t": t, "tau_ext": 0.5 * np.sign(np.sin(t))}
+    for k, name in enumerate(result.inputs):
+        cols[name] = np.sin((k + 1) * 2 * np.pi * t)
+    return cols
+
+
+def _with(cols: dict[str, np.ndarray], name: str, row: int, value: float) -> dict:
+    col = cols[name].copy()
+    col[row] = value
+    return {**cols, name: col}
+
+
+@pytest.mark.parametrize("fn", ["simulate", "describe"])
+def test_a_value_that_is_not_finite_is_refused_by_row_and_column(result, columns, fn) -> None:
+    bad = DataLog(_with(columns, "omega", 100, np.nan), result.sample_time, "mem")
+    with pytest.raises(DataFormatError) as info:
+        getattr(edm_sym, fn)(result, bad)
+    assert info.value.where == "mem: row 101, column 'omega'"
+    assert "expected a finite number, found nan" in info.value.problem
+
+
+@pytest.mark.parametrize("fn", ["simulate", "describe"])
+def test_a_log_at_another_sample_time_is_refused(result, columns, fn) -> None:
+    with pytest.raises(DataFormatError, match=r"sample time: expected 0.001 s .* found 0.002 s"):
+        getattr(edm_sym, fn)(result, DataLog(columns, 2 * result.sample_time, "mem"))
+
+
+def test_simulate_refuses_an_empty_log_a_missing_column_and_what_is_no_model(result,
+                                                                              columns) -> None:
+    with pytest.raises(DataFormatError, match="expected samples, found an empty log"):
+        edm_sym.simulate(result, {k: v[:0] for k, v in columns.items()})
+    with pytest.raises(DataFormatError, match="column 'alpha': expected the model's input column"):
+        edm_sym.simulate(result, {k: v for k, v in columns.items() if k != "alpha"})
+    with pytest.raises(DataFormatError, match="column 'alpha': expected 2000 samples"):
+        edm_sym.simulate(result, {**columns, "alpha": columns["alpha"][:10]})
+    with pytest.raises(ResultFormatError, match="result: expected an EdmResult or a Compensator"):
+        edm_sym.simulate(str(EXAMPLE), columns)
+    # What is fine still runs: a mapping of the input columns, no sample time to compare.
+    assert edm_sym.simulate(result, columns).total.shape == (2000,)
+
+
+def test_describe_refuses_data_of_another_kind(result, columns) -> None:
+    with pytest.raises(DataFormatError, match="data: expected a DataLog, a file or a plant"):
+        edm_sym.describe(result, columns)
+
+
+@pytest.fixture(scope="module")
+def small() -> dict[str, np.ndarray]:
+    t = np.arange(400) * 1e-3
+    omega = np.sin(2 * np.pi * t)
+    return {"t": t, "omega": omega, "alpha": np.cos(2 * np.pi * t),
+            "tau_ext": 0.5 * np.sign(omega) + 0.1 * omega}
+
+
+@pytest.mark.parametrize("change,where,problem", [
+    (("omega", 50, np.nan), "mem: row 51, column 'omega'", "expected a finite number, found nan"),
+    (("tau_ext", 7, np.inf), "mem: row 8, column 'tau_ext'", "expected a finite number, found inf"),
+])
+def test_abstract_refuses_a_value_that_is_not_finite(small, change, where, problem) -> None:
+    # A NaN input was dropped by the search without a word; an infinite target gave fitness inf.
+    with pytest.raises(DataFormatError) as info:
+        abstract(DataLog(_with(small, *change), 1e-3, "mem"), target="tau_ext",
+                 inputs=["omega", "alpha"], config=TINY, workers=1)
+    assert (info.value.where, info.value.problem) == (where, problem)
+
+
+def test_abstract_refuses_a_constant_target(small) -> None:
+    with pytest.raises(DataFormatError, match="expected a varying target .* 0 on all 400 rows"):
+        abstract(DataLog({**small, "tau_ext": np.zeros(400)}, 1e-3), target="tau_ext",
+                 inputs=["omega"], config=TINY, workers=1)
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"time_limit": -1.0}, "time_limit: expected a number of seconds >= 0, found -1.0"),
+    ({"time_limit": float("nan")}, "time_limit: expected a number of seconds >= 0, found nan"),
+    ({"time_limit": "3"}, "time_limit: expected a number of seconds >= 0, found '3'"),
+    ({"config": "abstraction.toml"}, "config: expected an AbstractionConfig"),
+])
+def test_abstract_refuses_arguments_of_the_wrong_kind(small, kwargs, match) -> None:
+    with pytest.raises(ConfigError, match=match):
+        abstract(DataLog(small, 1e-3), target="tau_ext", inputs=["omega"],
+                 **{"config": TINY, "workers": 1, **kwargs})
+    with pytest.raises(DataFormatError, match="data: expected a DataLog"):
+        abstract(small, target="tau_ext", inputs=["omega"], config=TINY)
