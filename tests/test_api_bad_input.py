@@ -114,3 +114,47 @@ def test_abstract_refuses_arguments_of_the_wrong_kind(small, kwargs, match) -> N
                  **{"config": TINY, "workers": 1, **kwargs})
     with pytest.raises(DataFormatError, match="data: expected a DataLog"):
         abstract(small, target="tau_ext", inputs=["omega"], config=TINY)
+
+
+@pytest.mark.parametrize("inputs,rows,where,problem", [
+    (["omega"], [("omega", [("zzz", 0)])], "rows[0].elements[0]", "'zzz' is not a known element"),
+    (["omega"], [("omega", [(99, 0)])], "rows[0].elements[0]", "99 is not a known element"),
+    (["omega"], [("omega", [(True, 0)])], "rows[0].elements[0]", "True is no element name"),
+    (["omega"], [("omega", [("gain", "abc")])], "rows[0].elements[0]", "expected (element"),
+    (["omega"], [("om", [("sign", 0)])], "rows[0]", "expected one of the inputs omega, found 'om'"),
+    (["omega"], [(3, [("sign", 0)])], "rows[0]", "an index below 1, found 3"),
+    (["omega"], [("omega",)], "rows[0]", "expected (input, [(element, p), ...])"),
+    ("omega", [("omega", [("sign", 0)])], "inputs", "found the string 'omega'"),
+])
+def test_make_matrix_names_the_row_and_element_it_cannot_build(inputs, rows, where,
+                                                               problem) -> None:
+    # It raised KeyError, tuple.index's "x not in tuple", or split "omega" into letters.
+    with pytest.raises(ConfigError) as info:
+        edm_sym.make_matrix(inputs, rows)
+    assert info.value.where == where and problem in info.value.problem
+
+
+@pytest.mark.parametrize("args,where", [
+    ((0, {}), "sample_time"),            # was a ZeroDivisionError in the default ranges
+    ((1e-3, {}, 0.0), "record_length"),
+    (("0.001", {}), "sample_time"),
+    ((1e-3, {"gain": (1, 2)}), "ranges"),
+    ((1e-3, None), "ranges"),
+])
+def test_a_compensator_of_bad_parts_is_refused(args, where) -> None:
+    m = edm_sym.make_matrix(["omega"], [("omega", [("sign", 0), ("gain", 0.55)])])
+    with pytest.raises(ConfigError) as info:
+        edm_sym.Compensator(m, *args)
+    assert info.value.where == where
+
+
+def test_save_result_writes_only_what_load_result_reads(tmp_path: Path) -> None:
+    m = edm_sym.make_matrix(["omega"], [("omega", [("sign", 0), ("gain", 0.55)])])
+    comp = edm_sym.Compensator(m, 1e-3, {})
+    out = tmp_path / "r.json"
+    with pytest.raises(ResultFormatError, match="r.json: provenance.seed: required field"):
+        edm_sym.save_result(edm_sym.EdmResult(comp, "tau_ext"), out)  # default provenance: {}
+    assert not out.exists()
+    provenance = {"seed": None, "package_version": edm_sym.__version__, "data_sha256": None}
+    edm_sym.save_result(edm_sym.EdmResult(comp, "tau_ext", provenance=provenance), out)
+    assert edm_sym.load_result(out).compensator == comp

@@ -7,6 +7,8 @@ genomes and their validation only: no sympy, no numerics beyond decoding.
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -115,6 +117,20 @@ class Compensator:
     record_length: float = 20.0
 
     def __post_init__(self) -> None:
+        from edm_sym.core.errors import ConfigError
+
+        if not isinstance(self.matrix, ElementMatrix):
+            raise ConfigError("matrix", f"expected an ElementMatrix (make_matrix), found "
+                              f"{type(self.matrix).__name__}")
+        for name in ("sample_time", "record_length"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                    or not math.isfinite(value) or value <= 0:
+                raise ConfigError(name, f"expected a number of seconds > 0, found {value!r}")
+        if not isinstance(self.ranges, Mapping) or not all(
+                isinstance(r, ParamRange) for r in self.ranges.values()):
+            raise ConfigError("ranges", "expected a mapping of element names to ParamRange, found "
+                              f"{self.ranges!r}"[:200])
         full = default_ranges(self.sample_time, self.record_length)
         full.update(self.ranges)
         object.__setattr__(self, "ranges", full)
@@ -148,10 +164,36 @@ def make_matrix(
     '2x1'
     """
     from edm_sym.core.elements import element
+    from edm_sym.core.errors import ConfigError
 
+    if isinstance(inputs, str):
+        raise ConfigError("inputs", f"expected a sequence of input names, found the string {inputs!r}")
     inputs = tuple(inputs)
     out = []
-    for inp, genes in rows:
-        idx = inputs.index(inp) if isinstance(inp, str) else int(inp)
-        out.append(Row(idx, tuple(Gene(element(c).code, float(p)) for c, p in genes)))
+    for j, row in enumerate(rows):
+        try:
+            inp, genes = row
+        except (TypeError, ValueError):
+            raise ConfigError(f"rows[{j}]", f"expected (input, [(element, p), ...]), found {row!r}") from None
+        if isinstance(inp, str) and inp not in inputs:
+            raise ConfigError(f"rows[{j}]", f"expected one of the inputs {', '.join(inputs)}, found {inp!r}")
+        if not isinstance(inp, str) and (isinstance(inp, bool) or not isinstance(inp, int)
+                                         or not 0 <= inp < len(inputs)):
+            raise ConfigError(f"rows[{j}]", f"expected an input name or an index below {len(inputs)}, "
+                              f"found {inp!r}")
+        made = []
+        for i, gene in enumerate(genes):
+            where = f"rows[{j}].elements[{i}]"
+            try:
+                code, p = gene
+                if isinstance(code, bool) or not isinstance(code, str | int):
+                    raise KeyError(f"{code!r} is no element name or code")
+                cls = element(code)
+                value = float(p)
+            except KeyError as exc:
+                raise ConfigError(where, str(exc.args[0])) from None
+            except (TypeError, ValueError):
+                raise ConfigError(where, f"expected (element name or code, p), found {gene!r}") from None
+            made.append(Gene(cls.code, value))
+        out.append(Row(inputs.index(inp) if isinstance(inp, str) else inp, tuple(made)))
     return ElementMatrix(inputs, tuple(out))

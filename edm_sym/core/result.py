@@ -252,8 +252,23 @@ def dumps(result: EdmResult) -> str:
 
 
 def save_result(result: EdmResult, path: str | Path) -> Path:
-    """Write ``result`` to ``path`` atomically (temporary file, then rename)."""
-    return write_atomic(path, dumps(result))
+    """Write ``result`` to ``path`` atomically (temporary file, then rename).
+
+    The document is checked as :func:`load_result` checks it before anything
+    is written, so a saved file always loads.
+
+    Raises
+    ------
+    ResultFormatError
+        When ``result`` would make a file that :func:`load_result` refuses
+        (a result built by hand without ``provenance["seed"]``, say), naming
+        the field; nothing is written.
+    """
+    if not isinstance(result, EdmResult):
+        raise ResultFormatError("result", f"expected an EdmResult, found {type(result).__name__}")
+    text = dumps(result)
+    parse_result(json.loads(text), Path(path).name)
+    return write_atomic(path, text)
 
 
 @lru_cache(maxsize=1)
