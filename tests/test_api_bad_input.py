@@ -158,3 +158,17 @@ def test_save_result_writes_only_what_load_result_reads(tmp_path: Path) -> None:
     provenance = {"seed": None, "package_version": edm_sym.__version__, "data_sha256": None}
     edm_sym.save_result(edm_sym.EdmResult(comp, "tau_ext", provenance=provenance), out)
     assert edm_sym.load_result(out).compensator == comp
+
+
+@pytest.mark.parametrize("params,where", [
+    ({"target_name": ""}, "EDMRegressor.target_name"),
+    ({"target_name": None}, "EDMRegressor.target_name"),   # saved a result load_result refused
+    ({"roles": "x"}, "EDMRegressor.roles"),                # failed later in sympy() as a TypeError
+    ({"workers": "2"}, "workers"),
+    ({"time_limit": -1.0}, "time_limit"),
+])
+def test_the_estimator_refuses_bad_parameters_when_it_fits(small, params, where) -> None:
+    est = edm_sym.EDMRegressor(sample_time=1e-3, config=TINY, **params)
+    with pytest.raises(ConfigError) as info:
+        est.fit(np.c_[small["omega"], small["alpha"]], small["tau_ext"])
+    assert info.value.where == where

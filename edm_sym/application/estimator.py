@@ -173,6 +173,14 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         """
         ts = self._checked_sample_time()
         axis = self._checked_axis()
+        if not isinstance(self.target_name, str) or not self.target_name:
+            raise ConfigError("EDMRegressor.target_name", f"expected a column name, found "
+                              f"{self.target_name!r}")
+        if self.roles is not None and (not isinstance(self.roles, Mapping) or not all(
+                isinstance(k, str) and (v is None or isinstance(v, str))
+                for k, v in self.roles.items())):
+            raise ConfigError("EDMRegressor.roles", f"expected a mapping of feature names to "
+                              f"roles (str or None), found {self.roles!r}")
         names = _names_of(X, feature_names)
         X, y = check_X_y(X, y, dtype=np.float64, ensure_min_samples=2, y_numeric=True)
         names = names if names is not None else [f"x{j}" for j in range(X.shape[1])]

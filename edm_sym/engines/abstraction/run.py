@@ -529,7 +529,8 @@ def abstract(
         raise ConfigError("inputs", TARGET_AS_INPUT.format(target=target))
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
-    if workers is not None and (isinstance(workers, bool) or int(workers) < 1):
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int | np.integer)
+                                or workers < 1):
         raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
     try:
         units = axis_units(axis)
