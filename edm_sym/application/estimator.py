@@ -169,7 +169,10 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             infinity, fewer than 2 samples, ``y`` of another length), names
             that are not unique or equal ``target_name``.
         ConfigError
-            A bad ``config``, ``seed``, ``workers`` (a subclass of ValueError).
+            A bad ``config``, ``seed``, ``workers``, ``time_limit``, ``target_name`` or
+            ``roles`` (a subclass of ValueError).
+        DataFormatError
+            A constant ``y``: nothing to model (a subclass of ValueError).
         """
         ts = self._checked_sample_time()
         axis = self._checked_axis()
