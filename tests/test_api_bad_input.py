@@ -134,6 +134,13 @@ def test_make_matrix_names_the_row_and_element_it_cannot_build(inputs, rows, whe
     assert info.value.where == where and problem in info.value.problem
 
 
+def test_make_matrix_still_takes_numpy_integers_for_inputs_and_codes() -> None:
+    m = edm_sym.make_matrix(["omega", "alpha"], [(np.int64(1), [(np.int64(19), 0),
+                                                                ("gain", np.float64(0.5))])])
+    assert m.rows[0].input == 1 and type(m.rows[0].input) is int
+    assert [g.element.name for g in m.rows[0].genes] == ["sign", "gain"]
+
+
 @pytest.mark.parametrize("args,where", [
     ((0, {}), "sample_time"),            # was a ZeroDivisionError in the default ranges
     ((1e-3, {}, 0.0), "record_length"),

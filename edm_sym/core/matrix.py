@@ -177,7 +177,7 @@ def make_matrix(
             raise ConfigError(f"rows[{j}]", f"expected (input, [(element, p), ...]), found {row!r}") from None
         if isinstance(inp, str) and inp not in inputs:
             raise ConfigError(f"rows[{j}]", f"expected one of the inputs {', '.join(inputs)}, found {inp!r}")
-        if not isinstance(inp, str) and (isinstance(inp, bool) or not isinstance(inp, int)
+        if not isinstance(inp, str) and (isinstance(inp, bool) or not isinstance(inp, numbers.Integral)
                                          or not 0 <= inp < len(inputs)):
             raise ConfigError(f"rows[{j}]", f"expected an input name or an index below {len(inputs)}, "
                               f"found {inp!r}")
@@ -186,7 +186,7 @@ def make_matrix(
             where = f"rows[{j}].elements[{i}]"
             try:
                 code, p = gene
-                if isinstance(code, bool) or not isinstance(code, str | int):
+                if isinstance(code, bool) or not isinstance(code, str | numbers.Integral):
                     raise KeyError(f"{code!r} is no element name or code")
                 cls = element(code)
                 value = float(p)
@@ -195,5 +195,5 @@ def make_matrix(
             except (TypeError, ValueError):
                 raise ConfigError(where, f"expected (element name or code, p), found {gene!r}") from None
             made.append(Gene(cls.code, value))
-        out.append(Row(inputs.index(inp) if isinstance(inp, str) else inp, tuple(made)))
+        out.append(Row(inputs.index(inp) if isinstance(inp, str) else int(inp), tuple(made)))
     return ElementMatrix(inputs, tuple(out))

@@ -22,7 +22,8 @@ from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator, Row
 
 __all__ = [
-    "Simulation", "fitness", "input_array", "plain_loop", "simulate", "simulate_row", "simulate_rows",
+    "Simulation", "checked_inputs", "fitness", "input_array", "plain_loop", "simulate", "simulate_row",
+    "simulate_rows",
 ]
 
 
