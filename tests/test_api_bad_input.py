@@ -17,6 +17,7 @@ import edm_sym
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError, DataFormatError, ResultFormatError
 from edm_sym.engines.abstraction import abstract, load_config
+from edm_sym.engines.lugre import identify_lugre
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
 TINY = load_config(Path(__file__).resolve().parent / "data" / "estimator_tiny.toml")
@@ -179,3 +180,22 @@ def test_the_estimator_refuses_bad_parameters_when_it_fits(small, params, where)
     with pytest.raises(ConfigError) as info:
         est.fit(np.c_[small["omega"], small["alpha"]], small["tau_ext"])
     assert info.value.where == where
+
+
+def test_a_residual_needs_one_target_sample_per_simulated_sample(result, columns) -> None:
+    sim = edm_sym.simulate(result, columns)
+    assert np.array_equal(sim.residual(columns["tau_ext"]), columns["tau_ext"] - sim.total)
+    for bad in (None, columns["tau_ext"][:10]):  # None gave all NaN, a short one a numpy error
+        with pytest.raises(DataFormatError, match="target: expected 2000 samples"):
+            sim.residual(bad)
+
+
+@pytest.mark.parametrize("ts", [None, "0.001", True])
+def test_identify_lugre_names_a_sample_time_of_the_wrong_kind(ts) -> None:
+    with pytest.raises(DataFormatError, match="ts: expected a positive finite sample time"):
+        identify_lugre(np.ones(50), np.linspace(-1, 1, 50), ts)
+
+
+def test_a_result_path_of_the_wrong_kind_is_named() -> None:
+    with pytest.raises(ResultFormatError, match="path: expected a file path, found NoneType"):
+        edm_sym.load_result(None)

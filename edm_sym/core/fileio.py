@@ -190,6 +190,8 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
     -------
     (document, raw bytes)
     """
+    if not isinstance(path, str | os.PathLike):
+        raise error("path", f"expected a file path, found {type(path).__name__}")
     path = Path(path)
     name = path.name
     try:

@@ -524,7 +524,7 @@ def load_result(path: str | Path) -> EdmResult:
     ResultFormatError
         When the file is missing, not JSON, or not a valid edm-result.
     """
-    path = Path(path)
     doc, raw = read_json(path, ResultFormatError)
+    path = Path(path)
     res = parse_result(doc, path.name)
     return replace(res, sha256=hashlib.sha256(raw).hexdigest(), source=str(path))

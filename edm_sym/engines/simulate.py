@@ -43,8 +43,18 @@ class Simulation:
     total: np.ndarray
 
     def residual(self, target: np.ndarray) -> np.ndarray:
-        """``target - tau_cmp``."""
-        return np.asarray(target, dtype=float) - self.total
+        """``target - tau_cmp``.
+
+        Raises
+        ------
+        DataFormatError
+            When ``target`` is not one real number per sample.
+        """
+        y = np.asarray(target, dtype=float) if target is not None else np.empty(0)
+        if y.shape != self.total.shape:
+            raise DataFormatError("target", f"expected {self.total.shape[0]} samples like the "
+                                  f"simulation, found shape {y.shape}")
+        return y - self.total
 
 
 def simulate_row(comp: Compensator, row: Row, x: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ interval. See ``docs/lugre.md``.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -184,6 +185,8 @@ def _as_velocity(velocity: ArrayLike) -> np.ndarray:
 
 
 def _check_ts(ts: float) -> float:
+    if isinstance(ts, bool) or not isinstance(ts, numbers.Real):
+        raise DataFormatError("ts", f"expected a positive finite sample time, found {ts!r}")
     ts_f = float(ts)
     if not (math.isfinite(ts_f) and ts_f > 0.0):
         raise DataFormatError("ts", f"expected a positive finite sample time, found {ts!r}")
