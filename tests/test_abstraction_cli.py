@@ -126,10 +126,14 @@ def test_bad_input_exits_2_with_one_line(
 
 # -- a real process, interrupted and resumed ---------------------------------------
 
+# Long enough that a checkpoint (every CHECKPOINT_SECONDS, and at each step's end) shows a
+# generation of the first step before it ends, whatever the machine's speed: the interrupt
+# must land mid-step (no patience: the step runs all its generations).
 LONG = """
 [ga]
 population = 32
-generations = 25
+generations = 400
+patience = 0
 continue = "no"
 
 [[step]]
