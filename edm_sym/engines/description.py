@@ -331,13 +331,8 @@ def _load(spec: Any, result: EdmResult, ts: float | None, columns: ColumnRoles |
 
         log = spec
         checked_inputs(result.compensator, log)  # present, finite, one length, the model's Ts
-        target = log.column(result.target, role="target column")
-        bad = np.flatnonzero(~np.isfinite(target))
-        if len(target) != len(log) or bad.size:
-            raise DataFormatError(f"{log.source}: column {result.target!r}",
-                                  f"expected {len(log)} finite numbers, found "
-                                  + (f"{target[bad[0]]} at row {bad[0] + 1}" if bad.size
-                                     else f"{len(target)} samples"))
+        log.column(result.target, role="target column")
+        log.require_finite([result.target])
     elif not isinstance(spec, str | os.PathLike):
         raise DataFormatError("data", f"expected a DataLog, a file or a plant: spec, found "
                               f"{type(spec).__name__}")
