@@ -76,7 +76,8 @@ def steady_state_friction(result, velocity: str = "omega", step: int | None = No
 
 
 STEP_4X2 = {"step": [{"n_rows": 2, "n_elements": 4}]}
-SMALL = {"ga": {"population": 24, "generations": 6, "continue": "no"},
+# No restarts (the default is 1): 6 generations a step, the schedule these tests reason about.
+SMALL = {"ga": {"population": 24, "generations": 6, "continue": "no", "restarts": 0},
          "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 3, "n_elements": 3}]}
 
 
@@ -278,7 +279,8 @@ def test_the_best_never_gets_worse_and_steps_inherit(log: DataLog) -> None:
 
 
 def test_a_step_starts_from_the_previous_best_as_it_is(log: DataLog) -> None:
-    doc = {"ga": {"population": 12, "generations": 3, "continue": "no"},
+    # No restarts: the second population drawn is the second step's.
+    doc = {"ga": {"population": 12, "generations": 3, "continue": "no", "restarts": 0},
            "step": [{"n_rows": 1, "n_elements": 3}, {"n_rows": 2, "n_elements": 4}]}
     seen: list = []
     orig = Operators.random_population
@@ -394,16 +396,19 @@ def test_the_progress_bar_shows_step_generation_best_and_rate(
     assert "step 2/2 (3x3)" in err and "best" in err and "eval/s" in err and "gen 6" in err
 
 
+@pytest.mark.parametrize("restarts", [0, 1])
 def test_the_engine_prints_nothing_and_reports_the_generations_left(
-    log: DataLog, capsys: pytest.CaptureFixture
+    log: DataLog, capsys: pytest.CaptureFixture, restarts: int
 ) -> None:
     seen = []
-    run(log, SMALL, seed=0, workers=1, callback=seen.append)
+    doc = {**SMALL, "ga": {**SMALL["ga"], "restarts": restarts}}
+    run(log, doc, seed=0, workers=1, callback=seen.append)
     assert capsys.readouterr() == ("", "")
-    # continue = "no", 6 generations per step, no restarts: the fewest generations left
-    # count down to 0 over both steps.
+    # continue = "no", 6 generations per step, each restart 6 more (its generations count
+    # on): the fewest generations left count down to 0 over both steps.
+    per = 6 * (1 + restarts)
     assert [(i.step, i.generation) for i in seen][:2] == [(1, 0), (1, 1)]
-    assert [i.generations_left for i in seen] == [6 - g + (6 if s == 1 else 0)
+    assert [i.generations_left for i in seen] == [per - g + (per if s == 1 else 0)
                                                   for s, g in ((i.step, i.generation) for i in seen)]
     assert seen[-1].generations_left == 0 and seen[-1].shape == (3, 3) and seen[-1].steps == 2
 

@@ -19,7 +19,8 @@ from edm_sym.engines.abstraction.validation import ValidationSettings, parse_val
 from edm_sym.engines.simulate import plain_loop
 
 ROOT = Path(__file__).resolve().parents[1]
-TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
+# A rough search (4 generations a step, no restarts) leaves step bests a refit improves.
+TINY = {"ga": {"population": 16, "generations": 4, "continue": "no", "restarts": 0},
         "step": [{"n_rows": 2, "n_elements": 3},
                  {"n_rows": 3, "n_elements": 3,
                   "weighting": {"threshold": 0.5, "above": 4.0, "below": 1.0}}]}
