@@ -76,7 +76,7 @@ def steady_state_friction(result, velocity: str = "omega", step: int | None = No
 
 
 STEP_4X2 = {"step": [{"n_rows": 2, "n_elements": 4}]}
-# No restarts (the default is 1): 6 generations a step, the schedule these tests reason about.
+# No restarts (the default, said here): 6 generations a step, the schedule these tests reason about.
 SMALL = {"ga": {"population": 24, "generations": 6, "continue": "no", "restarts": 0},
          "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 3, "n_elements": 3}]}
 

@@ -151,7 +151,7 @@ class GaSettings:
     gain_fit: bool = True
     local_search: int = 20
     local_search_evaluations: int = 300
-    restarts: int = 1
+    restarts: int = 0
     reject_poles: bool = True
     elements: tuple[str, ...] | None = None
 
