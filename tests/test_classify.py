@@ -77,6 +77,32 @@ def test_acceleration_from_velocity_derivative_through_low_pass() -> None:
     close(t, "corner", 150.0, "rad/s")
 
 
+def test_a_filtered_acceleration_is_named_by_its_gain_where_the_motion_is() -> None:
+    # EMPS seed 1's row 3: corners at 1.28 and 1472 rad/s and a zero in the right half
+    # plane at 1.28 rad/s, so the filter's DC gain (-7.44) has the other sign than its
+    # gain through the 0.2-20 Hz motion (+7.47 at 4 pi rad/s, shifted by 16 deg).
+    from edm_sym.engines.symbolic import classify_expression
+    from edm_sym.engines.symbolic.significance import _term_flags as term_flags
+
+    a = sp.Symbol("alpha")
+    G = (74.4 * s**2 + 1.086e4 * s - 1.399e4) / (s**2 + 1474.0 * s + 1881.0)  # noqa: N806
+    t = one(classify_expression(LTI(a, G), a, "acceleration"), "acceleration")
+    jw = 4j * math.pi
+    g = (74.4 * jw**2 + 1.086e4 * jw - 1.399e4) / (jw**2 + 1474.0 * jw + 1881.0)
+    assert t.parameters["inertia"][0] == pytest.approx(abs(g), rel=1e-6)
+    assert t.parameters["filter_phase"][0] == pytest.approx(np.angle(g), rel=1e-6)
+    assert not any(f.code == "derivative_like" for f in term_flags(t))
+    # A low pass below that frequency: named there, and it acts mostly as an integral.
+    t = one(classify_expression(LTI(a, 0.3 * 5 / (s + 5)), a, "acceleration"), "acceleration")
+    assert t.parameters["inertia"][0] == pytest.approx(0.3 * 5 / abs(jw + 5), rel=1e-6)
+    assert any(f.code == "derivative_like" for f in term_flags(t))
+    # A low pass well above it shifts it by 7 deg: named with its DC gain, as before.
+    t = one(classify_expression(LTI(a, 0.3 * 100 / (s + 100)), a, "acceleration"),
+            "acceleration")
+    close(t, "inertia", 0.3, "kg m^2")
+    assert "filter_phase" not in t.parameters
+
+
 def test_acceleration_input() -> None:
     t = one(terms_of([("gain", enc("gain", -0.3))], inp="alpha"), "acceleration")
     close(t, "inertia", -0.3, "kg m^2")

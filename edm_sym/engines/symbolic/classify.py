@@ -50,6 +50,7 @@ A term that fits none of these is ``"unclassified"`` with the reason.
 
 from __future__ import annotations
 
+import cmath
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -64,6 +65,7 @@ from edm_sym.engines.symbolic.characteristic import (
     measure_acceleration,
     measure_periodic,
     measure_velocity,
+    response,
     s_power,
     tf_coefficients,
 )
@@ -228,6 +230,23 @@ def _leaf(e: sp.Expr, u: sp.Symbol, role: str | None) -> _Leaf | None:
     return None
 
 
+def _shifted(e: sp.Expr, w: float) -> bool:
+    """Whether the filters of a leaf shift it by more than 45 deg at ``w`` against DC.
+
+    Each ``LTI`` counts as ``G(j w) / ((j w)^k H(0))`` for ``G = s^k H``: its
+    derivatives are the leaf's change of role, not a shift.
+    """
+    rel = 1.0 + 0.0j
+    for node in sp.preorder_traversal(e):
+        if isinstance(node, LTI):
+            tf = tf_coefficients(node.args[1])
+            if tf is None:
+                return False
+            n, d = (np.trim_zeros(c, "b") for c in tf)
+            rel *= complex(response(tf, w)) / ((1j * w) ** s_power(tf) * float(n[-1] / d[-1]))
+    return abs(cmath.phase(rel)) > math.pi / 4
+
+
 def _leaves(e: sp.Expr, u: sp.Symbol, role: str | None, out: dict) -> None:
     lf = _leaf(e, u, role)
     if lf is not None:
@@ -337,6 +356,15 @@ def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
                               "angle, velocity and acceleration")]
     w = sp.Dummy("w", real=True)
     f = core.xreplace({leaf_expr: w})
+    if f == w and leaf.role == "acceleration" and leaf.corners and _shifted(
+            leaf_expr, opts.acceleration_frequency):
+        # A filtered acceleration (c H(s) a, c s H(s) v) whose filters shift it by more
+        # than 45 deg at acceleration_frequency: there its DC gain says little (it can even
+        # have the other sign), so its filters count with their gain there, as in a
+        # measured acceleration term.
+        found = _measured_acceleration(term, u, role, opts)
+        if found:
+            return found
     extra, note = _extras(leaf)
     return _match(term, c, f, w, leaf, extra, note, opts)
 
@@ -667,6 +695,14 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
         found = _measured_velocity(term, u, opts)
         if found:
             return found
+    return _measured_acceleration(term, u, role, opts)
+
+
+def _measured_acceleration(term: sp.Expr, u: sp.Symbol, role: str,
+                           opts: ClassifyOptions) -> list[PhysicalTerm] | None:
+    """A term of acceleration, its filters at ``acceleration_frequency`` (None: it is none)."""
+    U = opts.units
+    F = U.force
     if role not in _INDEX:
         return None
     w, a_range = opts.acceleration_frequency, opts.acceleration_range
