@@ -196,7 +196,13 @@ def _tf_split(G: sp.Expr) -> tuple[int, float, tuple[float, ...]] | None:  # noq
     if tf is None:
         return None
     n, d = (np.trim_zeros(c, "b") for c in tf)
-    return s_power(tf), float(n[-1] / d[-1]), corners((n, d))
+    return s_power(tf), _h0(tf), corners((n, d))
+
+
+def _h0(tf: tuple[np.ndarray, np.ndarray]) -> float:
+    """``H(0)`` for ``G = s^k H`` given by its coefficients."""
+    n, d = (np.trim_zeros(c, "b") for c in tf)
+    return float(n[-1] / d[-1])
 
 
 def _leaf(e: sp.Expr, u: sp.Symbol, role: str | None) -> _Leaf | None:
@@ -242,8 +248,7 @@ def _shifted(e: sp.Expr, w: float) -> bool:
             tf = tf_coefficients(node.args[1])
             if tf is None:
                 return False
-            n, d = (np.trim_zeros(c, "b") for c in tf)
-            rel *= complex(response(tf, w)) / ((1j * w) ** s_power(tf) * float(n[-1] / d[-1]))
+            rel *= complex(response(tf, w)) / ((1j * w) ** s_power(tf) * _h0(tf))
     return abs(cmath.phase(rel)) > math.pi / 4
 
 
