@@ -16,7 +16,9 @@ the target, and decides per row what may be said about it:
   its static characteristic along the data's angle, fitted to the row's
   output by least squares. Below the threshold it is **unsupported** and left
   out: the row does something else on the data (a derivative of the
-  acceleration, a ripple its filters smooth away at the data's speeds);
+  acceleration, a ripple its filters smooth away at the data's speeds); so is
+  an acceleration term when the rows together, with the observer's lag taken
+  out, hold an inertia below the threshold;
 * a row with a parameter at (or within ``bound_margin`` of) its range bound
   (:mod:`edm_sym.core.bounds`) keeps its parameters, but its terms are
   ``unclassified``: the value is a limit of the search, not an estimate;
@@ -68,7 +70,8 @@ ROW_FLAGS = {
     "no_output": "the row's output is identically zero",
     "unmeasured": "no data: the contribution was not measured",
     "unsupported": ("a term its expression has (an inertia, a ripple) is not what the row does "
-                    "on the data: fitted to the row's output, it explains less than the threshold"),
+                    "on the data: fitted to the row's output, it explains less than the threshold; "
+                    "or an acceleration term of a model whose rows hold no inertia together"),
     "joint": ("its velocity (or position-dependent) terms are named together with other rows' "
               "(their summed characteristic)"),
 }
@@ -301,7 +304,9 @@ def judge_rows(
         threshold, and unless the acceleration terms named row by row add up
         to it (within 25 %), it replaces them as one ``acceleration`` term on
         the row that holds most of it; the rows that hold a tenth of it or
-        more are flagged ``joint``.
+        more are flagged ``joint``. Below the threshold the model holds no
+        inertia, and the acceleration terms named row by row are left out
+        (``unsupported``).
 
     Returns
     -------
@@ -493,8 +498,10 @@ _INERTIA_HOLDS = 0.1
 def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelInertia | None,
                    ref: float, opts: SignificanceOptions) -> tuple[JudgedRow, ...]:
     """Name the inertia the rows hold together, where the row-by-row names miss it."""
-    if mi is None or not ref > 0 or mi.rms / ref < opts.threshold:
+    if mi is None or not ref > 0:
         return tuple(judged)
+    if mi.rms / ref < opts.threshold:
+        return _inertia_not_held(model, judged, mi, ref, opts)
     named = [(j, jt) for j, jr in enumerate(judged) for jt in jr.terms
              if jt.term.kind == "acceleration"]
     total = sum(float(jt.term.parameters["inertia"][0]) for _, jt in named)
@@ -526,6 +533,31 @@ def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelI
                f"this row holds {mi.rows[j]:.3g} {U.inertia} of it"
                + (" (named here)" if j == lead else f" (named in row {lead + 1})"))
         out[j] = replace(jr, terms=tuple(keep), flags=(*jr.flags, Flag("joint", msg)))
+    return tuple(out)
+
+
+def _inertia_not_held(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelInertia,
+                      ref: float, opts: SignificanceOptions) -> tuple[JudgedRow, ...]:
+    """Leave out the acceleration terms named row by row when the model holds no inertia.
+
+    With the observer's lag taken out, the rows together hold an inertia below the
+    threshold: what a row's filters make look like ``J a`` is the observer's lag,
+    or is undone by the other rows (a lead on the velocity, say), so no row of the
+    model is an acceleration term (``unsupported``).
+    """
+    U = axis_units(model.axis)
+    out = list(judged)
+    for j, jr in enumerate(judged):
+        gone = [jt for jt in jr.terms if jt.term.kind == "acceleration"]
+        if not gone:
+            continue
+        flags = tuple(Flag("unsupported", f"term {term_summary(jt.term)} is not the model's: "
+                           f"with the observer's lag taken out (y + y'/g at g = "
+                           f"{mi.bandwidth:.4g} rad/s), the rows hold {mi.inertia:.3g} "
+                           f"{U.inertia} together, {_pct(mi.rms / ref)} of the target's RMS "
+                           f"(threshold {_pct(opts.threshold)}): not listed") for jt in gone)
+        out[j] = replace(jr, terms=tuple(jt for jt in jr.terms if jt not in gone),
+                         flags=(*jr.flags, *flags))
     return tuple(out)
 
 
