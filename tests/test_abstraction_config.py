@@ -115,6 +115,7 @@ def _write(tmp_path: Path, text: str) -> Path:
     ("[ga]\nelites = 64", "cfg.toml: ga.elites", "fewer than population"),
     ("[ga]\nelements = ['sign', 'frobnicate']", "cfg.toml: ga.elements[1]", "element name"),
     ("[ga]\nelements = []", "cfg.toml: ga.elements", "non-empty"),
+    ("step = []", "cfg.toml: step", "at least one [[step]]"),
     ("[[step]]\nn_elements = 4", "cfg.toml: step[0].n_rows", "missing"),
     ("[[step]]\nn_rows = 0", "cfg.toml: step[0].n_rows", "integer >= 1"),
     ("[[step]]\nn_rows = 2\nrows = 3", "cfg.toml: step[0].rows", "unknown key"),

@@ -461,6 +461,10 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
     if not isinstance(raw_steps, list):
         raise ConfigError(f"{f}step", f"expected an array of tables [[step]], found "
                                       f"{_found(raw_steps)}")
+    if "step" in doc and not raw_steps:
+        # Not the default schedule in silence: the file asked for steps and gave none.
+        raise ConfigError(f"{f}step", "expected at least one [[step]] table (leave `step` out "
+                                      "for the default schedule), found an empty array")
     for k, s in enumerate(raw_steps):
         where = f"{f}step[{k}]"
         s = _table(where, s)
