@@ -103,6 +103,34 @@ def test_a_filtered_acceleration_is_named_by_its_gain_where_the_motion_is() -> N
     assert "filter_phase" not in t.parameters
 
 
+def test_a_saturated_filtered_acceleration_takes_its_slope_where_the_motion_is() -> None:
+    # c tanh(k H(s) a) with the EMPS row's filter: its slope for small accelerations is
+    # c k H at 4 pi rad/s (+0.747), not c k H(0) (-0.744); the level keeps its sign rule.
+    from edm_sym.engines.symbolic import classify_expression
+    from edm_sym.engines.symbolic.significance import _term_flags as term_flags
+
+    a, v = sp.Symbol("alpha"), sp.Symbol("omega")
+    G = (74.4 * s**2 + 1.086e4 * s - 1.399e4) / (s**2 + 1474.0 * s + 1881.0)  # noqa: N806
+    jw = 4j * math.pi
+    g = (74.4 * jw**2 + 1.086e4 * jw - 1.399e4) / (jw**2 + 1474.0 * jw + 1881.0)
+    t = one(classify_expression(2.0 * sp.tanh(0.05 * LTI(a, G)), a, "acceleration"),
+            "acceleration")
+    assert t.parameters["inertia"][0] == pytest.approx(2.0 * 0.05 * abs(g), rel=1e-6)
+    assert t.parameters["saturation_level"] == (pytest.approx(2.0), "N m")
+    assert t.parameters["filter_phase"][0] == pytest.approx(np.angle(g), rel=1e-6)
+    assert not any(f.code == "derivative_like" for f in term_flags(t))
+    # The velocity differentiated through a low pass below 4 pi: its gain there, derivative-like.
+    t = one(classify_expression(2.0 * sp.atan(0.05 * LTI(v, 5 * s / (s + 5))), v, "velocity"),
+            "acceleration")
+    assert t.parameters["inertia"][0] == pytest.approx(2.0 * 0.05 * 5 / abs(jw + 5), rel=1e-6)
+    assert any(f.code == "derivative_like" for f in term_flags(t))
+    # A low pass well above it: the DC gain, as before.
+    t = one(classify_expression(2.0 * sp.tanh(0.05 * LTI(a, 100 / (s + 100))), a,
+                                "acceleration"), "acceleration")
+    close(t, "inertia", 0.1, "kg m^2")
+    assert "filter_phase" not in t.parameters
+
+
 def test_acceleration_input() -> None:
     t = one(terms_of([("gain", enc("gain", -0.3))], inp="alpha"), "acceleration")
     close(t, "inertia", -0.3, "kg m^2")

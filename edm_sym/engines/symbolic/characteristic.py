@@ -585,6 +585,28 @@ def _slope(term: sp.Expr, u: sp.Symbol, index: int, w: float,
     return slope / scale, r2, float(np.max(np.abs(y))), form
 
 
+def acceleration_gain(leaf: sp.Expr, u: sp.Symbol, index: int,
+                      w: float) -> tuple[float, float] | None:
+    """A linear path from the input to acceleration, taken at ``w``: (gain, phase).
+
+    ``leaf`` is the input through filters and delays only (``c H(s) a``,
+    ``s H(s) v``). The gain is per unit acceleration, each filter counted as
+    in :func:`measure_acceleration` (its magnitude at ``w``, signed by whether
+    it keeps or inverts the signal relative to acceleration there); the phase
+    is the filters' shift against acceleration at ``w`` [rad]. None when the
+    path does not reach acceleration or is not linear.
+    """
+    form = static_form(leaf, u, index, _gain_at(w))
+    if form is None or form.index < 2:
+        return None
+    gain = sp.expand(form.expr).coeff(u)
+    if not gain.is_Number or sp.expand(form.expr - gain * u) != 0:
+        return None
+    phase = cmath.phase(complex(np.prod([f.relative(w) for f in form.filters]))) \
+        if form.filters else 0.0
+    return float(gain) / w ** (2 - index), phase
+
+
 def measure_acceleration(term: sp.Expr, u: sp.Symbol, index: int, w: float,
                          a_range: float) -> AccelerationFit | None:
     """The equivalent inertia of a term that depends on acceleration (or beyond).

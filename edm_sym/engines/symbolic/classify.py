@@ -60,6 +60,7 @@ import sympy as sp
 
 from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.characteristic import (
+    acceleration_gain,
     corners,
     describe_operators,
     measure_acceleration,
@@ -361,16 +362,25 @@ def _classify_term(term: sp.Expr, u: sp.Symbol, role: str | None,
                               "angle, velocity and acceleration")]
     w = sp.Dummy("w", real=True)
     f = core.xreplace({leaf_expr: w})
-    if f == w and leaf.role == "acceleration" and leaf.corners and _shifted(
+    extra, note = _extras(leaf)
+    if leaf.role == "acceleration" and leaf.corners and _shifted(
             leaf_expr, opts.acceleration_frequency):
         # A filtered acceleration (c H(s) a, c s H(s) v) whose filters shift it by more
         # than 45 deg at acceleration_frequency: there its DC gain says little (it can even
         # have the other sign), so its filters count with their gain there, as in a
-        # measured acceleration term.
-        found = _measured_acceleration(term, u, role, opts)
-        if found:
-            return found
-    extra, note = _extras(leaf)
+        # measured acceleration term; saturated (c tanh(k H(s) a)), so does its slope.
+        if f == w:
+            found = _measured_acceleration(term, u, role, opts)
+            if found:
+                return found
+        elif _saturation(f, w) is not None:
+            wa = opts.acceleration_frequency
+            at = acceleration_gain(leaf_expr, u, _INDEX[role], wa)
+            if at is not None:
+                extra = {**extra, "frequency": (wa, "rad/s"), "filter_phase": (at[1], "rad")}
+                note += (f"; the filters taken with their gain at {wa:.4g} rad/s, where they "
+                         f"shift it by {math.degrees(at[1]):.3g} deg")
+                leaf = replace(leaf, gain=at[0])
     return _match(term, c, f, w, leaf, extra, note, opts)
 
 
