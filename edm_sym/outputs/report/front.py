@@ -24,6 +24,12 @@ def _quantity(p: EdmLatexPrinter, q: Any) -> str:
     return p.math(p.number(float(q[0]))) + "~" + p.text(str(q[1])).replace(" ", r"\,")
 
 
+#: What samples held out of the abstraction log itself cannot show (said in the report).
+SAME_LOG = ("motion this log does not hold: the held-out samples come from the same log, so "
+            "a row fitted to what repeats in its motion passes them too; a second log "
+            "(edm abstract --validate FILE) tests that")
+
+
 def _held_out(p: EdmLatexPrinter, held: Mapping[str, Any]) -> str:
     if held["kind"] == "segment":
         a, b = held["rows"]
@@ -69,6 +75,8 @@ def front_context(p: EdmLatexPrinter, result: Any, figures: Mapping[str, str]) -
             facts.append({"label": p.text(f"{part.capitalize()}: eq. 8 / RMSE"),
                           "value": f"{_quantity(p, s['fitness'])} / {_quantity(p, s['rmse'])}"
                                    + p.text(f" ({s['samples']} samples)")})
+        if val["held_out"]["kind"] in ("blocks", "segment"):
+            facts.append({"label": p.text("Not tested"), "value": p.text(SAME_LOG)})
     front = []
     if par:
         members = [{
