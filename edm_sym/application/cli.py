@@ -547,6 +547,19 @@ def _files_named(argv: Sequence[str] | None) -> str:
     return ", ".join(files) or "input"
 
 
+def _from_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` wraps a Ctrl-C or SIGTERM: Python 3.11 turns a KeyboardInterrupt
+    raised while a class is built (``__set_name__`` of a dataclass field, during a lazy
+    import) into a RuntimeError whose cause it is."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     try:
         args = parser.parse_args(argv)
@@ -579,6 +592,9 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         print(f"{parser.prog}: {where}: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:  # the work itself failed: one line, exit 1
+        if _from_interrupt(exc):
+            print(f"{parser.prog}: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
         print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
