@@ -116,6 +116,7 @@ def _write(tmp_path: Path, text: str) -> Path:
     ("[ga]\nelements = ['sign', 'frobnicate']", "cfg.toml: ga.elements[1]", "element name"),
     ("[ga]\nelements = []", "cfg.toml: ga.elements", "non-empty"),
     ("step = []", "cfg.toml: step", "at least one [[step]]"),
+    ("axis = []", "cfg.toml: axis", "expected rotary or linear, found array"),
     ("[[step]]\nn_elements = 4", "cfg.toml: step[0].n_rows", "missing"),
     ("[[step]]\nn_rows = 0", "cfg.toml: step[0].n_rows", "integer >= 1"),
     ("[[step]]\nn_rows = 2\nrows = 3", "cfg.toml: step[0].rows", "unknown key"),

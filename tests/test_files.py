@@ -143,6 +143,9 @@ def test_corrupted_result_is_refused(desc, mutate, where, result_doc, data_csv, 
     ("{not json", "expected JSON"),
     ("", "expected JSON"),
     ('{"format": "edm-result", "version": 1, "sample_time": NaN}', "expected JSON"),
+    # An integer too large for a double was read, then crashed every loader (exit 1).
+    ('{"format": "edm-result", "version": 1, "fitness": 1' + "0" * 400 + "}",
+     r"the integer 100000000000\.\.\.000000 \(401 digits\) overflows a double"),
 ])
 def test_unparsable_result_is_refused(text, where, tmp_path) -> None:
     p = tmp_path / "r.json"

@@ -134,6 +134,12 @@ def test_settings_are_checked() -> None:
     with pytest.raises(ConfigError, match="c.toml: parsimony.level: unknown key"):
         parse_parsimony("c.toml: parsimony", {"level": 1})
     assert ParsimonySettings(tolerance=0.05).selection == "simplest-within=5"
+    # Every tolerance the check accepts gives a rule select() takes: 1e-320 (printed with
+    # an exponent) and -0.0 were accepted, then refused as a rule after the whole search.
+    front = [Member(None, 1, 1.0, ""), Member(None, 2, 0.5, "")]
+    for t, rule in ((1e-320, "simplest-within=9.99989e-319"), (-0.0, "simplest-within=0")):
+        settings = parse_parsimony("c.toml: parsimony", {"tolerance": t})
+        assert settings.selection == rule and select(front, settings.selection) == 1
 
 
 # -- through abstract() and the command line -------------------------------------------

@@ -157,6 +157,16 @@ def _finite_only(token: str) -> float:
     raise ValueError(f"{token} is not allowed (numbers must be finite)")
 
 
+def _int_of_a_double(token: str) -> int:
+    value = int(token)
+    try:
+        float(value)
+    except OverflowError:
+        shown = token if len(token) <= 24 else f"{token[:12]}...{token[-6:]} ({len(token)} digits)"
+        raise ValueError(f"the integer {shown} overflows a double (numbers must be finite)") from None
+    return value
+
+
 def json_kind(value: Any) -> str:
     """The JSON name of a parsed value's type (for messages: ``null``, not ``NoneType``)."""
     if value is None:
@@ -205,7 +215,8 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
     except UnicodeDecodeError as exc:
         raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     try:
-        doc = json.loads(text, parse_constant=_finite_only, object_pairs_hook=_no_duplicates)
+        doc = json.loads(text, parse_constant=_finite_only, parse_int=_int_of_a_double,
+                         object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as exc:
         raise error(f"{name}: line {exc.lineno} column {exc.colno}",
                     f"expected JSON, found invalid JSON ({exc.msg})") from None

@@ -256,7 +256,7 @@ class AbstractionConfig:
     axis: str | None = None
 
     def __post_init__(self) -> None:
-        if self.axis is not None and self.axis not in AXES:
+        if self.axis is not None and (not isinstance(self.axis, str) or self.axis not in AXES):
             raise ConfigError(f"{self.source}: axis",
                               f"expected {' or '.join(AXES)}, found {_found(self.axis)}")
         steps = tuple(self.steps) or default_steps()

@@ -35,7 +35,7 @@ CRITERIA = ("rmse", "fitness")
 #: Which model the pruning starts from: the step best with the lowest plain RMSE over the
 #: whole abstraction log, or the last step's best.
 STARTS = ("best-step", "last-step")
-_SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+))$")
+_SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?)$")
 
 
 class _Member(Protocol):
@@ -85,7 +85,7 @@ class ParsimonySettings:
         if isinstance(t, bool) or not isinstance(t, int | float) or not (
                 math.isfinite(t) and 0 <= t <= 1):
             raise ConfigError("parsimony.tolerance", f"expected a number in [0, 1], found {t!r}")
-        object.__setattr__(self, "tolerance", float(t))
+        object.__setattr__(self, "tolerance", float(t) + 0.0)  # -0.0 is 0
         if self.select is not None:
             check_select(self.select, "parsimony.select")
         if self.criterion not in CRITERIA:
