@@ -229,6 +229,14 @@ def test_degenerate_stribeck_function_stays_finite():
         assert np.all(np.isfinite(tau))
     tau = simulate_lugre(no_coulomb, v, TS)
     assert tau[4] == pytest.approx(no_coulomb.sigma2 * 1e3)
+    # Between the two, g(v) subnormal: |v| / g overflows (a fuzzed LUGRE.json with
+    # tau_c = 0 simulated NaN, exit 0). The bristles relax at once there too.
+    sweep = no_coulomb.v_s * np.linspace(20.0, 40.0, 4001)
+    g = no_coulomb.g(sweep)
+    with np.errstate(over="ignore", divide="ignore"):
+        assert np.any((g > 0) & ~np.isfinite(sweep / g))
+    tau = simulate_lugre(no_coulomb, sweep, TS)
+    np.testing.assert_allclose(tau, no_coulomb.sigma2 * sweep, rtol=1e-9)
 
 
 def test_simulate_rejects_bad_input():

@@ -224,13 +224,15 @@ def bristle_coefficients(
     """
     absv = np.abs(velocity)
     moving = absv > 0.0
-    finite_rate = g > 0.0
     rate = np.zeros_like(absv)
-    np.divide(absv, g, out=rate, where=finite_rate)
-    decay = np.exp(-rate * ts)
-    # g == 0 with v != 0: instantaneous relaxation to z_ss = 0; its dz/dt -> 0.
-    decay[~finite_rate & moving] = 0.0
+    with np.errstate(over="ignore"):
+        np.divide(absv, g, out=rate, where=g > 0.0)
+    # g == 0 (or so small that |v| / g overflows: tau_c = 0 at speed) with v != 0:
+    # instantaneous relaxation to z_ss = g sgn(v) ~ 0; its dz/dt -> 0.
+    finite_rate = (g > 0.0) & np.isfinite(rate)
     rate[~finite_rate] = 0.0
+    decay = np.exp(-rate * ts)
+    decay[~finite_rate & moving] = 0.0
     z_ss = g * np.sign(velocity)
     return z_ss, decay, rate
 
