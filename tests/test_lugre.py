@@ -373,12 +373,29 @@ def test_methods_are_dispatched_through_the_registry():
         ({"seed": 1.5}, "seed"),
         ({"time_limit": -1.0}, "time_limit"),
         ({"time_limit": "soon"}, "time_limit"),
+        # A finite speed whose square overflows (eq. 12) crashed the fit (IndexError, exit 1).
+        ({"velocity": np.r_[np.linspace(-1, 1, 9), 1e308]}, "square is a finite number"),
     ],
 )
 def test_identify_rejects_bad_input(kwargs, match):
     args = {"target": np.ones(10), "velocity": np.linspace(-1, 1, 10), "ts": TS} | kwargs
     with pytest.raises(ValueError, match=match):
         identify_lugre(**args)
+
+
+def test_edm_lugre_names_the_file_and_column_of_a_refused_velocity(tmp_path, capsys):
+    from edm_sym.application.cli import main
+    from edm_sym.core.data import write_csv
+
+    v = np.r_[np.linspace(-1, 1, 19), 1e308]
+    write_csv(tmp_path / "log.csv", {"t": np.arange(20) * TS, "w": v, "tau": np.ones(20)})
+    out = tmp_path / "l.json"
+    assert main(["lugre", str(tmp_path / "log.csv"), "--target", "tau", "--velocity", "w",
+                 "-o", str(out), "--quiet"]) == 2
+    assert capsys.readouterr().err == ("edm: log.csv: column 'w': expected speeds "
+                                       "whose square is a finite number (below 1e154), found "
+                                       "1e+308\n")
+    assert not out.exists()
 
 
 # ----------------------------------------------------------------- LUGRE.json

@@ -487,7 +487,8 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
     data.require_varying([velocity])  # named by file and column, before the fit
-    with ProgressReporter("edm lugre", quiet=args.quiet) as reporter:
+    with ProgressReporter("edm lugre", quiet=args.quiet) as reporter, \
+            data.naming(target=target, velocity=velocity):
         res = identify_lugre(data.columns[target], data.columns[velocity], data.ts,
                              method=args.method, seed=args.seed, time_limit=args.time_limit,
                              progress=reporter.lugre)

@@ -321,7 +321,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
         if not (reuse and lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
-            with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
+            with ProgressReporter("edm pipeline", quiet=not progress) as reporter, \
+                    abst.naming(target=pipe.target, velocity=velocity):
                 res = identify_lugre(
                     abst.columns[pipe.target], abst.column(velocity, role="velocity column"),
                     abst.ts, method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"),

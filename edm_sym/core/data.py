@@ -8,11 +8,12 @@ that names the file and the row or column.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import io
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -277,6 +278,22 @@ class DataLog:
                 raise DataFormatError(f"{self.source}: column {name!r}",
                                       f"expected a varying signal for an input, found "
                                       f"{col[0]:g} on all {len(col)} rows")
+
+    @contextlib.contextmanager
+    def naming(self, **arguments: str) -> Iterator[None]:
+        """A ``DataFormatError`` about an argument taken from this log names its file and column.
+
+        ``with log.naming(velocity="omega"): identify_lugre(...)``: the function
+        refuses its ``velocity`` argument; the message then says
+        ``log.csv: column 'omega'``.
+        """
+        try:
+            yield
+        except DataFormatError as exc:
+            if exc.where not in arguments:
+                raise
+            raise DataFormatError(f"{self.source}: column {arguments[exc.where]!r}",
+                                  exc.problem) from None
 
     def require_finite(self, names: Iterable[str]) -> None:
         """Refuse NaN or an infinity in the columns ``names`` (naming the first, by row).

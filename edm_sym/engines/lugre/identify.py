@@ -543,6 +543,11 @@ def identify_lugre(
                               f"{len(LuGreParams.__dataclass_fields__)} parameters, found {len(v)}")
     if not np.any(v != 0.0):
         raise DataFormatError("velocity", "all samples are zero; the friction model cannot be identified")
+    v_max = float(np.max(np.abs(v)))
+    if not math.isfinite(v_max * v_max):
+        # eq. 12 squares the velocity: no shape can be evaluated on such a log.
+        raise DataFormatError("velocity", f"expected speeds whose square is a finite number "
+                              f"(below 1e154), found {v_max:g}")
     if np.all(v == v[0]):
         raise DataFormatError("velocity", f"expected a varying velocity (the friction curve needs "
                               f"several speeds), found {v[0]:g} on all {len(v)} samples")
