@@ -249,6 +249,35 @@ def test_a_checkpoint_of_another_run_is_refused(log: DataLog, tmp_path: Path) ->
         run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
 
 
+@pytest.mark.parametrize("damage", ["rng_state", "codes", "fitness", "step", "ps"])
+def test_a_damaged_checkpoint_is_refused_before_the_run(log: DataLog, tmp_path: Path,
+                                                        damage: str) -> None:
+    # Each edit keeps valid JSON; resumed, they crashed the run (KeyError, IndexError,
+    # "Initial guess is outside of provided bounds", exit 1 or a library message).
+    from edm_sym.core.errors import ConfigError
+
+    ckpt = tmp_path / "c"
+    seen: list[GenerationInfo] = []
+    run(log, SMALL, seed=1, workers=1, checkpoint=ckpt,
+        callback=lambda info: seen.append(info) or len(seen) >= 3)
+    doc = json.loads(ckpt.read_text())
+    cur = doc["current"]
+    if damage == "rng_state":
+        del doc["rng_state"]["state"]
+    elif damage == "codes":
+        cur["population"]["codes"][0][0][0] = -1
+    elif damage == "fitness":
+        cur["fitness"] = None
+    elif damage == "step":
+        cur["step"] = 1e308
+    else:
+        cur["population"]["ps"][0][0][0] = -1.0
+    ckpt.write_text(json.dumps(doc, sort_keys=True))
+    with pytest.raises(ConfigError, match="damaged or edited") as err:
+        run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, resume=True)
+    assert err.value.where == f"{ckpt}: sha256"
+
+
 def test_time_limit_ends_at_a_generation_boundary_with_a_valid_result(
     log: DataLog, tmp_path: Path
 ) -> None:

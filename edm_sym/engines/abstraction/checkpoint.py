@@ -5,11 +5,14 @@ fitness values and counters, and the random generator's state, so a resumed
 run draws exactly the numbers the uninterrupted run would have drawn. It is
 written atomically at a generation boundary (every few seconds, at each step's
 end and when the run stops; never half-written) and holds data only: loading
-it evaluates nothing.
+it evaluates nothing. It carries the sha256 of its own content, so a file
+damaged or edited after it was written is refused as a whole when it is
+loaded, not met later as a crash in the middle of the resumed run.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,7 +25,8 @@ from edm_sym.core.fileio import write_atomic
 from edm_sym.engines.abstraction.ga import Population
 
 FORMAT = "edm-abstraction-checkpoint"
-VERSION = 1
+#: 2: with ``sha256``, the digest of the rest of the document.
+VERSION = 2
 
 
 @dataclass
@@ -99,7 +103,14 @@ def dumps(state: RunState) -> str:
             "restarts": cur.restarts,
         },
     }
+    doc["sha256"] = _digest(doc)
     return json.dumps(doc, sort_keys=True) + "\n"
+
+
+def _digest(doc: dict[str, Any]) -> str:
+    """sha256 of the document without its ``sha256`` (JSON, keys sorted: floats round-trip)."""
+    body = {k: v for k, v in doc.items() if k != "sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
 
 
 def save_checkpoint(path: str | Path, state: RunState) -> Path:
@@ -133,9 +144,17 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
                           ) from None
     except RecursionError:
         raise ConfigError(str(path), TOO_DEEP) from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT or doc.get("version") != VERSION:
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ConfigError(f"{path}: format", f"expected {FORMAT!r} version {VERSION}, found "
                                              "something else")
+    if doc.get("version") != VERSION:
+        raise ConfigError(f"{path}: version",
+                          f"expected {VERSION}, found {doc.get('version')!r} (a checkpoint of "
+                          "another edm_sym release: delete it or drop --resume)")
+    if doc.get("sha256") != _digest(doc):
+        raise ConfigError(f"{path}: sha256", "expected the digest of the checkpoint's content, "
+                                             "found another (the file was damaged or edited "
+                                             "after it was written; delete it or drop --resume)")
     if doc.get("fingerprint") != fingerprint:
         raise ConfigError(f"{path}: fingerprint",
                           "expected a checkpoint of this run (same data, target, inputs, config "
