@@ -132,6 +132,11 @@ def _write(tmp_path: Path, text: str) -> Path:
      "expected a threshold"),
     ("[[step]]\nn_rows = 2\nweighting = {constant = -1}", "cfg.toml: step[0].weighting.constant",
      ">= 0"),
+    # 1e308 overflowed eq. 8: refused only at the end, by the JSON writer (inf).
+    ("[[step]]\nn_rows = 2\nweighting = 1e308", "cfg.toml: step[0].weighting.constant",
+     "expected a weight <= 1e12"),
+    ("[[step]]\nn_rows = 2\nweighting = {windows = [[0, 1, 1e13]], otherwise = 0}",
+     "cfg.toml: step[0].weighting.windows[0]", "found 1e+13"),
     ("[ranges.gain]\nlow = 2\nhigh = 1", "cfg.toml: ranges.gain", "low < high"),
     ("[ranges.gain]\nscaling = 'cubic'", "cfg.toml: ranges.gain.scaling", "'linear' or 'log'"),
     ("[ranges.sign]\nlow = 0", "cfg.toml: ranges.sign", "no parameter"),

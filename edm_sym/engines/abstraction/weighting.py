@@ -123,6 +123,13 @@ def _show(value: Any) -> str:
     return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
 
 
+#: The largest weight factor: eq. 8 squares the error times the product of the factors,
+#: which must stay a finite number (the paper's largest is 20000).
+MAX_WEIGHT = 1e12
+_TOO_HEAVY = ("expected a weight <= 1e12 (eq. 8 multiplies the squared error by it, and the "
+              "product of the factors must stay finite), found {:g}")
+
+
 def parse_weighting(where: str, doc: Any) -> Weighting:
     """Build a :class:`Weighting` from its config form, refusing anything unknown.
 
@@ -158,6 +165,8 @@ def parse_weighting(where: str, doc: Any) -> Weighting:
             kw[key] = _number(f"{where}.{key}", doc[key])
             if kw[key] < 0:
                 raise ConfigError(f"{where}.{key}", f"expected a number >= 0, found {kw[key]}")
+            if key != "threshold" and kw[key] > MAX_WEIGHT:
+                raise ConfigError(f"{where}.{key}", _TOO_HEAVY.format(kw[key]))
     if ("above" in doc or "below" in doc) and "threshold" not in doc:
         raise ConfigError(f"{where}.threshold", "expected a threshold with above/below, found none")
     if "windows" in doc:
@@ -175,6 +184,8 @@ def parse_weighting(where: str, doc: Any) -> Weighting:
                 raise ConfigError(ww, f"expected t_start < t_end, found [{t0}, {t1}]")
             if lam < 0:
                 raise ConfigError(ww, f"expected a weight >= 0, found {lam}")
+            if lam > MAX_WEIGHT:
+                raise ConfigError(ww, _TOO_HEAVY.format(lam))
             out.append((t0, t1, lam))
         kw["windows"] = tuple(out)
     elif "otherwise" in doc:
