@@ -203,6 +203,24 @@ def test_npz_and_mat_are_read(tmp_path: Path) -> None:
         load_data(tmp_path / "junk.mat")
 
 
+@pytest.mark.parametrize("scale, ts, where", [
+    (1e-310, None, "column 't'"), (1e306, None, "column 't'"),
+    (None, 1e-320, "--ts"), (None, 1e308, "--ts"),
+])
+def test_a_sample_time_beyond_what_the_models_hold_is_refused(tmp_path: Path, scale, ts,
+                                                               where) -> None:
+    # Found by a fuzz pass: such logs crashed `edm simulate --resample` (ZeroDivisionError,
+    # exit 1) or gave library messages ("math domain error", "Maximum allowed size exceeded").
+    t = np.arange(20) * 1e-3 * (scale or 1.0)
+    cols = {"omega": np.linspace(-1, 1, 20)} | ({"t": t} if scale else {})
+    write_csv(tmp_path / "log.csv", cols)
+    with pytest.raises(DataFormatError, match="from 1e-09 s to 1000 s") as err:
+        load_data(tmp_path / "log.csv", ts=ts)
+    assert err.value.where == f"log.csv: {where}"
+    if ts is not None:  # the range's ends are sample times
+        assert [load_data(tmp_path / "log.csv", ts=ok).ts for ok in (1e-9, 1e3)] == [1e-9, 1e3]
+
+
 def test_ts_option_for_logs_without_time(tmp_path: Path) -> None:
     p = tmp_path / "x.csv"
     p.write_text("omega\n1\n2\n3\n")

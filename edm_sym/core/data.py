@@ -29,6 +29,10 @@ TIME_RTOL = 1e-3
 #: Jitter accepted on single time stamps: every step within this share of the
 #: median step. A longer step is a gap (missing samples), a shorter one a burst.
 JITTER_RTOL = 0.25
+#: The sample times a log may have [s]: from a 1 GHz clock to a sample every
+#: quarter of an hour. Beyond them the element ranges of eqs. 6-7 and the
+#: LuGre model's scales leave what a double holds (docs/data.md, "Sample time").
+TS_RANGE = (1e-9, 1e3)
 #: A data spec ``plant:PRESET/EXCITATION[@SEED]`` names a simulated plant log.
 PLANT_SCHEME = "plant:"
 
@@ -572,12 +576,29 @@ def _read_arrays(
     return columns, scalars, skipped
 
 
+def check_sample_time(where: str, ts: float, what: str = "a sample time") -> float:
+    """Refuse a sample time outside :data:`TS_RANGE` (a positive finite number assumed).
+
+    Raises
+    ------
+    DataFormatError
+        Naming ``where``, the range and the value.
+    """
+    low, high = TS_RANGE
+    if not low <= ts <= high:
+        raise DataFormatError(where, f"expected {what} from {low:g} s to {high:g} s, "
+                                     f"found {ts:g} s")
+    return ts
+
+
 def _sample_time(
     name: str, columns: Mapping[str, np.ndarray], time: str | None, ts: float | None, *,
     row_offset: int,
 ) -> float:
     if ts is not None and not (math.isfinite(ts) and ts > 0):
         raise DataFormatError(f"{name}: --ts", f"expected a positive sample time, found {ts}")
+    if ts is not None:
+        check_sample_time(f"{name}: --ts", ts)
     if time is None:
         if ts is None:
             raise DataFormatError(f"{name}: column {DEFAULT_TIME!r}",
@@ -608,6 +629,7 @@ def _sample_time(
     # The sample time is the mean step: exact on a uniform grid and, unlike the
     # median, unbiased by per-stamp jitter (its error shrinks as 1/N).
     step = float(t[-1] - t[0]) / (len(t) - 1)
+    check_sample_time(f"{name}: column {time!r}", step, "the step of the time stamps")
     if ts is not None and abs(ts - step) > TIME_RTOL * step:
         raise DataFormatError(f"{name}: --ts",
                               f"expected the step of column {time!r} ({step:g} s), found {ts:g}")

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from edm_sym.core.data import check_sample_time
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.fitness import fitness
 
@@ -190,7 +191,7 @@ def _check_ts(ts: float) -> float:
     ts_f = float(ts)
     if not (math.isfinite(ts_f) and ts_f > 0.0):
         raise DataFormatError("ts", f"expected a positive finite sample time, found {ts!r}")
-    return ts_f
+    return check_sample_time("ts", ts_f)
 
 
 def bristle_coefficients(
