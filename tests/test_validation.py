@@ -214,9 +214,17 @@ def test_settings_are_checked() -> None:
         parse_validation("c.toml: validation", {"layout": "middle"})
     with pytest.raises(ConfigError, match="validation.blocks: expected an integer >= 1, found 0"):
         parse_validation("c.toml: validation", {"blocks": 0})
-    with pytest.raises(ConfigError, match="validation.share: expected a share that leaves"):
-        run(DataLog({"omega": np.ones(3), "alpha": np.zeros(3), "tau_ext": np.ones(3)}, TS),
-            validation_share=0.1)
+    three = DataLog({"omega": np.ones(3), "alpha": np.zeros(3), "tau_ext": np.ones(3)}, TS,
+                    "three.csv")
+    # Named by where the share came from (the argument, else the config file's key), and
+    # the log it does not fit (found by a fuzz pass: neither was named).
+    with pytest.raises(ConfigError, match="expected a share that leaves samples on both sides "
+                                          "of the 3 samples of three.csv") as err:
+        run(three, validation_share=0.1)
+    assert err.value.where == "validation_share"
+    with pytest.raises(ConfigError, match="of the 3 samples of three.csv") as err:
+        run(three, {**TINY, "validation": {"share": 1e-320}})
+    assert err.value.where == "test.toml: validation.share"
 
 
 # -- the command line ----------------------------------------------------------------

@@ -102,10 +102,12 @@ def run_cli(args: argparse.Namespace) -> int:
                               callback=reporter.abstraction,
                               checkpoint=ckpt, resume=args.resume, workers=args.workers,
                               validate=validate, select=getattr(args, "select", None), axis=axis,
-                              scheduler=getattr(args, "scheduler", None))
+                              scheduler=getattr(args, "scheduler", None),
+                              validation_share=share)
     except ConfigError as exc:
-        if exc.where == "scheduler":
-            raise ConfigError("--scheduler", exc.problem) from None
+        option = {"scheduler": "--scheduler", "validation_share": "--validation-share"}
+        if exc.where in option:
+            raise ConfigError(option[exc.where], exc.problem) from None
         raise
     finally:
         signal.signal(signal.SIGTERM, old)

@@ -540,8 +540,16 @@ def abstract(
         cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
     if cfg.validation.unit is None:
         cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
-    hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
-                        validate=validate)
+    try:
+        hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
+                            validate=validate)
+    except ConfigError as exc:
+        # Named where the share came from: the argument, else the config file's key.
+        if not exc.where.startswith("validation."):
+            raise
+        if validation_share is not None:
+            raise ConfigError("validation_share", exc.problem) from None
+        raise ConfigError(f"{cfg.source}: {exc.where}", exc.problem) from None
     # The sizes first (config alone), then whether the log can support them.
     check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
     _require_samples(data, hold.n_train if hold.mask is None

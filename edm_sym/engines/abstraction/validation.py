@@ -240,12 +240,12 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
     if settings.share == 0.0:
         return Holdout(n, None, Part(x, y, t, slice(0, n)), None, {"kind": "none"}, unit)
     if settings.layout == "blocks":
-        return _blocks(x, y, t, settings, unit)
+        return _blocks(x, y, t, settings, unit, data.source)
     n_train = int(round(n * (1.0 - settings.share)))
     if not 1 <= n_train < n:
         raise ConfigError("validation.share",
-                          f"expected a share that leaves samples on both sides of a log of "
-                          f"{n} samples, found {settings.share:g}")
+                          f"expected a share that leaves samples on both sides of the "
+                          f"{n} samples of {data.source}, found {settings.share:g}")
     record = {"kind": "segment", "end": "last", "share": settings.share,
               "rows": [n_train, n], "t": [float(t[n_train]), float(t[-1])]}
     return Holdout(n_train, None, Part(x, y, t, slice(0, n_train)),
@@ -253,7 +253,7 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
 
 
 def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSettings,
-            unit: str | None) -> Holdout:
+            unit: str | None, source: str = "the log") -> Holdout:
     """The ``blocks`` layout: one held-out block in the middle of each of k equal sections."""
     n = len(y)
     # A short log gets fewer blocks, each of at least one sample (the count is recorded).
@@ -261,9 +261,9 @@ def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSet
     length = int(round(n * settings.share / k))
     if not (1 <= length and k * length < n and n // k >= length):
         raise ConfigError("validation.share",
-                          f"expected a share that leaves samples on both sides of a log of {n} "
-                          f"samples (blocks of at least one sample), found {settings.share:g} "
-                          f"in {k} blocks")
+                          f"expected a share that leaves samples on both sides of the {n} "
+                          f"samples of {source} (blocks of at least one sample), found "
+                          f"{settings.share:g} in {k} block{'s' if k > 1 else ''}")
     held = np.zeros(n, dtype=bool)
     spans = []
     for j in range(k):
