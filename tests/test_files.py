@@ -243,6 +243,24 @@ def test_usage_error_is_one_line_exit_2(capsys) -> None:
     assert len(err.splitlines()) == 1 and "--preset" in err
 
 
+@pytest.mark.parametrize("args", [
+    ["simulate", "tests/data/handwritten_result.json", "plant:auger/evaluation"],
+    ["plant", "--preset", "auger", "--excitation", "abstraction"],
+    ["export", "tests/data/handwritten_result.json", "--target", "c"],
+], ids=["simulate", "plant", "export"])
+def test_an_empty_output_name_is_refused_not_taken_for_the_default(
+        args: list[str], tmp_path: Path, monkeypatch, capsys) -> None:  # noqa: ANN001
+    # `-o ''` wrote the command's default file (<data>_sim.csv, auger_abstraction.csv,
+    # generated/<name>/) in the current folder, replacing one of the user's there.
+    repo = Path(__file__).resolve().parents[1]
+    args = [str(repo / a) if a.startswith("tests/") else a for a in args]
+    monkeypatch.chdir(tmp_path)
+    assert main([*args, "-o", ""]) == 2
+    assert capsys.readouterr().err.endswith(
+        "-o: expected a file or folder name, found an empty one\n")
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("seed,problem", [("-1", "expected an integer >= 0, found -1"),
                                           ("1_0", "expected an integer, found '1_0'"),
                                           ("x", "expected an integer, found 'x'")])

@@ -363,7 +363,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.engines.sources import load_data
 
     model_path = Path(args.model)
-    out = Path(args.output) if args.output else Path(f"{Path(args.data).stem}_sim.csv")
+    out = Path(args.output) if args.output is not None else Path(f"{Path(args.data).stem}_sim.csv")
     check_outputs([out], [args.model, args.data])
     given = _columns(args)
     # The model is validated completely before the data is read.
@@ -564,6 +564,10 @@ def _from_interrupt(exc: BaseException) -> bool:
 def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     try:
         args = parser.parse_args(argv)
+        if "" in (getattr(args, "output", None), getattr(args, "out_dir", None)):
+            # Not "no -o": a command's default name could then replace a file of the user's.
+            raise UsageError(f"{parser.prog}: -o: expected a file or folder name, found an "
+                             "empty one")
         return int(args.func(args) or 0)
     except (EdmError, ValueError) as exc:
         if isinstance(exc, ToolMissingError):
