@@ -143,6 +143,8 @@ def _write(tmp_path: Path, text: str) -> Path:
     ("[ranges.gian]\nlow = 0", "cfg.toml: ranges.gian", "element name"),
     ("[initial]\nrows = [{input = 'omega', elements = [['gain']]}]",
      "cfg.toml: initial.rows[0].elements[0]", "found no value"),
+    ("[initial]\nrows = [{input = 'omega', elements = [['sign', 3.0]]}]",
+     "cfg.toml: initial.rows[0].elements[0]", "has no parameter), found the value float 3.0"),
     ("[initial]\nrows = [{input = 'omega', elements = [['sgn']]}]",
      "cfg.toml: initial.rows[0].elements[0]", "element name"),
     ("[initial]\nrows = [{elements = [['sign']]}]", "cfg.toml: initial.rows[0].input",

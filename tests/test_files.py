@@ -261,6 +261,27 @@ def test_an_empty_output_name_is_refused_not_taken_for_the_default(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("args, message", [
+    (["abstract", "{log}", "--target", "tau_ext", "--inputs", "t,omega", "-o", "r.json"],
+     "log.csv: column 't': expected a signal of the axis for an input, found the log's time "
+     "column"),
+    (["lugre", "{log}", "--target", "tau_ext", "--velocity", "t", "-o", "l.json"],
+     "log.csv: column 't': expected a signal of the axis"),
+    (["lugre", "{log}", "--target", "tau_ext", "--velocity", "tau_ext", "-o", "l.json"],
+     "--velocity: expected a column other than the target 'tau_ext', found it"),
+], ids=["abstract-time", "lugre-time", "lugre-target"])
+def test_the_clock_or_the_target_is_no_input(args: list[str], message: str, tmp_path: Path,
+                                              monkeypatch, capsys) -> None:  # noqa: ANN001
+    # Accepted before (a fuzz pass): a model of the clock, or of the target itself.
+    n = 200
+    write_csv(tmp_path / "log.csv", {"t": np.arange(n) * TS, "omega": np.sin(np.arange(n) / 9),
+                                     "tau_ext": np.cos(np.arange(n) / 7)})
+    monkeypatch.chdir(tmp_path)
+    assert main([a.format(log="log.csv") for a in args]) == 2
+    assert message in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]
+
+
 @pytest.mark.parametrize("seed,problem", [("-1", "expected an integer >= 0, found -1"),
                                           ("1_0", "expected an integer, found '1_0'"),
                                           ("x", "expected an integer, found 'x'")])

@@ -484,6 +484,9 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     given = _columns(args)
     target = _option_or_role(args.target, given, "target", "--target", "edm lugre")
     velocity = _option_or_role(args.velocity, given, "velocity", "--velocity", "edm lugre")
+    if velocity == target:
+        raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
+                         f"{target!r}, found it")
     check_outputs([args.output], [args.data])
     data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
     data.require_varying([velocity])  # named by file and column, before the fit

@@ -269,7 +269,10 @@ class DataLog:
                              "max": float(np.max(v))} for c, v in self.columns.items()]}
 
     def require_varying(self, names: Iterable[str]) -> None:
-        """Refuse a constant column among ``names`` (an input that carries no information).
+        """Refuse an input among ``names`` that says nothing about the axis.
+
+        A constant column carries no information; the log's time column is the
+        clock, not the axis (a compensator of it does not carry to another run).
 
         Raises
         ------
@@ -277,6 +280,11 @@ class DataLog:
             Naming the file, the column and its rows.
         """
         for name in names:
+            if name == self.time_column:
+                raise DataFormatError(f"{self.source}: column {name!r}",
+                                      "expected a signal of the axis for an input, found the "
+                                      "log's time column (a model of the clock does not carry "
+                                      "to another run)")
             col = self.column(name, role="input column")
             if len(col) and np.all(col == col[0]):
                 raise DataFormatError(f"{self.source}: column {name!r}",

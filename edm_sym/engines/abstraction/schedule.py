@@ -562,6 +562,9 @@ def _parse_initial(f: str, doc: Any) -> tuple[InitialRow, ...]:
                 raise ConfigError(ew, f"expected an element name (known: {', '.join(BY_NAME)}), "
                                       f"found {name!r}")
             if el.param is None:
+                if len(pair) == 2:  # a value it would silently drop
+                    raise ConfigError(ew, f"expected [{name!r}] (element {name!r} has no "
+                                          f"parameter), found the value {_found(pair[1])}")
                 genes.append((name, None))
                 continue
             if len(pair) != 2:
