@@ -139,6 +139,13 @@ def test_corrupted_result_is_refused(desc, mutate, where, result_doc, data_csv, 
     assert set(tmp_path.iterdir()) == {bad, data_csv}  # no temporary file left either
 
 
+def test_a_result_with_a_byte_order_mark_is_read(tmp_path: Path, result_doc: dict) -> None:
+    # As a CSV log with one is: Windows editors write it (it was refused as invalid JSON).
+    p = tmp_path / "r.json"
+    p.write_bytes(b"\xef\xbb\xbf" + json.dumps(result_doc).encode())
+    assert load_result(p).fitness == result_doc["fitness"]
+
+
 @pytest.mark.parametrize("text,where", [
     ("{not json", "expected JSON"),
     ("", "expected JSON"),

@@ -211,7 +211,7 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
     except OSError as exc:
         raise error(str(path), f"cannot be read ({exc.strerror or exc})") from None
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte order mark (Windows editors) is no error
     except UnicodeDecodeError as exc:
         raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     try:
