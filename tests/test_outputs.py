@@ -208,6 +208,8 @@ def test_bad_values_are_one_line_exit_2(files, tmp_path: Path, capsys) -> None:
     ("math", "C header"), ("stddef", "C header"), ("_", "leading underscore"), ("_x", "leading underscore"),
     ("class", "keyword"), ("None", "keyword"), ("new", "keyword"), ("json", "Python module"),
     ("numpy", "Python module"), ("os", "Python module"), ("1abc", "C identifier"), ("a-b", "C identifier"),
+    # Longer, it named files the system refuses ("File name too long", no expected/found).
+    ("p" * 64, "expected at most 63 characters"),
 ])
 def test_prefix_that_would_shadow_or_clash_is_refused(prefix: str, why: str, tmp_path: Path, capsys) -> None:
     assert export_main([str(EXAMPLE), "--target", "all", "--prefix", prefix, "-o", str(tmp_path / "g")]) == 2

@@ -144,6 +144,11 @@ PYTHON_NEIGHBOURS = frozenset(
     "numpy scipy sympy control matplotlib pandas jinja2 pytest edm_sym".split())
 
 
+#: The longest prefix: file names of 255 bytes leave room for the report's longest suffix,
+#: and C compilers need keep only 63 characters of an internal identifier significant.
+MAX_PREFIX = 63
+
+
 def prefix_problem(prefix: str) -> str | None:
     """Why ``prefix`` cannot name the generated files and symbols, or None when it can.
 
@@ -158,6 +163,9 @@ def prefix_problem(prefix: str) -> str | None:
 
     if not isinstance(prefix, str) or not is_c_identifier(prefix):
         return "expected a C identifier"
+    if len(prefix) > MAX_PREFIX:
+        return (f"expected at most {MAX_PREFIX} characters ({len(prefix)} here; it names "
+                f"files such as <prefix>_fig_contributions_evaluation.pdf)")
     if not prefix[0].isalpha():
         return "expected a name starting with a letter (a leading underscore is reserved to the C library)"
     if prefix in CXX_KEYWORDS or keyword.iskeyword(prefix) or keyword.issoftkeyword(prefix):
