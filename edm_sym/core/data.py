@@ -30,7 +30,7 @@ TIME_RTOL = 1e-3
 #: median step. A longer step is a gap (missing samples), a shorter one a burst.
 JITTER_RTOL = 0.25
 #: The sample times a log may have [s]: from a 1 GHz clock to a sample every
-#: quarter of an hour. Beyond them the element ranges of eqs. 6-7 and the
+#: 17 minutes. Beyond them the element ranges of eqs. 6-7 and the
 #: LuGre model's scales leave what a double holds (docs/data.md, "Sample time").
 TS_RANGE = (1e-9, 1e3)
 #: A data spec ``plant:PRESET/EXCITATION[@SEED]`` names a simulated plant log.

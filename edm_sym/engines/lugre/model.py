@@ -219,8 +219,9 @@ def bristle_coefficients(
 
     Notes
     -----
-    Where ``g`` underflows to 0 at a nonzero velocity the bristles relax at
-    once (``z = z_ss = 0``, ``dz/dt = 0``, the limit of eq. 11); at ``v = 0``
+    Where ``g`` underflows to 0 at a nonzero velocity, or is so small that
+    ``|v| / g`` overflows (``tau_c = 0`` at speed), the bristles relax at once
+    (``z = z_ss``, about 0, ``dz/dt = 0``, the limit of eq. 11); at ``v = 0``
     the state does not move.
     """
     absv = np.abs(velocity)
