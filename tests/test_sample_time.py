@@ -185,3 +185,14 @@ def test_a_v73_log_without_h5py_names_the_extra(tmp_path: Path, monkeypatch: pyt
     monkeypatch.setattr(builtins, "__import__", no_h5py)
     with pytest.raises(DataFormatError, match=r"log73.mat.*v7.3.*edm_sym\[mat73\]"):
         load_data(path)
+
+
+@pytest.mark.parametrize("log_ts", [1000.0, 1e-9])
+def test_resample_refuses_a_ratio_beyond_small_integers(log_ts: float) -> None:
+    # 1000 s onto 1 ms made a log of 1e6 times the samples (the process was killed for
+    # memory); 1e-9 s rounded the ratio to 0 (ZeroDivisionError, exit 1).
+    from edm_sym.core.data import DataLog, match_sample_time
+
+    data = DataLog({"omega": np.sin(np.arange(500) / 9.0)}, log_ts, "slow.csv")
+    with pytest.raises(DataFormatError, match="expected a ratio of small integers"):
+        match_sample_time(data, TS, model="r.json", resample=True)
