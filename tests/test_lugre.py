@@ -374,7 +374,10 @@ def test_methods_are_dispatched_through_the_registry():
         ({"time_limit": -1.0}, "time_limit"),
         ({"time_limit": "soon"}, "time_limit"),
         # A finite speed whose square overflows (eq. 12) crashed the fit (IndexError, exit 1).
-        ({"velocity": np.r_[np.linspace(-1, 1, 9), 1e308]}, "square is a finite number"),
+        ({"velocity": np.r_[np.linspace(-1, 1, 9), 1e308]}, "velocity: expected values whose"),
+        # 1e-160 gave an IndexError, a target of 1e160 an AssertionError (exit 1).
+        ({"velocity": 1e-160 * np.linspace(-1, 1, 10)}, "velocity: expected values whose"),
+        ({"target": 1e160 * np.linspace(0, 1, 10)}, "target: expected values whose"),
     ],
 )
 def test_identify_rejects_bad_input(kwargs, match):
@@ -392,9 +395,9 @@ def test_edm_lugre_names_the_file_and_column_of_a_refused_velocity(tmp_path, cap
     out = tmp_path / "l.json"
     assert main(["lugre", str(tmp_path / "log.csv"), "--target", "tau", "--velocity", "w",
                  "-o", str(out), "--quiet"]) == 2
-    assert capsys.readouterr().err == ("edm: log.csv: column 'w': expected speeds "
-                                       "whose square is a finite number (below 1e154), found "
-                                       "1e+308\n")
+    assert capsys.readouterr().err == ("edm: log.csv: column 'w': expected values whose "
+                                       "largest magnitude is from 1e-150 to 1e+150 (their "
+                                       "squares normal numbers), found 1e+308\n")
     assert not out.exists()
 
 

@@ -12,7 +12,7 @@ from test_abstraction import TS, friction_log
 
 from edm_sym.application.cli import main
 from edm_sym.core.data import DataLog, write_csv
-from edm_sym.core.errors import ConfigError
+from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.result import dumps, load_result, matrix_to_json, parse_result, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
 from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
@@ -225,6 +225,16 @@ def test_settings_are_checked() -> None:
     with pytest.raises(ConfigError, match="of the 3 samples of three.csv") as err:
         run(three, {**TINY, "validation": {"share": 1e-320}})
     assert err.value.where == "test.toml: validation.share"
+
+
+def test_a_target_whose_square_overflows_is_refused_before_the_search() -> None:
+    # 1e160 ran the whole search with every fitness inf, then failed in the JSON writer
+    # ("Out of range float values are not JSON compliant: inf"), naming nothing.
+    log, _ = friction_log(2.0, seed=1)
+    cols = {**log.columns, "tau_ext": 1e160 * log.columns["tau_ext"]}
+    with pytest.raises(DataFormatError, match="largest magnitude is from 1e-150") as err:
+        run(DataLog(cols, log.ts, "huge.csv"))
+    assert err.value.where == "huge.csv: column 'tau_ext'"
 
 
 # -- the command line ----------------------------------------------------------------

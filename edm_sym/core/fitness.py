@@ -11,7 +11,20 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["fitness", "rms"]
+__all__ = ["MAGNITUDE", "fitness", "magnitude_problem", "rms"]
+
+#: The largest magnitude a target (or a velocity) may reach: eq. 8 squares the error,
+#: and eq. 12 the velocity; squared, it must stay a normal double.
+MAGNITUDE = (1e-150, 1e150)
+
+
+def magnitude_problem(x: ArrayLike) -> str | None:
+    """Why the values ``x`` cannot be squared safely (None: they can, or are all zero)."""
+    peak = float(np.max(np.abs(np.asarray(x, dtype=float))))
+    if peak and not MAGNITUDE[0] <= peak <= MAGNITUDE[1]:
+        return (f"expected values whose largest magnitude is from {MAGNITUDE[0]:g} to "
+                f"{MAGNITUDE[1]:g} (their squares normal numbers), found {peak:g}")
+    return None
 
 
 def fitness(residual: ArrayLike, weights: ArrayLike | float = 1.0) -> float:

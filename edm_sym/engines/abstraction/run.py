@@ -33,6 +33,7 @@ from threadpoolctl import threadpool_limits
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
+from edm_sym.core.fitness import magnitude_problem
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
 from edm_sym.core.units import axis_units
@@ -561,6 +562,9 @@ def abstract(
         raise DataFormatError(f"{data.source}: column {target!r}",
                               f"expected a varying target (a constant one leaves nothing to "
                               f"model), found {y_all[0]:g} on all {len(y_all)} rows")
+    problem = magnitude_problem(y_all)  # eq. 8 squares the error: 1e160 made every fitness inf
+    if problem:
+        raise DataFormatError(f"{data.source}: column {target!r}", problem)
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training

@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike
 from scipy import linalg, optimize
 
 from edm_sym.core.errors import ConfigError, DataFormatError
-from edm_sym.core.fitness import fitness
+from edm_sym.core.fitness import fitness, magnitude_problem
 from edm_sym.engines.lugre.model import (
     LuGreParams,
     _as_velocity,
@@ -543,15 +543,14 @@ def identify_lugre(
                               f"{len(LuGreParams.__dataclass_fields__)} parameters, found {len(v)}")
     if not np.any(v != 0.0):
         raise DataFormatError("velocity", "all samples are zero; the friction model cannot be identified")
-    v_max = float(np.max(np.abs(v)))
-    if not math.isfinite(v_max * v_max):
-        # eq. 12 squares the velocity: no shape can be evaluated on such a log.
-        raise DataFormatError("velocity", f"expected speeds whose square is a finite number "
-                              f"(below 1e154), found {v_max:g}")
     if np.all(v == v[0]):
         raise DataFormatError("velocity", f"expected a varying velocity (the friction curve needs "
                               f"several speeds), found {v[0]:g} on all {len(v)} samples")
     y = _as_series("target", target, len(v))
+    for name, x in (("velocity", v), ("target", y)):
+        problem = magnitude_problem(x)  # eq. 12 squares the velocity, eq. 8 the error
+        if problem:
+            raise DataFormatError(name, problem)
     w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
     if np.any(w < 0.0) or not np.any(w > 0.0):
         raise DataFormatError("weights", "expected non-negative values, not all zero")
