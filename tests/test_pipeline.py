@@ -136,6 +136,38 @@ def test_a_data_file_where_the_pipeline_writes_is_refused_before_any_work(tmp_pa
     assert not (tmp_path / "lugre.json").exists()
 
 
+@pytest.mark.parametrize("where", ["gen/edm_comp.c", "gen/edm_comp_report.tex"])
+def test_an_input_among_the_files_the_export_writes_is_refused_before_any_work(
+        where: str, tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    # Only <out_dir>/<prefix>.h was checked: a log named gen/edm_comp.c was replaced by
+    # the generated C (exit 0), found by a fuzz pass.
+    from edm_sym.core.data import write_csv
+    from edm_sym.engines.plant import simulate_plant
+
+    (tmp_path / "gen").mkdir()
+    write_csv(tmp_path / where, simulate_plant("lugre", "evaluation").columns)
+    before = (tmp_path / where).read_bytes()
+    p = _write(tmp_path, PIPELINE.replace('evaluation = "plant:lugre/evaluation"',
+                                          f'evaluation = "{where}"'))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "found the input" in err and where in err and "choose another out_dir or prefix" in err
+    assert (tmp_path / where).read_bytes() == before
+    assert not (tmp_path / "lugre.json").exists()
+
+
+@pytest.mark.parametrize("velocity, message", [
+    ("tau_ext", "pipeline.toml: lugre.velocity: expected a column other than the target"),
+    ("t", "column 't': expected a signal of the axis"),
+])
+def test_the_target_or_the_clock_is_no_lugre_velocity(velocity: str, message: str,
+                                                      tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    p = _write(tmp_path, PIPELINE.replace('velocity = "omega"', f'velocity = "{velocity}"'))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "lugre.json").exists()
+
+
 def test_an_interrupted_abstraction_stops_the_pipeline_with_130(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
 ) -> None:

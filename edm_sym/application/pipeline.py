@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec
-from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError
+from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError, OutputError
 from edm_sym.core.fileio import check_outputs, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
@@ -304,9 +304,18 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     # Every output is checked before the long work: none may be an input, all must be writable.
     data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
     ckpt = result_file.with_name(result_file.name + ".checkpoint")
+    prefix = ex.get("prefix", "edm_comp")
+    inputs = [path, pipe.config, *data_files]
     check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
-                   out_dir / f"{ex.get('prefix', 'edm_comp')}.h"], [path, pipe.config, *data_files],
-                  option="pipeline output")
+                   out_dir / f"{prefix}.h"], inputs, option="pipeline output")
+    # Every file the export writes is <out_dir>/<prefix>... (.c, .py, the report, its figures).
+    for src in (Path(i) for i in inputs if i is not None and not str(i).startswith("plant:")):
+        if src.exists() and src.resolve().parent == out_dir.resolve() and \
+                src.name.startswith(prefix):
+            raise OutputError(f"pipeline output {out_dir / prefix}*: expected the export's files "
+                              f"apart from the inputs, found the input {src} among the names it "
+                              "writes (writing would destroy it); choose another out_dir or "
+                              "prefix")
     # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
     keep_result = reuse and result_file.exists() and \
         load_result(result_file).provenance.get("stop_reason") != "interrupted"
@@ -319,6 +328,10 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     lugre = None
     if pipe.lugre is not None:
         velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
+        if velocity == pipe.target:  # as edm lugre --velocity
+            raise ConfigError(f"{name}: lugre.velocity", f"expected a column other than the "
+                                                         f"target {velocity!r}, found it")
+        abst.require_varying([velocity])  # a constant column, or the clock, is no velocity
         if not (reuse and lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
             with ProgressReporter("edm pipeline", quiet=not progress) as reporter, \
