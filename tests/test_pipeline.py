@@ -156,6 +156,28 @@ def test_an_input_among_the_files_the_export_writes_is_refused_before_any_work(
     assert not (tmp_path / "lugre.json").exists()
 
 
+@pytest.mark.parametrize("change, message", [
+    (('inputs = ["omega", "theta_w"]', 'inputs = ["omega", "omega"]'),
+     "pipeline.toml: abstraction.inputs: expected each column once, found 'omega' twice"),
+    (('inputs = ["omega", "theta_w"]', 'inputs = ["t", "omega"]'),
+     "column 't': expected a signal of the axis"),
+])
+def test_what_the_abstraction_refuses_is_refused_before_the_lugre_fit(
+        change: tuple[str, str], message: str, tmp_path: Path, capsys) -> None:  # noqa: ANN001
+    # Refused only after the LuGre fit (and its lugre.json written over an earlier one's),
+    # found by a fuzz pass.
+    from edm_sym.core.data import write_csv
+    from edm_sym.engines.plant import simulate_plant
+
+    write_csv(tmp_path / "abs.csv", simulate_plant("lugre", "abstraction").columns)
+    p = _write(tmp_path, PIPELINE.replace('abstraction = "plant:lugre/abstraction"',
+                                          'abstraction = "abs.csv"').replace(*change))
+    (tmp_path / "lugre.json").write_text("an earlier run's")
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    assert message in capsys.readouterr().err
+    assert (tmp_path / "lugre.json").read_text() == "an earlier run's"
+
+
 @pytest.mark.parametrize("velocity, message", [
     ("tau_ext", "pipeline.toml: lugre.velocity: expected a column other than the target"),
     ("t", "column 't': expected a signal of the axis"),

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec
+from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, match_sample_time
 from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError, OutputError
 from edm_sym.core.fileio import check_outputs, write_atomic
 from edm_sym.core.fitness import rms
@@ -282,7 +282,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, default_config, load_config
-    from edm_sym.engines.abstraction.run import check_budget
+    from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 
@@ -297,6 +297,15 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         logs["evaluation"] = load_data(pipe.data_path(pipe.evaluation_data),
                                        require=[*pipe.inputs, pipe.target], columns=pipe.columns)
     abst = logs["abstraction"]
+    # What the abstraction and the evaluation will refuse, refused before any work: a
+    # refused pipeline leaves the outputs of an earlier run as they were.
+    try:
+        check_inputs(pipe.target, pipe.inputs)
+    except ConfigError as exc:
+        raise ConfigError(f"{name}: abstraction.{exc.where}", exc.problem) from None
+    check_data(abst, pipe.target, pipe.inputs)
+    if "evaluation" in logs:
+        match_sample_time(logs["evaluation"], abst.ts, model=str(abst.source))
     lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
     ex = pipe.export
     out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \

@@ -517,17 +517,7 @@ def abstract(
                                    or not math.isfinite(time_limit) or time_limit < 0):
         raise ConfigError("time_limit", f"expected a number of seconds >= 0, found {time_limit!r}")
     cfg = config if config is not None else default_config()
-    inputs = tuple(inputs)
-    if not inputs:
-        raise ConfigError("inputs", "expected at least one input column, found none")
-    for k, name in enumerate(inputs):
-        if inputs.index(name) != k:
-            raise ConfigError("inputs", f"expected each column once, found {name!r} twice")
-        problem = input_name_problem(name, inputs[:k])
-        if problem:
-            raise ConfigError(f"inputs: {name!r}", problem)
-    if target in inputs:
-        raise ConfigError("inputs", TARGET_AS_INPUT.format(target=target))
+    inputs = check_inputs(target, inputs)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int | np.integer)
@@ -555,16 +545,7 @@ def abstract(
     check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
     _require_samples(data, hold.n_train if hold.mask is None
                      else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
-    data.require_varying(inputs)
-    data.require_finite([*inputs, target])
-    y_all = data.column(target, role="target column")
-    if np.all(y_all == y_all[0]):
-        raise DataFormatError(f"{data.source}: column {target!r}",
-                              f"expected a varying target (a constant one leaves nothing to "
-                              f"model), found {y_all[0]:g} on all {len(y_all)} rows")
-    problem = magnitude_problem(y_all)  # eq. 8 squares the error: 1e160 made every fitness inf
-    if problem:
-        raise DataFormatError(f"{data.source}: column {target!r}", problem)
+    check_data(data, target, inputs)
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training
@@ -633,6 +614,49 @@ def abstract(
     logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=logs)
+
+
+def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
+    """The input names as a tuple; refuses none, a repeated one, a bad name or the target.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``inputs`` (and the name).
+    """
+    inputs = tuple(inputs)
+    if not inputs:
+        raise ConfigError("inputs", "expected at least one input column, found none")
+    for k, name in enumerate(inputs):
+        if inputs.index(name) != k:
+            raise ConfigError("inputs", f"expected each column once, found {name!r} twice")
+        problem = input_name_problem(name, inputs[:k])
+        if problem:
+            raise ConfigError(f"inputs: {name!r}", problem)
+    if target in inputs:
+        raise ConfigError("inputs", TARGET_AS_INPUT.format(target=target))
+    return inputs
+
+
+def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
+    """Refuse a log the search cannot fit: inputs that say nothing about the axis (constant,
+    the clock), values that are not finite, a constant target or one whose square overflows.
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file and the column.
+    """
+    data.require_varying(inputs)
+    data.require_finite([*inputs, target])
+    y_all = data.column(target, role="target column")
+    if np.all(y_all == y_all[0]):
+        raise DataFormatError(f"{data.source}: column {target!r}",
+                              f"expected a varying target (a constant one leaves nothing to "
+                              f"model), found {y_all[0]:g} on all {len(y_all)} rows")
+    problem = magnitude_problem(y_all)  # eq. 8 squares the error: 1e160 made every fitness inf
+    if problem:
+        raise DataFormatError(f"{data.source}: column {target!r}", problem)
 
 
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
