@@ -120,3 +120,20 @@ def test_an_acceleration_row_is_left_out_when_the_model_holds_no_inertia(motion)
     gone, (message,) = kinds(ModelInertia(-2e-6, (0.0, 0.0, 2e-5, -2.2e-5), 0.005 * ref, G))
     assert gone[2] == [] and gone[:2] + gone[3:] == named[:2] + named[3:]
     assert "not the model's" in message and "0.5 %" in message and "-2e-06" in message
+
+
+@pytest.mark.parametrize("bad", [float("nan"), 0.0, -5.0, 1e-300])
+def test_an_observer_bandwidth_the_log_cannot_hold_is_refused(bad: float) -> None:
+    # In a log's scalars NaN, 0 or -5 was dropped in silence; 1e-300 named -4.9e298 kg m^2.
+    from edm_sym.core.errors import DataFormatError
+
+    result = ROOT / "examples" / "auger" / "result.json"
+    log = load_data("plant:auger/evaluation")
+    bad_log = dataclasses.replace(log, scalars={"observer_bandwidth": bad})
+    with pytest.raises(DataFormatError, match="expected an observer bandwidth of at least") as err:
+        edm_sym.describe(result, bad_log)
+    assert err.value.where.endswith(": observer_bandwidth")
+    if bad > 0:  # the option itself refuses the others
+        with pytest.raises(DataFormatError, match="at least 2 pi / the log's length") as err:
+            edm_sym.describe(result, log, observer_bandwidth=bad)
+        assert err.value.where == "observer_bandwidth"

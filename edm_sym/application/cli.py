@@ -148,13 +148,19 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_describe(args: argparse.Namespace) -> int:
+    from edm_sym.core.errors import DataFormatError
     from edm_sym.engines.description import describe
     from edm_sym.engines.symbolic.significance import SignificanceOptions
 
-    desc = describe(args.result, data=args.data, ts=args.ts,
-                    options=SignificanceOptions(threshold=args.threshold / 100), axis=args.axis,
-                    columns=_columns(args), resample=args.resample,
-                    observer_bandwidth=args.observer_bandwidth)
+    try:
+        desc = describe(args.result, data=args.data, ts=args.ts,
+                        options=SignificanceOptions(threshold=args.threshold / 100),
+                        axis=args.axis, columns=_columns(args), resample=args.resample,
+                        observer_bandwidth=args.observer_bandwidth)
+    except DataFormatError as exc:
+        if exc.where != "observer_bandwidth":
+            raise
+        raise DataFormatError("--observer-bandwidth", exc.problem) from None
     print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
     return 0
 

@@ -469,6 +469,17 @@ def describe(
     if inputs is not None:
         g = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
             "observer_bandwidth")
+        if g is not None:
+            # An observer slower than the whole log says nothing (its lag y'/g then
+            # dwarfs the rows: 1e-300 rad/s named -4.9e298 kg m^2); NaN, 0 or a negative
+            # value in a log was dropped in silence.
+            low = 2 * math.pi / (len(log) * log.ts)
+            if isinstance(g, bool) or not isinstance(g, int | float | np.number) or not (
+                    math.isfinite(float(g)) and float(g) >= low):
+                where = ("observer_bandwidth" if observer_bandwidth is not None
+                         else f"{log.source}: observer_bandwidth")
+                raise DataFormatError(where, f"expected an observer bandwidth of at least 2 pi / "
+                                             f"the log's length, {low:.4g} rad/s, found {g!r}")
         inertia = rows_inertia([row.role for row in model.rows], full_outputs, full_inputs,
                                log.ts, g, held_out_selector(held) if held is not None
                                else slice(None))
