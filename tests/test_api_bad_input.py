@@ -199,3 +199,60 @@ def test_identify_lugre_names_a_sample_time_of_the_wrong_kind(ts) -> None:
 def test_a_result_path_of_the_wrong_kind_is_named() -> None:
     with pytest.raises(ResultFormatError, match="path: expected a file path, found NoneType"):
         edm_sym.load_result(None)
+
+
+@pytest.mark.parametrize("columns,ts,where,problem", [
+    ({}, 1e-3, "mem: columns", "expected at least one column, found none"),   # was StopIteration
+    ({"a": np.ones(3), "b": np.ones(4)}, 1e-3, "mem: column 'b'",             # numpy broadcast
+     "expected 3 rows as column 'a' has, found 4"),
+    ({"a": np.ones((3, 2))}, 1e-3, "mem: column 'a'", "expected a column of one dimension"),
+    ({"a": np.ones(3)}, np.nan, "mem: sample time", "found nan"),  # simulate accepted it
+    ({"a": np.ones(3)}, 0.0, "mem: sample time", "found 0.0"),
+    ({"a": np.ones(3)}, "0.001", "mem: sample time", "found '0.001'"),
+])
+def test_a_log_made_in_memory_is_refused_when_it_is_no_log(columns, ts, where, problem) -> None:
+    with pytest.raises(DataFormatError) as info:
+        DataLog(columns, ts, "mem")
+    assert info.value.where == where and problem in info.value.problem
+
+
+@pytest.mark.parametrize("rows,where,problem", [
+    ([("omega", [("gain", 1.5)])], "rows[0].elements[0].p", "expected 0..1, found 1.5"),
+    ([("omega", [("gain", np.nan)])], "rows[0].elements[0].p", "expected 0..1, found nan"),
+    ([], "matrix", "expected at least one row, found 0"),
+])
+def test_make_matrix_refuses_a_parameter_outside_its_range_and_no_rows(rows, where,
+                                                                       problem) -> None:
+    # These were plain ValueErrors, where make_matrix's other refusals are ConfigErrors.
+    with pytest.raises(ConfigError) as info:
+        edm_sym.make_matrix(["omega"], rows)
+    assert info.value.where == where and problem in info.value.problem
+
+
+def test_a_sample_time_the_default_ranges_cannot_span_names_the_sample_time() -> None:
+    m = edm_sym.make_matrix(["omega"], [("omega", [("sign", 0), ("gain", 0.55)])])
+    with pytest.raises(ConfigError) as info:  # named "range" before
+        edm_sym.Compensator(m, 1000.0, {})
+    assert info.value.where == "sample_time" and "found 1000 s" in info.value.problem
+
+
+def test_describe_names_a_role_it_does_not_know(result, columns) -> None:
+    with pytest.raises(ConfigError) as info:
+        edm_sym.describe(result, DataLog(columns, result.sample_time), roles={"omega": "banana"})
+    assert info.value.where == "roles['omega']" and "found 'banana'" in info.value.problem
+    with pytest.raises(ConfigError, match="expected an input's name .* found 'zz'"):
+        edm_sym.describe(result, DataLog(columns, result.sample_time), roles={"zz": "velocity"})
+
+
+def test_identify_lugre_refuses_a_negative_seed() -> None:
+    v = np.sin(np.linspace(0, 20, 500))
+    with pytest.raises(ConfigError, match="seed: expected an integer >= 0, found -1"):
+        identify_lugre(np.sign(v), v, 1e-3, seed=-1)
+
+
+def test_a_selection_within_an_infinite_share_is_refused() -> None:
+    from edm_sym.engines.abstraction.selection import check_select
+
+    assert check_select("simplest-within=1e300", "select") == "simplest-within=1e300"
+    with pytest.raises(ConfigError, match="select: expected simplest-within=PCT with a finite"):
+        check_select("simplest-within=1e400", "select")

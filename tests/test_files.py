@@ -315,3 +315,18 @@ def test_an_npz_array_that_is_no_column_is_named_as_what_it_is(tmp_path: Path, v
     assert info.value.where == "log.npz: column 'omega'"
     assert info.value.problem == f"expected a 1-D array of real numbers, found {found}"
     assert set(load_data(path).columns) == {"t", "tau_ext"}  # not asked for: left aside
+
+
+def test_an_npz_time_column_of_timedelta64_is_read_in_seconds(tmp_path: Path) -> None:
+    # numpy counts a timedelta64 an integer: read as its count of milliseconds, the log
+    # had a sample time of 1 s instead of 1 ms.
+    ms = np.arange(500).astype("timedelta64[ms]")
+    np.savez(tmp_path / "log.npz", t=ms, omega=np.sin(np.arange(500) * 1e-3))
+    log = load_data(tmp_path / "log.npz")
+    assert log.ts == pytest.approx(1e-3)
+    np.testing.assert_allclose(log.columns["t"], np.arange(500) * 1e-3)
+    ms[7] = np.timedelta64("NaT")
+    np.savez(tmp_path / "nat.npz", t=ms, omega=np.sin(np.arange(500) * 1e-3))
+    with pytest.raises(DataFormatError) as info:
+        load_data(tmp_path / "nat.npz")
+    assert info.value.where == "nat.npz: row 8, column 't'"

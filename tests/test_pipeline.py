@@ -210,3 +210,34 @@ def test_an_interrupted_abstraction_stops_the_pipeline_with_130(
     assert "interrupted" in capsys.readouterr().err
     assert (tmp_path / "result.json").exists()  # the best so far is kept
     assert not (tmp_path / "evaluation.json").exists() and not (tmp_path / "gen").exists()
+
+
+@pytest.mark.parametrize("old,new,where", [
+    # An empty string was taken for the key left out: no config, the default axis,
+    # no evaluation log, the default out_dir.
+    ('config = "quick.toml"', 'config = ""', "abstraction.config"),
+    ('evaluation = "plant:lugre/evaluation"', 'evaluation = ""', "data.evaluation"),
+    ('evaluation = "plant:lugre/evaluation"', 'evaluation = "plant:lugre/evaluation"\naxis = ""',
+     "data.axis"),
+    ('target = "tau_ext"', 'target = " "', "abstraction.target"),
+    ('out_dir = "gen"', 'out_dir = ""', "export.out_dir"),
+])
+def test_an_empty_string_is_refused_not_taken_for_a_missing_key(
+        tmp_path: Path, old: str, new: str, where: str, capsys) -> None:
+    p = _write(tmp_path, PIPELINE.replace(old, new))
+    with pytest.raises(ConfigError, match=f"{where}: expected a non-empty str, found"):
+        load_pipeline(p)
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"pipeline.toml: {where}" in err, err
+
+
+def test_a_lugre_weighting_zero_on_the_whole_log_names_its_key(tmp_path: Path, capsys) -> None:
+    p = _write(tmp_path, PIPELINE.replace(
+        "time_limit = 5", "time_limit = 5\nweighting = { windows = [[1000.0, 2000.0, 1.0]], "
+        "otherwise = 0.0 }"))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "pipeline.toml: lugre.weighting: expected a weighting above zero somewhere" in err
+    assert not (tmp_path / "lugre.json").exists()

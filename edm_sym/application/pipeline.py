@@ -94,6 +94,9 @@ def _get(where: str, table: Mapping[str, Any], key: str, kind: type | tuple, def
     if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
         names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
         raise ConfigError(f"{where}.{key}", f"expected {names}, found {value!r}")
+    if isinstance(value, str) and not value.strip():  # not taken for the key left out
+        raise ConfigError(f"{where}.{key}", f"expected a non-empty {kind.__name__}, found "
+                                            f"{value!r}")
     return value
 
 
@@ -246,7 +249,11 @@ def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
 
     weighting = parse_weighting(where, spec)
     w = weighting.weights(data.times, data.columns[target])
-    return np.broadcast_to(np.asarray(w, dtype=float), (len(data),)).copy()
+    w = np.broadcast_to(np.asarray(w, dtype=float), (len(data),)).copy()
+    if not np.any(w > 0.0):  # identify_lugre refuses it too, but could not name the key
+        raise ConfigError(where, f"expected a weighting above zero somewhere on {data.source}, "
+                                 f"found zero on all {len(w)} samples")
+    return w
 
 
 def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False,

@@ -227,6 +227,31 @@ class DataLog:
     scalars: Mapping[str, float] = field(default_factory=dict)
     roles: Mapping[str, str] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # A log made in memory gets the checks a file gets as it is read: at least one
+        # column, all of one length (one dimension each), a positive sample time.
+        if not self.columns:
+            raise DataFormatError(f"{self.source}: columns", "expected at least one column, "
+                                                             "found none")
+        lengths = {}
+        for name, col in self.columns.items():
+            shape = np.shape(col)
+            if len(shape) != 1:
+                raise DataFormatError(f"{self.source}: column {name!r}",
+                                      f"expected a column of one dimension, found shape {shape}")
+            lengths[name] = shape[0]
+        first, n = next(iter(lengths.items()))
+        other = next((c for c, k in lengths.items() if k != n), None)
+        if other is not None:
+            raise DataFormatError(f"{self.source}: column {other!r}",
+                                  f"expected {n} rows as column {first!r} has, "
+                                  f"found {lengths[other]}")
+        ts = self.ts
+        if isinstance(ts, bool) or not isinstance(ts, (int, float, np.floating, np.integer)) \
+                or not (math.isfinite(ts) and ts > 0):
+            raise DataFormatError(f"{self.source}: sample time",
+                                  f"expected a positive finite number of seconds, found {ts!r}")
+
     def __len__(self) -> int:
         return len(next(iter(self.columns.values())))
 
@@ -559,6 +584,8 @@ def _read_arrays(
     scalars: dict[str, float] = {}
     skipped: dict[str, str] = {}
     for key, arr in arrays.items():
+        if arr.dtype.kind == "m":  # a timedelta64 (numpy counts it an integer): in seconds
+            arr = arr / np.timedelta64(1, "s")
         if np.iscomplexobj(arr):
             skipped[key] = f"a complex array of shape {arr.shape}"
         elif not np.issubdtype(arr.dtype, np.number):

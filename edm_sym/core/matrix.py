@@ -131,7 +131,12 @@ class Compensator:
                 isinstance(r, ParamRange) for r in self.ranges.values()):
             raise ConfigError("ranges", "expected a mapping of element names to ParamRange, found "
                               f"{self.ranges!r}"[:200])
-        full = default_ranges(self.sample_time, self.record_length)
+        try:
+            full = default_ranges(self.sample_time, self.record_length)
+        except ValueError as exc:  # a sample time the default ranges cannot span
+            raise ConfigError("sample_time", f"expected a sample time the default parameter "
+                              f"ranges fit with record_length = {self.record_length:g} s "
+                              f"({exc}), found {self.sample_time:g} s") from None
         full.update(self.ranges)
         object.__setattr__(self, "ranges", full)
 
@@ -196,4 +201,8 @@ def make_matrix(
                 raise ConfigError(where, f"expected (element name or code, p), found {gene!r}") from None
             made.append(Gene(cls.code, value))
         out.append(Row(inputs.index(inp) if isinstance(inp, str) else int(inp), tuple(made)))
-    return ElementMatrix(inputs, tuple(out))
+    try:
+        return ElementMatrix(inputs, tuple(out))
+    except ValueError as exc:  # no rows, a p outside [0, 1]: named as the matrix names it
+        where, _, problem = str(exc).partition(": ")
+        raise ConfigError(where, problem) from None

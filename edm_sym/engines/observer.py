@@ -58,6 +58,12 @@ class ObserverOptions:
                              f"found {self.force_gain}")
 
 
+#: The lowest filter corner, as a fraction of the Nyquist frequency: below it the
+#: Butterworth filter's transfer-function coefficients lose its DC gain (1e-6 at 1e-3 of
+#: Nyquist, 1 % at 1e-4, unstable below 3e-5 for order 4).
+MIN_CORNER = 1e-3
+
+
 def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
     """Derive ``q, qd, qdd, force, tau_ext`` from a measured log.
 
@@ -77,6 +83,9 @@ def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
     DataFormatError
         A missing column or scalar, or a filter corner above the Nyquist frequency.
     """
+    if options.position == data.time_column:
+        raise DataFormatError(f"{data.source}: column {options.position!r}",
+                              "expected the measured position, found the log's time column")
     q = data.column(options.position, role="position column")
     raw = data.column(options.force, role="force column")
     gain = options.force_gain
@@ -94,6 +103,12 @@ def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
         raise DataFormatError(f"{data.source}: cutoff",
                               f"expected a corner below Nyquist ({nyquist:g} Hz), "
                               f"found {options.cutoff_hz:g}")
+    if options.cutoff_hz < MIN_CORNER * nyquist:
+        raise DataFormatError(f"{data.source}: cutoff",
+                              f"expected a corner of at least {MIN_CORNER:g} of Nyquist "
+                              f"({MIN_CORNER * nyquist:g} Hz: below it the order-{options.order} "
+                              f"filter's coefficients lose its gain), found "
+                              f"{options.cutoff_hz:g}")
     b, a = signal.butter(options.order, options.cutoff_hz / nyquist)
     need = 3 * max(len(a), len(b)) + 1  # filtfilt's padding, plus one sample
     if len(q) < need:
@@ -103,9 +118,18 @@ def observer_view(data: DataLog, options: ObserverOptions) -> DataLog:
     qf = signal.filtfilt(b, a, q)
     qd = np.gradient(qf, data.ts)
     qdd = np.gradient(qd, data.ts)
-    force = float(gain) * raw
+    with np.errstate(over="ignore", invalid="ignore"):
+        force = float(gain) * raw
+        tau = force - options.nominal_inertia * qdd
+    for col, what in ((force, f"force gain {gain:g}"),
+                      (tau, f"nominal inertia {options.nominal_inertia:g}")):
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:
+            raise DataFormatError(f"{data.source}: row {bad[0] + 1}, column {options.force!r}",
+                                  f"expected a force a double holds with the {what}, "
+                                  f"found {col[bad[0]]}")
     cols = {data.time_column or "t": data.times, "q": q, "qd": qd, "qdd": qdd, "force": force,
-            "tau_ext": force - options.nominal_inertia * qdd}
+            "tau_ext": tau}
     return DataLog(cols, data.ts, data.source, data.sha256, dict(data.scalars))
 
 

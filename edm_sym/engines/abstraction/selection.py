@@ -113,6 +113,8 @@ def check_select(text: Any, where: str) -> str:
     """Refuse a selection rule other than ``best``, ``knee``, ``simplest-within=PCT``."""
     if not isinstance(text, str) or not _SELECT.match(text):
         raise ConfigError(where, f"expected best, knee or simplest-within=PCT, found {text!r}")
+    if text.startswith("simplest-within=") and not math.isfinite(float(text.partition("=")[2])):
+        raise ConfigError(where, f"expected simplest-within=PCT with a finite PCT, found {text!r}")
     return text
 
 

@@ -527,8 +527,8 @@ def identify_lugre(
     if method not in METHODS and method != "both":
         known = ", ".join(sorted([*METHODS, "both"]))
         raise ConfigError("method", f"unknown method {method!r} (known: {known})")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ConfigError("seed", f"expected an integer, found {seed!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if time_limit is not None and not (
         isinstance(time_limit, (int, float, np.integer, np.floating))
         and not isinstance(time_limit, bool)

@@ -15,6 +15,8 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping
 
+from edm_sym.core.errors import ConfigError
+
 #: The roles an input may have.
 ROLES = ("velocity", "acceleration", "angle", "angle_wrapped")
 #: The names of a log's column roles (:data:`edm_sym.core.data.INPUT_ROLES`, the
@@ -73,17 +75,18 @@ def input_roles(
 
     Raises
     ------
-    ValueError
+    ConfigError
         For a role that is not one of :data:`ROLES` or a name that is not an input.
     """
     names = list(inputs)
     out = {n: default_role(n) for n in names}
     for name, role in (overrides or {}).items():
         if name not in out:
-            raise ValueError(f"roles: {name!r} is not an input (inputs: {', '.join(names)})")
+            raise ConfigError("roles", f"expected an input's name (inputs: {', '.join(names)}), "
+                                       f"found {name!r}")
         role = LOG_ROLE_NAMES.get(role, role) if isinstance(role, str) else role
         if role is not None and role not in ROLES:
-            raise ValueError(f"roles[{name!r}]: expected one of {', '.join(ROLES)}, "
-                             f"{', '.join(LOG_ROLE_NAMES)} or None, found {role!r}")
+            raise ConfigError(f"roles[{name!r}]", f"expected one of {', '.join(ROLES)}, "
+                              f"{', '.join(LOG_ROLE_NAMES)} or None, found {role!r}")
         out[name] = role
     return out
