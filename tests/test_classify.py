@@ -260,7 +260,7 @@ def test_role_defaults_and_validation() -> None:
     assert input_roles(["omega"], {"omega": None}) == {"omega": None}
     with pytest.raises(ValueError, match="expected one of"):
         input_roles(["omega"], {"omega": "speedy"})
-    with pytest.raises(ValueError, match="not an input"):
+    with pytest.raises(ValueError, match="expected an input.s name"):
         input_roles(["omega"], {"nope": "velocity"})
 
 

@@ -136,7 +136,7 @@ class Compensator:
         except ValueError as exc:  # a sample time the default ranges cannot span
             raise ConfigError("sample_time", f"expected a sample time the default parameter "
                               f"ranges fit with record_length = {self.record_length:g} s "
-                              f"({exc}), found {self.sample_time:g} s") from None
+                              f"({exc}), found {self.sample_time:g} s") from exc
         full.update(self.ranges)
         object.__setattr__(self, "ranges", full)
 

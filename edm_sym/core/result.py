@@ -425,7 +425,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     except ValueError as exc:  # the default ranges follow from both (1e-300 s, say, breaks them)
         raise ResultFormatError(f"{name}: sample_time, record_length",
                                 f"expected a sample time and record length that give usable "
-                                f"parameter ranges, found {ts:g} s and {length:g} s ({exc})") from None
+                                f"parameter ranges, found {ts:g} s and {length:g} s "
+                                f"({exc.__cause__ or exc})") from None
     return EdmResult(comp, doc["target"], tuple(steps), dict(doc["provenance"]), fitness,
                      report_inputs=dict(doc.get("report_inputs", {})),
                      validation=dict(doc.get("validation", {})),
