@@ -205,3 +205,10 @@ def test_simulate_refuses_rows_that_do_not_fit(monkeypatch, tmp_path: Path, caps
     assert re.search(r"plant:auger/evaluation: needs about [\d.]+ MiB of memory \(3 rows x \d+ "
                      r"samples\), more than the 4 KiB", err), err
     assert not out.exists()
+
+
+def test_restarts_count_in_the_time_estimate() -> None:
+    # Each restart runs the step again: 10**6 of them were left out of the estimate.
+    check_budget(parse_config({"ga": {"restarts": 1}}), 800, 1, workers=1)
+    with pytest.raises(BudgetError, match="CPU time"):
+        check_budget(parse_config({"ga": {"restarts": 10**6}}), 800, 1, workers=1)

@@ -748,8 +748,10 @@ def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
     from edm_sym.core.budget import StepSize, abstraction_estimate, check
     from edm_sym.engines.abstraction.rowsim import default_workers
 
+    # A step runs at least one block (or its patience), and each restart as much again.
     sizes = [StepSize(s.ga.population, s.n_rows, s.n_elements,
-                      min(s.ga.generations, s.ga.patience) if s.ga.patience else s.ga.generations)
+                      (1 + s.ga.restarts) * (min(s.ga.generations, s.ga.patience)
+                                             if s.ga.patience else s.ga.generations))
              for s in cfg.steps]
     est = abstraction_estimate(sizes, n_samples=n_samples, n_inputs=n_inputs,
                                cache_bytes=int(cfg.cache_mb * 2**20),
