@@ -330,3 +330,21 @@ def test_an_npz_time_column_of_timedelta64_is_read_in_seconds(tmp_path: Path) ->
     with pytest.raises(DataFormatError) as info:
         load_data(tmp_path / "nat.npz")
     assert info.value.where == "nat.npz: row 8, column 't'"
+
+
+@pytest.mark.skipif(not Path("/proc/self").exists(), reason="needs Linux's /proc")
+@pytest.mark.parametrize("out", ["/proc/edm_sim.csv", "/proc/edm_sub/sim.csv"])
+def test_an_output_where_nothing_can_be_made_is_refused_before_the_work(out: str,
+                                                                        capsys) -> None:
+    # As root the permission bits allow /proc: the write failed only after the work.
+    assert main(["plant", "--preset", "lugre", "--excitation", "abstraction", "-o", out]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"edm: -o {out}: cannot write in /proc"), err
+    assert len(err.splitlines()) == 1
+
+
+def test_checking_an_output_leaves_nothing_behind(tmp_path: Path) -> None:
+    from edm_sym.core.fileio import check_outputs
+
+    check_outputs([tmp_path / "r.json", tmp_path / "new" / "deeper" / "r.json"])
+    assert list(tmp_path.iterdir()) == []

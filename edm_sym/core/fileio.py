@@ -102,7 +102,7 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 def _writable(path: Path) -> str | None:
-    """Why ``path`` cannot be written, or None when it can (nothing is created)."""
+    """Why ``path`` cannot be written, or None when it can (nothing is left behind)."""
     if path.is_dir():
         return "expected a file to write, found a folder"
     if path.exists():
@@ -119,6 +119,17 @@ def _writable(path: Path) -> str | None:
         return f"cannot create the output folder ({folder} is a file)"
     if not os.access(folder, os.W_OK | os.X_OK):
         return f"cannot write in {folder} (permission denied)"
+    # The permission bits do not tell all (root in /proc, a read-only mount): make and
+    # remove what the write will make there first, a file or the output's folder.
+    try:
+        if folder == path.parent:
+            fd, probe = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".probe")
+            os.close(fd)
+            os.unlink(probe)
+        else:
+            os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".edm-", suffix=".probe"))
+    except OSError as exc:
+        return f"cannot write in {folder} ({exc.strerror or exc})"
     return None
 
 
