@@ -15,7 +15,8 @@ runs with.
 The numpy steps (:data:`CALLS`) give what the math interface
 (:class:`~edm_sym.core.elements.ops.NumpyOps`) gives, to the bit, with fewer
 passes: in place, their guards compiled, and no tangent's sine or saturated
-tanh computed where the answer is known (numpy's tanh is exactly +-1 from
+tanh computed where the answer is known (the C library's tanh,
+:func:`~edm_sym.core.elements.ops.libm_tanh`, is exactly +-1 from
 |x| = :data:`TANH_ONE`, which the tests check).
 """
 
@@ -28,7 +29,13 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, NUMPY, POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.core.elements.ops import (
+    LOG_QUOTIENT_LIMIT,
+    NUMPY,
+    POW_INPUT_LIMIT,
+    TAN_LIMIT,
+    libm_tanh,
+)
 from edm_sym.core.elements.realisation import Realisation
 from edm_sym.engines.kernel.loops import (
     CALL,
@@ -129,21 +136,21 @@ def _clipped(fn: Any) -> Callable[..., None]:
     return call
 
 
-#: ``|x|`` from which numpy's tanh is exactly +-1 (from about 19.06 on; 22 is the C
-#: library's bound too). tests/test_kernel.py checks numpy's tanh there.
+#: ``|x|`` from which the C library's tanh (:func:`libm_tanh`) is exactly +-1 (from about
+#: 19.06 on; 22 is its algorithm's own bound). tests/test_kernel.py checks it there.
 TANH_ONE = 22.0
 
 
 def _tanh(v: np.ndarray, x: np.ndarray, scratch: np.ndarray) -> None:
-    # Saturated samples are +-1 without the call (numpy's own tanh costs the same
-    # everywhere; the C library's returns at once there): numpy for the rest only.
+    # Saturated samples are +-1 without the call (the vectorised tanh costs the same
+    # everywhere; the C library's returns at once there): the call for the rest only.
     where = _indices(x.shape[0])
     m = saturated(x, v, TANH_ONE, scratch, where)
     if m == x.shape[0]:
-        np.tanh(scratch, out=v)
+        libm_tanh(scratch, out=v)
     elif m:
         part = scratch[:m]
-        np.tanh(part, out=part)
+        libm_tanh(part, out=part)
         scatter(v, part, where, m)
 
 
