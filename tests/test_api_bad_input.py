@@ -8,6 +8,7 @@ was simulated as if at 1 ms, a NaN input was dropped by the search.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -256,3 +257,31 @@ def test_a_selection_within_an_infinite_share_is_refused() -> None:
     assert check_select("simplest-within=1e300", "select") == "simplest-within=1e300"
     with pytest.raises(ConfigError, match="select: expected simplest-within=PCT with a finite"):
         check_select("simplest-within=1e400", "select")
+
+
+@pytest.mark.parametrize("low,high", [(-1.0, 3.0), (0.1, 100.0)])
+def test_a_power_range_where_the_element_is_not_finite_is_refused(tmp_path: Path, low, high,
+                                                                  result) -> None:
+    # A negative exponent is infinite at x = 0, 100 overflows at |x| = 1e4: the simulator
+    # wrote NaN or inf with exit 0 and the generated Python module raised ZeroDivisionError.
+    from edm_sym.core.elements import ParamRange
+
+    m = edm_sym.make_matrix(["omega"], [("omega", [("power", 0.5), ("gain", 0.55)])])
+    with pytest.raises(ConfigError) as info:
+        edm_sym.Compensator(m, 1e-3, {"power": ParamRange(low, high)})
+    assert info.value.where == "ranges['power']"
+    assert "expected the exponent within 0 .. 48" in info.value.problem
+    # The same range in a result file and in a config.
+    comp = edm_sym.Compensator(m, 1e-3, {})
+    provenance = {"seed": None, "package_version": edm_sym.__version__, "data_sha256": None}
+    edm_sym.save_result(edm_sym.EdmResult(comp, "tau_ext", provenance=provenance),
+                        tmp_path / "r.json")
+    doc = json.loads((tmp_path / "r.json").read_text())
+    doc["parameter_ranges"]["power"] = {"low": low, "high": high, "scaling": "linear"}
+    (tmp_path / "r.json").write_text(json.dumps(doc))
+    with pytest.raises(ResultFormatError, match="r.json: parameter_ranges.power: range: expected "
+                                                "the exponent within 0 .. 48"):
+        edm_sym.load_result(tmp_path / "r.json")
+    (tmp_path / "c.toml").write_text(f"[ranges.power]\nlow = {low}\nhigh = {high}\n")
+    with pytest.raises(ConfigError, match="c.toml: ranges.power: range: expected the exponent"):
+        load_config(tmp_path / "c.toml").resolve_ranges(1e-3, 20.0)

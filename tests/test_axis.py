@@ -52,3 +52,14 @@ def test_the_closing_summarys_fitness_is_in_the_axis_unit() -> None:
                                  "validation: none held out")
     assert fitness_line(replace(res, axis="linear")) == ("fitness (weighted eq. 8): training 0.25 N, "
                                                          "validation: none held out")
+
+
+def test_a_fitness_never_recorded_is_said_so_not_printed_inf() -> None:
+    # result-format.md: fitness is null for a hand-written matrix; the report says "not
+    # recorded" and describe "-", but the closing summary and repr said "inf".
+    from edm_sym.application.summary import fitness_line
+
+    res = replace(load_result(HANDWRITTEN), fitness=None, validation={})
+    assert fitness_line(res) == ("fitness (weighted eq. 8): training not recorded, "
+                                 "validation: none held out")
+    assert "fitness not recorded" in repr(res) and "inf" not in repr(res)

@@ -6,6 +6,7 @@ how to report it), 2 bad input or an unwritable output, 130 interrupted.
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 from pathlib import Path
@@ -295,3 +296,36 @@ def test_the_target_is_no_input_of_its_own_model(files) -> None:
     log = load_data(files["data"])
     with pytest.raises(ConfigError, match="inputs: expected input columns other than the target"):
         abstract(log, target="tau_ext", inputs=["omega", "tau_ext"])
+
+
+def test_a_libraries_own_value_error_is_a_failure_not_bad_input(capsys) -> None:
+    # matplotlib's "Axis limits cannot be NaN or Inf" and the JSON encoder's "Out of range
+    # float values" came out as exit 2, bad input, naming no file or field.
+    import argparse
+
+    from edm_sym.application.cli import EXIT_BAD_INPUT, EXIT_FAILED, REPORT_BUG, _dispatch
+    from edm_sym.core.matrix import ParamRange
+
+    def library(args: argparse.Namespace) -> int:
+        json.dumps(float("nan"), allow_nan=False)
+        return 0
+
+    def own_check(args: argparse.Namespace) -> int:
+        ParamRange(2.0, 1.0)  # edm_sym's own validation: bad input
+        return 0
+
+    def builtin(args: argparse.Namespace) -> int:
+        float("abc")  # a built-in has no frame: its caller, edm_sym's, counts
+        return 0
+
+    for func, code in ((library, EXIT_FAILED), (own_check, EXIT_BAD_INPUT)):
+        parser = argparse.ArgumentParser(prog="edm")
+        parser.set_defaults(func=func)
+        assert _dispatch([], parser) == code, func.__name__
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("edm: failed: ValueError: Out of range float") and REPORT_BUG in err[0]
+    assert err[1] == "edm: range: expected low < high, found [2.0, 1.0]"
+    parser = argparse.ArgumentParser(prog="edm")
+    parser.set_defaults(func=builtin)
+    # The test's own frame is not edm_sym's: a built-in called from outside is a failure.
+    assert _dispatch([], parser) == EXIT_FAILED

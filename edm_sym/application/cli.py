@@ -579,6 +579,8 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
                              "empty one")
         return int(args.func(args) or 0)
     except (EdmError, ValueError) as exc:
+        if not isinstance(exc, EdmError) and not _raised_by_edm_sym(exc):
+            return _failed(parser.prog, exc)  # a library's own check: input edm_sym let through
         if isinstance(exc, ToolMissingError):
             print(f"{parser.prog}: {exc}", file=sys.stderr)
             return EXIT_FAILED
@@ -606,14 +608,38 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         print(f"{parser.prog}: {where}: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:  # the work itself failed: one line, exit 1
-        if _from_interrupt(exc):
-            print(f"{parser.prog}: interrupted", file=sys.stderr)
-            return EXIT_INTERRUPTED
-        if os.environ.get("EDM_DEBUG"):
-            traceback.print_exc()
-        print(f"{parser.prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
-              f"({REPORT_BUG})", file=sys.stderr)
-        return EXIT_FAILED
+        return _failed(parser.prog, exc)
+
+
+def _failed(prog: str, exc: Exception) -> int:
+    """Exit 1 with one line for an error edm_sym did not expect (or 130 for a wrapped Ctrl-C)."""
+    if _from_interrupt(exc):
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if os.environ.get("EDM_DEBUG"):
+        traceback.print_exc()
+    print(f"{prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
+          f"({REPORT_BUG})", file=sys.stderr)
+    return EXIT_FAILED
+
+
+def _raised_by_edm_sym(exc: BaseException) -> bool:
+    """Whether a ValueError was raised in edm_sym's own code (its validation: bad input).
+
+    One raised inside a library (matplotlib's "Axis limits cannot be NaN", the JSON
+    encoder's "Out of range float values") is input edm_sym should have refused, or a
+    defect: it names no file or field, so it is reported as a failure, not as bad input.
+    A built-in's (``float("x")``) has no frame of its own: its caller's counts.
+    """
+    tb = exc.__traceback__
+    last = None
+    while tb is not None:
+        last = tb.tb_frame.f_code.co_filename
+        tb = tb.tb_next
+    return last is not None and Path(last).resolve().is_relative_to(_PACKAGE)
+
+
+_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 def _interruptible(prog: str, body: Callable[[], int]) -> int:

@@ -61,7 +61,7 @@ def fitness_line(result: Any) -> str:
     if not parts:
         fit = result.fitness
         unit = axis_units(getattr(result, "axis", None) or "rotary").force
-        parts.append("training " + ("inf" if fit is None else f"{fit:.6g} {unit}"))
+        parts.append("training " + ("not recorded" if fit is None else f"{fit:.6g} {unit}"))
     if len(parts) == 1:
         parts.append("validation: none held out")
     return "fitness (weighted eq. 8): " + ", ".join(parts)

@@ -12,7 +12,7 @@ import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from edm_sym.core.elements import REGISTRY, Element, ParamRange, default_ranges
+from edm_sym.core.elements import REGISTRY, Element, ParamRange, check_range, default_ranges
 
 
 @dataclass(frozen=True)
@@ -131,6 +131,11 @@ class Compensator:
                 isinstance(r, ParamRange) for r in self.ranges.values()):
             raise ConfigError("ranges", "expected a mapping of element names to ParamRange, found "
                               f"{self.ranges!r}"[:200])
+        for name, rng in self.ranges.items():
+            try:
+                check_range(name, rng)
+            except ValueError as exc:
+                raise ConfigError(f"ranges[{name!r}]", str(exc).partition(": ")[2]) from None
         try:
             full = default_ranges(self.sample_time, self.record_length)
         except ValueError as exc:  # a sample time the default ranges cannot span

@@ -21,7 +21,7 @@ from typing import Any
 
 from edm_sym.core.bounds import bound_flags
 from edm_sym.core.data import ColumnRoles
-from edm_sym.core.elements import REGISTRY, ParamRange
+from edm_sym.core.elements import REGISTRY, ParamRange, check_range
 from edm_sym.core.errors import DataFormatError, ResultFormatError
 from edm_sym.core.fileio import json_kind, read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
@@ -149,7 +149,7 @@ class EdmResult:
         from edm_sym.core.units import axis_units
 
         unit = axis_units(getattr(self, "axis", "rotary")).force
-        fit = "inf" if self.fitness is None else f"{self.fitness:.4g} {unit}"
+        fit = "not recorded" if self.fitness is None else f"{self.fitness:.4g} {unit}"
         if isinstance(val, Mapping) and val.get("fitness") and val["fitness"][0] is not None:
             fit += f", validation {val['fitness'][0]:.4g} {unit}"
         tail = (f"{m.n_elements}x{len(m.rows)} matrix, Ts = {self.sample_time:g} s, "
@@ -391,7 +391,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     for ename, rdoc in doc["parameter_ranges"].items():
         where = f"{name}: parameter_ranges.{ename}"
         try:
-            ranges[ename] = ParamRange(float(rdoc["low"]), float(rdoc["high"]), rdoc["scaling"])
+            ranges[ename] = check_range(ename, ParamRange(float(rdoc["low"]), float(rdoc["high"]),
+                                                          rdoc["scaling"]))
         except ValueError as exc:
             raise ResultFormatError(where, str(exc)) from None
     matrix = _matrix_from_json(name, "matrix", doc["matrix"], inputs)

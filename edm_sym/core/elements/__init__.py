@@ -30,6 +30,7 @@ __all__ = [
     "RelayElement",
     "StaticElement",
     "all_elements",
+    "check_range",
     "default_ranges",
     "element",
 ]
@@ -49,6 +50,20 @@ def element(code_or_name: int | str) -> type[Element]:
     except KeyError:
         known = f"{min(REGISTRY)}-{max(REGISTRY)}" if table is REGISTRY else ", ".join(BY_NAME)
         raise KeyError(f"{code_or_name!r} is not a known element (known: {known})") from None
+
+
+def check_range(name: str, rng: ParamRange) -> ParamRange:
+    """Refuse a range of element ``name`` that passes its parameter's limits (:class:`Param`).
+
+    Raises
+    ------
+    ValueError
+        ``"range: expected ... found [low, high]"``; names unknown to the registry pass.
+    """
+    el = BY_NAME.get(name)
+    if el is not None and el.param is not None:
+        el.param.check(rng)
+    return rng
 
 
 def all_elements() -> list[type[Element]]:

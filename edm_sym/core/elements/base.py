@@ -113,6 +113,10 @@ class Param:
     period : float or None
         The period of a periodic parameter (a phase), else None: a range at
         least this wide reaches every value, so its bounds limit nothing.
+    limits : (float, float) or None
+        Bounds no range of ``a`` may pass, a custom one included (a config's
+        ``[ranges]``, a result's ``parameter_ranges``): beyond them the element
+        is not finite for every finite input. None: only :data:`RANGE_LIMIT`.
     """
 
     meaning: str
@@ -120,6 +124,17 @@ class Param:
     default: Callable[[float, float], ParamRange]
     rule: str
     period: float | None = None
+    limits: tuple[float, float] | None = None
+
+    def check(self, rng: ParamRange) -> None:
+        """Refuse a range that passes :attr:`limits` (``ValueError`` naming ``range``)."""
+        if self.limits is None:
+            return
+        lo, hi = self.limits
+        if rng.low < lo or rng.high > hi:
+            raise ValueError(f"range: expected the {self.meaning} within {lo:g} .. {hi:g} "
+                             f"(beyond, the element is not finite for every input), found "
+                             f"[{rng.low:g}, {rng.high:g}]")
 
 
 def corner_range(ts: float, t_sum: float, *, top_divisor: float = 1.0) -> ParamRange:

@@ -10,7 +10,12 @@ import math
 from typing import Any
 
 from edm_sym.core.elements.base import Param, ParamRange, RelayElement, StaticElement
-from edm_sym.core.elements.ops import LOG_QUOTIENT_LIMIT, POW_INPUT_LIMIT, TAN_LIMIT
+from edm_sym.core.elements.ops import (
+    LOG_QUOTIENT_LIMIT,
+    POW_EXPONENT_LIMIT,
+    POW_INPUT_LIMIT,
+    TAN_LIMIT,
+)
 
 LEVEL = Param("level", "unit of the input",
               lambda ts, t_sum: ParamRange(1e-4, 1e2, "log"), "1e-4 .. 100 (log)")
@@ -113,9 +118,10 @@ class Power(StaticElement):
     category = "nonlinear"
     formula = "y = sgn(x) |x|^a"
     guard = (f"odd extension for x < 0 (fractional powers of negatives); |x| limited to "
-             f"{POW_INPUT_LIMIT:g} first, so no power overflows")
+             f"{POW_INPUT_LIMIT:g} first and any range of the exponent within 0 .. "
+             f"{POW_EXPONENT_LIMIT:g}, so no power overflows")
     param = Param("exponent", "1", lambda ts, t_sum: ParamRange(0.1, 3.0, "linear"),
-                  "0.1 .. 3 (linear)")
+                  "0.1 .. 3 (linear)", limits=(0.0, POW_EXPONENT_LIMIT))
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:

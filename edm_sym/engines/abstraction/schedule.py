@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from edm_sym.core.data import ColumnRoles
-from edm_sym.core.elements import BY_NAME, ParamRange, default_ranges
+from edm_sym.core.elements import BY_NAME, ParamRange, check_range, default_ranges
 from edm_sym.core.errors import TOO_DEEP, ConfigError, DataFormatError
 from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
@@ -294,7 +294,8 @@ class AbstractionConfig:
             base = out[name]
             kw = {"low": base.low, "high": base.high, "scaling": base.scaling, **over}
             try:
-                out[name] = ParamRange(float(kw["low"]), float(kw["high"]), kw["scaling"])
+                out[name] = check_range(name, ParamRange(float(kw["low"]), float(kw["high"]),
+                                                         kw["scaling"]))
             except ValueError as exc:
                 raise ConfigError(f"{self.source}: ranges.{name}", str(exc)) from None
         return out
