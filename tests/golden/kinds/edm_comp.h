@@ -44,8 +44,8 @@
  *                  ln|x| for |x| >> a; |x| / a limited to 1e+30 first, so no quotient
  *                  overflows in float
  *              row 3, element 3, power (a_11 = 1.26): odd extension for x < 0
- *                  (fractional powers of negatives); |x| limited to 1e+06 first, so no
- *                  power overflows
+ *                  (fractional powers of negatives); |x| limited to 1e+06 first and any
+ *                  range of the exponent within 0 .. 48, so no power overflows
  *              row 4, element 2, acos: input limited to [-1, 1] first
  * Real type: double
  *
