@@ -184,7 +184,7 @@ class DeadTime(DelayElement):
     code = 13
     title = "Dead time"
     category = "calculation"
-    formula = "y = exp(-a s) x   (realised as z^-N, N = round(a / Ts))"
+    formula = "y = exp(-a s) x   (realised as z^-N, N = max(1, round(a / Ts)), halves up)"
     param = Param("dead time", "s", lambda ts, t_sum: ParamRange(ts, t_sum, "log"),
                   "Ts .. T_sum (log, eq. 7)")
 
@@ -200,7 +200,7 @@ class Shift(DelayElement):
     code = 14
     title = "Shift operator"
     category = "calculation"
-    formula = "y = z^-k x,  k = round(a) samples"
+    formula = "y = z^-k x,  k = max(1, round(a)) samples, halves up"
     param = Param("shift in samples", "samples",
                   lambda ts, t_sum: ParamRange(1.0, 10.0, "linear"), "1 .. 10 (linear)")
 
