@@ -348,6 +348,11 @@ def test_describe_accepts_clock_drift_and_says_so(linear_result: Path, tmp_path:
     desc = edm_sym.describe(linear_result, path)
     assert any("relative drift 0.0005, accepted" in n for n in desc.notes)
     assert desc.fitness["data"]["samples"] == 1000
+    # The rounding of a time column's steps is no drift: no note (one said "0.001 s in
+    # the log, 0.001 s in the result, relative drift 1.1e-16").
+    drifted["time_s"] = c["t"] * (1 + 3e-16)
+    rounded = edm_sym.describe(linear_result, write_csv(tmp_path / "rounded.csv", drifted))
+    assert not any("drift" in n for n in rounded.notes)
     # Beyond the tolerance: refused with both values and the way out named.
     drifted["time_s"] = c["t"] * 1.01
     far = write_csv(tmp_path / "far.csv", drifted)

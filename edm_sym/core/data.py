@@ -26,6 +26,9 @@ from edm_sym.core.fileio import write_atomic
 #: time column and ``--ts``, or a model's sample time and a second log's
 #: (docs/data.md, "Sample time").
 TIME_RTOL = 1e-3
+#: A smaller relative difference of two sample times is the rounding of a time column's
+#: steps, not drift: it is accepted without a note.
+TIME_ROUNDING = 1e-12
 #: Jitter accepted on single time stamps: every step within this share of the
 #: median step. A longer step is a gap (missing samples), a shorter one a burst.
 JITTER_RTOL = 0.25
