@@ -399,14 +399,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _match_ts(name: str, ts: float, data, resample: bool):  # noqa: ANN001, ANN202
     """The log on the model's sample time (docs/data.md, "Sample time"); says what it assumed."""
-    from edm_sym.core.data import TIME_ROUNDING, match_sample_time
+    from edm_sym.core.data import drift, match_sample_time
 
     out = match_sample_time(data, ts, model=name, resample=resample)
     if out is not data:
         print(f"resampled {data.source} from {data.ts:.9g} s to {ts:.9g} s", file=sys.stderr)
-    elif abs(data.ts - ts) > TIME_ROUNDING * ts:
+    elif drift(data.ts, ts):
         print(f"sample time: {data.ts:.9g} s in {data.source}, {ts:.9g} s in {name} "
-              f"(relative drift {abs(data.ts - ts) / ts:.2g}, accepted)", file=sys.stderr)
+              f"(relative drift {drift(data.ts, ts):.2g}, accepted)", file=sys.stderr)
     return out
 
 

@@ -13,6 +13,7 @@ import csv
 import hashlib
 import io
 import math
+import numbers
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -250,7 +251,7 @@ class DataLog:
                                   f"expected {n} rows as column {first!r} has, "
                                   f"found {lengths[other]}")
         ts = self.ts
-        if isinstance(ts, bool) or not isinstance(ts, (int, float, np.floating, np.integer)) \
+        if isinstance(ts, bool) or not isinstance(ts, numbers.Real) \
                 or not (math.isfinite(ts) and ts > 0):
             raise DataFormatError(f"{self.source}: sample time",
                                   f"expected a positive finite number of seconds, found {ts!r}")
@@ -612,6 +613,13 @@ def _read_arrays(
             raise DataFormatError(f"{name}: row {bad[0] + 1}, column {key!r}",
                                   f"expected a finite number, found {col[bad[0]]}")
     return columns, scalars, skipped
+
+
+def drift(ts: float, model_ts: float) -> float:
+    """The relative difference of a log's sample time from a model's, or 0 below
+    :data:`TIME_ROUNDING` (the rounding of a time column's steps: no drift to note)."""
+    rel = abs(ts - model_ts) / model_ts
+    return rel if rel > TIME_ROUNDING else 0.0
 
 
 def check_sample_time(where: str, ts: float, what: str = "a sample time") -> float:

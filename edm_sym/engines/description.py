@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.bounds import complexity
-from edm_sym.core.data import TIME_ROUNDING, ColumnRoles, DataLog, is_plant_spec, match_sample_time
+from edm_sym.core.data import ColumnRoles, DataLog, drift, is_plant_spec, match_sample_time
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.result import EdmResult, load_result
 from edm_sym.core.units import axis_units
@@ -430,9 +430,9 @@ def describe(
     data_fit = None
     force = result.units.force
     if log is not None:
-        if abs(log.ts / result.sample_time - 1) > TIME_ROUNDING:
+        if drift(log.ts, result.sample_time):
             notes.append(f"sample time {log.ts:.9g} s in {log.source}, {result.sample_time:.9g} s "
-                         f"in the result (relative drift {abs(log.ts / result.sample_time - 1):.2g}, "
+                         f"in the result (relative drift {drift(log.ts, result.sample_time):.2g}, "
                          "accepted)")
         x = log.stack(comp.matrix.inputs)
         outputs = simulate_rows(comp, comp.matrix.rows, x)
