@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from edm_sym.core.elements import libm
+
 #: |tan| is limited to this value, so the tangent's poles give a finite output. Where
 #: |tan x| reaches it (within about 1e-6 rad of a pole), the output is this value with the
 #: sign of sin x: the same on both sides of the pole, so a phase that lands on the pole
@@ -30,46 +32,27 @@ POW_EXPONENT_LIMIT = 48.0
 LOG_QUOTIENT_LIMIT = 1.0e30
 
 
-def libm_tanh(x: Any, out: np.ndarray | None = None) -> Any:
-    """tanh as the C library computes it (fdlibm's ``s_tanh.c``), over arrays, to the bit.
-
-    numpy's own float64 tanh is a vectorised approximation that differs from the
-    C library's in the last bit on about a quarter of the arguments. The
-    generated C and the Python module call the C library's tanh; a chain that
-    amplifies a last bit (``tanh`` then ``acos`` near 1, a sharp notch) made
-    them differ from the simulator by 1.5e-8. This is fdlibm's algorithm on
-    ``numpy.expm1`` (the C library's expm1): ``1 - 2 / (expm1(2|x|) + 2)`` from
-    |x| = 1, ``-t / (t + 2)`` with ``t = expm1(-2|x|)`` below, ``x (1 + x)``
-    below 2**-55, exactly 1 from 22, with the sign of x. tests/test_elements.py
-    checks it against ``math.tanh`` on millions of arguments.
-    """
-    x = np.asarray(x, dtype=float)
-    ax = np.abs(x)
-    big = ax >= 1.0
-    with np.errstate(over="ignore", invalid="ignore"):
-        t = np.expm1(np.where(big, 2.0 * ax, -2.0 * ax))
-        z = np.where(big, 1.0 - 2.0 / (t + 2.0), -t / (t + 2.0))
-        z = np.where(ax < 2.0**-55, ax * (1.0 + ax), z)
-    z = np.where(ax >= 22.0, 1.0, z)
-    return np.copysign(z, x, out=out)
-
-
 class NumpyOps:
-    """Vectorised implementation over numpy arrays."""
+    """Vectorised implementation over numpy arrays.
+
+    The transcendental functions are the C library's (:mod:`~edm_sym.core.elements.libm`),
+    as the generated C and Python call them, not numpy's own vectorised ones: the
+    same bits on any processor.
+    """
 
     pi = math.pi
 
     @staticmethod
     def sin(x: Any) -> Any:
-        return np.sin(x)
+        return libm.sin(x)
 
     @staticmethod
     def atan(x: Any) -> Any:
-        return np.arctan(x)
+        return libm.atan(x)
 
     @staticmethod
     def tanh(x: Any) -> Any:
-        return libm_tanh(x)
+        return libm.tanh(x)
 
     @staticmethod
     def sign(x: Any) -> Any:
@@ -93,28 +76,28 @@ class NumpyOps:
     @staticmethod
     def sym_log(x: Any, a: float) -> Any:
         """Guarded logarithm: ``sign(x) ln(1 + min(|x| / a, LOG_QUOTIENT_LIMIT))``, odd and finite."""
-        return np.sign(x) * np.log1p(np.minimum(np.abs(x) / a, LOG_QUOTIENT_LIMIT))
+        return np.sign(x) * libm.log1p(np.minimum(np.abs(x) / a, LOG_QUOTIENT_LIMIT))
 
     @staticmethod
     def sym_pow(x: Any, a: float) -> Any:
         """Signed power: ``sign(x) min(|x|, POW_INPUT_LIMIT) ** a``."""
-        return np.sign(x) * np.minimum(np.abs(x), POW_INPUT_LIMIT) ** a
+        return np.sign(x) * libm.pow(np.minimum(np.abs(x), POW_INPUT_LIMIT), a)
 
     @staticmethod
     def tan(x: Any) -> Any:
         """Guarded tangent: ``tan(x)``; where ``|tan x| >= TAN_LIMIT``, that limit signed as ``sin x``."""
-        t = np.tan(x)
-        return np.where(np.abs(t) >= TAN_LIMIT, np.where(np.sin(x) < 0, -TAN_LIMIT, TAN_LIMIT), t)
+        t = libm.tan(x)
+        return np.where(np.abs(t) >= TAN_LIMIT, np.where(libm.sin(x) < 0, -TAN_LIMIT, TAN_LIMIT), t)
 
     @staticmethod
     def asin(x: Any) -> Any:
         """Guarded arcsine: the input is first limited to [-1, 1]."""
-        return np.arcsin(np.clip(x, -1.0, 1.0))
+        return libm.asin(np.clip(x, -1.0, 1.0))
 
     @staticmethod
     def acos(x: Any) -> Any:
         """Guarded arccosine: the input is first limited to [-1, 1]."""
-        return np.arccos(np.clip(x, -1.0, 1.0))
+        return libm.acos(np.clip(x, -1.0, 1.0))
 
 
 def _sign(x: float) -> float:

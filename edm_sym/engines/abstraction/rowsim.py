@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from edm_sym.core.elements import REGISTRY, Element, ParamRange
+from edm_sym.core.elements import REGISTRY, Element, ParamRange, libm
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Population
@@ -253,7 +253,7 @@ class Worker:
         hit = self.trig.get(k)
         if hit is None:
             x = self.ctx.inputs[k]
-            hit = self.trig[k] = (np.sin(x), np.cos(x))
+            hit = self.trig[k] = (libm.sin(x), libm.cos(x))
         return hit
 
     def stage(self, code: int, p: float) -> Any:
@@ -581,6 +581,7 @@ def warm_up() -> None:
     """
     if not kernel.NUMBA:
         return
+    libm.make_all()
     from edm_sym.core.elements import REGISTRY
 
     by_name = {cls.name: cls for cls in REGISTRY.values()}

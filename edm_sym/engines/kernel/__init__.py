@@ -14,8 +14,9 @@ the first-order filters of several rows overlapped.
 The instructions compute what the realisations' numpy steps compute, in the
 same order (direct form II transposed as ``scipy.signal.lfilter`` runs it,
 numpy's NaN rules for limits and signs), and the transcendental functions
-are numpy's own, so the kernel agrees with the reference simulator to
-rounding (tested to 1e-12; bit for bit on the machines tried).
+are the C library's (:mod:`edm_sym.core.elements.libm`), as in the reference
+simulator, so the kernel agrees with it to rounding (tested to 1e-12; bit for
+bit on the machines tried).
 
 numba is optional (``pip install edm_sym[fast]``). Without it :data:`NUMBA` is
 False and the genetic algorithm runs the reference realisations instead; the

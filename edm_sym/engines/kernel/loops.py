@@ -20,8 +20,9 @@ those of its own filter, so a row's numbers do not depend on its group.
 The numpy steps' guards (:func:`clip`, :func:`tan_guard`, :func:`quotient`,
 :func:`sign_times`, :func:`saturated`) are compiled here too: exact
 arithmetic only, so they give numpy's bits; the transcendental functions
-themselves stay numpy's. The limits and signs are selects, not branches: a
-data-dependent branch mispredicts on a noisy signal.
+themselves are the C library's (:mod:`edm_sym.core.elements.libm`). The
+limits and signs are selects, not branches: a data-dependent branch
+mispredicts on a noisy signal.
 """
 
 from __future__ import annotations

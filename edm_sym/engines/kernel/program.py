@@ -16,8 +16,10 @@ The numpy steps (:data:`CALLS`) give what the math interface
 (:class:`~edm_sym.core.elements.ops.NumpyOps`) gives, to the bit, with fewer
 passes: in place, their guards compiled, and no tangent's sine or saturated
 tanh computed where the answer is known (the C library's tanh,
-:func:`~edm_sym.core.elements.ops.libm_tanh`, is exactly +-1 from
-|x| = :data:`TANH_ONE`, which the tests check).
+:func:`~edm_sym.core.elements.libm.tanh`, is exactly +-1 from
+|x| = :data:`TANH_ONE`, which the tests check). Their transcendental
+functions are the C library's (:mod:`~edm_sym.core.elements.libm`), as the
+math interface's are.
 """
 
 from __future__ import annotations
@@ -29,12 +31,12 @@ from typing import Any
 
 import numpy as np
 
+from edm_sym.core.elements import libm
 from edm_sym.core.elements.ops import (
     LOG_QUOTIENT_LIMIT,
     NUMPY,
     POW_INPUT_LIMIT,
     TAN_LIMIT,
-    libm_tanh,
 )
 from edm_sym.core.elements.realisation import Realisation
 from edm_sym.engines.kernel.loops import (
@@ -42,6 +44,7 @@ from edm_sym.engines.kernel.loops import (
     COPY,
     GROUP,
     LFILTER,
+    NUMBA,
     STORE,
     clip,
     quotient,
@@ -52,6 +55,9 @@ from edm_sym.engines.kernel.loops import (
     tan_guard,
 )
 from edm_sym.engines.kernel.trace import encode, gene_encoder
+
+if NUMBA:  # the C library's functions compiled too (the same bits, faster)
+    libm.use_compiled()
 
 __all__ = ["CALLS", "Program", "compile_row", "compile_steps", "run_program", "run_rows",
            "simulate_rows"]
@@ -119,7 +125,7 @@ def compile_row(stages: Sequence[Realisation], *, store: bool = False
     return compile_steps([encode(r) for r in stages], store=store)
 
 
-# -- numpy steps: numpy's functions, their guards compiled ------------------------------
+# -- numpy steps: the C library's functions over the signal, their guards compiled --------
 
 def _ufunc(fn: Any) -> Callable[..., None]:
     def call(v: np.ndarray, x: np.ndarray, scratch: np.ndarray) -> None:
@@ -136,49 +142,48 @@ def _clipped(fn: Any) -> Callable[..., None]:
     return call
 
 
-#: ``|x|`` from which the C library's tanh (:func:`libm_tanh`) is exactly +-1 (from about
-#: 19.06 on; 22 is its algorithm's own bound). tests/test_kernel.py checks it there.
+#: ``|x|`` from which the C library's tanh (:func:`~edm_sym.core.elements.libm.tanh`) is
+#: exactly +-1 (from about 19.06 on; 22 is fdlibm's bound). tests/test_kernel.py checks it.
 TANH_ONE = 22.0
 
 
 def _tanh(v: np.ndarray, x: np.ndarray, scratch: np.ndarray) -> None:
-    # Saturated samples are +-1 without the call (the vectorised tanh costs the same
-    # everywhere; the C library's returns at once there): the call for the rest only.
+    # Saturated samples are +-1 without the call: the call for the rest only.
     where = _indices(x.shape[0])
     m = saturated(x, v, TANH_ONE, scratch, where)
     if m == x.shape[0]:
-        libm_tanh(scratch, out=v)
+        libm.tanh(scratch, out=v)
     elif m:
         part = scratch[:m]
-        libm_tanh(part, out=part)
+        libm.tanh(part, out=part)
         scatter(v, part, where, m)
 
 
 def _tan(v: np.ndarray, x: np.ndarray, scratch: np.ndarray) -> None:
-    np.tan(x, out=scratch)
+    libm.tan(x, out=scratch)
     tan_guard(scratch, x, v, TAN_LIMIT)
 
 
 def _sym_log(v: np.ndarray, x: np.ndarray, scratch: np.ndarray, a: float) -> None:
     quotient(x, scratch, a, LOG_QUOTIENT_LIMIT)
-    np.log1p(scratch, out=scratch)
+    libm.log1p(scratch, out=scratch)
     sign_times(x, scratch, v)
 
 
 def _sym_pow(v: np.ndarray, x: np.ndarray, scratch: np.ndarray, a: float) -> None:
     quotient(x, scratch, 1.0, POW_INPUT_LIMIT)  # |x| / 1 is |x| to the bit
-    scratch **= a  # numpy's ``**``, as the reference computes it
+    libm.pow(scratch, a, out=scratch)  # the C library's pow, as the reference computes it
     sign_times(x, scratch, v)
 
 
 #: The numpy steps: ``fn(v, x, scratch, *numbers)`` sets ``v`` to what the math
 #: interface's method (:class:`~edm_sym.core.elements.ops.NumpyOps`) computes
-#: from ``x`` (which may be ``v``), to the bit: the same numpy function on the
+#: from ``x`` (which may be ``v``), to the bit: the same C library function on the
 #: same numbers, with the guards around it compiled (exact arithmetic).
 #: ``scratch`` is a signal-sized work array.
 CALLS: dict[str, Callable[..., None]] = {
-    "sin": _ufunc(np.sin), "atan": _ufunc(np.arctan), "tanh": _tanh,
-    "asin": _clipped(np.arcsin), "acos": _clipped(np.arccos), "tan": _tan,
+    "sin": _ufunc(libm.sin), "atan": _ufunc(libm.atan), "tanh": _tanh,
+    "asin": _clipped(libm.asin), "acos": _clipped(libm.acos), "tan": _tan,
     "sym_log": _sym_log, "sym_pow": _sym_pow,
 }
 

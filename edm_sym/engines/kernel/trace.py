@@ -45,9 +45,9 @@ from edm_sym.engines.kernel.loops import (
 __all__ = ["COMPILED", "TRACE", "TraceOps", "encode", "gene_encoder"]
 
 #: Methods of the math interface the kernel compiles (exact arithmetic, limits,
-#: signs). The others (sin, tan, log ...) stay numpy steps: numpy's own
-#: functions on the whole signal (:data:`edm_sym.engines.kernel.program.CALLS`),
-#: so their bits are numpy's, as in the reference simulator.
+#: signs). The others (sin, tan, log ...) stay numpy steps: the C library's
+#: functions over the whole signal (:data:`edm_sym.engines.kernel.program.CALLS`),
+#: so their bits are the reference simulator's.
 COMPILED = {"neg": NEG, "add": ADD, "mul": MUL, "const": CONST, "sign": SIGN, "sat": SAT,
             "lower_limit": LOWER, "dead_zone": DEAD_ZONE}
 

@@ -106,16 +106,21 @@ class SympyOps:
 
 SYMPY_OPS = SympyOps()
 
-#: numpy implementations, for ``sympy.lambdify(..., modules=[NUMPY_FUNCTIONS, "numpy"])``.
+#: numpy implementations, for ``sympy.lambdify(..., modules=[NUMPY_FUNCTIONS, "numpy"])``:
+#: the simulator's, and its transcendental functions (the C library's, not numpy's own:
+#: :mod:`edm_sym.core.elements.libm`), so an expression gives the simulator's bits.
 NUMPY_FUNCTIONS: dict[str, Any] = {}
 
 
 def _numpy_functions() -> dict[str, Any]:
+    from edm_sym.core.elements import libm
     from edm_sym.core.elements.ops import NUMPY
 
     return {
         "Sat": NUMPY.sat, "DeadZone": NUMPY.dead_zone, "SymLog": NUMPY.sym_log,
         "SymPow": NUMPY.sym_pow, "GTan": NUMPY.tan, "GAsin": NUMPY.asin, "GAcos": NUMPY.acos,
+        "sin": libm.sin, "cos": libm.cos, "tan": libm.tan, "asin": libm.asin,
+        "acos": libm.acos, "atan": libm.atan, "tanh": libm.tanh, "log1p": libm.log1p,
     }
 
 
