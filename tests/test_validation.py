@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -322,12 +324,21 @@ def _whole_rmse(res: object, log: DataLog, matrix: object) -> float:
     return float(np.sqrt(np.mean(e ** 2)))
 
 
+def _balanced_rmse(res: object, log: DataLog, matrix: object) -> float:
+    """The mean of the plain RMSEs on the fitted samples and on the held-out blocks."""
+    from dataclasses import replace
+
+    comp = replace(res.compensator, matrix=matrix)
+    e = log.columns["tau_ext"] - plain_loop(comp, log).sum(axis=0)
+    return float(np.sqrt(np.mean(e[TRAIN] ** 2)) + np.sqrt(np.mean(e[HELD] ** 2))) / 2
+
+
 NO_REFIT = {**TINY, "parsimony": {"refit": 0}}
 
 
-def test_pruning_starts_from_the_step_best_of_the_lowest_whole_log_rmse(log: DataLog) -> None:
+def test_pruning_starts_from_the_step_best_of_the_lowest_balanced_rmse(log: DataLog) -> None:
     res = run(log, NO_REFIT)
-    rmse = [_whole_rmse(res, log, s.matrix) for s in res.steps]
+    rmse = [_balanced_rmse(res, log, s.matrix) for s in res.steps]
     best = min(range(len(rmse)), key=lambda q: (rmse[q], -q))
     assert res.parsimony["start_step"] == res.steps[best].step
     assert res.parsimony["criterion"] == "validation.rmse+training"
@@ -336,6 +347,37 @@ def test_pruning_starts_from_the_step_best_of_the_lowest_whole_log_rmse(log: Dat
     assert res.parsimony["refit"] == 0 and res.parsimony["refitted"] is False
     assert _start_matrix(res) == res.steps[best].matrix
     _guarded_criterion(res, log, "rmse")
+
+
+def test_a_step_best_that_buys_the_fitted_samples_with_the_held_out_ones_is_not_the_start(
+        ) -> None:
+    """Over the whole log (80 % fitted) step 2 wins; the held-out blocks count half: step 1."""
+    from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+    from edm_sym.core.result import StepRecord
+    from edm_sym.engines.abstraction.run import finish
+    from edm_sym.engines.abstraction.validation import plan_holdout
+
+    t = np.arange(1500) * TS
+    omega, s = np.sin(2 * np.pi * 0.7 * t), np.cos(2 * np.pi * 3.1 * t)
+    # A disturbance s on the fitted samples only: step 2 models 1.2 s, step 1 leaves it.
+    tau = np.sign(omega) + s
+    tau[HELD] = np.sign(omega[HELD])
+    data = DataLog({"t": t, "omega": omega, "s": s, "tau_ext": tau}, TS, "made.csv")
+    cfg = parse_config({**NO_REFIT, "ranges": {"gain": {"low": 0.0, "high": 2.0}}}, "test.toml")
+    cfg = replace(cfg, validation=replace(cfg.validation, unit="N m"))
+    hold = plan_holdout(data, target="tau_ext", inputs=["omega", "s"], settings=cfg.validation)
+    through = Gene(0, 0.0)
+    coulomb = Row(0, (Gene(19, 0.0), through, through))
+    one = ElementMatrix(("omega", "s"), (coulomb,))
+    two = ElementMatrix(("omega", "s"), (coulomb, Row(1, (Gene(3, 0.6), through, through))))
+    ranges = cfg.resolve_ranges(TS, 1.5)
+    steps = [StepRecord(k, m, 0.0, ()) for k, m in ((1, one), (2, two))]
+    whole = [_whole_rmse(SimpleNamespace(compensator=Compensator(m, TS, ranges, 1.5)), data, m)
+             for m in (one, two)]
+    assert whole[1] < whole[0]  # what the whole log would have chosen: step 2
+    _, record, _ = finish(steps, Compensator(two, TS, ranges, 1.5), hold, cfg)
+    assert record["start_step"] == 1
+    assert record["front"][-1]["change"] == "search (step 1 best)"
 
 
 def _start_matrix(res: object) -> object:

@@ -684,9 +684,11 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
     start_step, refitted, refit = steps[-1].step, False, 0
     if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
-        # The step best with the lowest plain RMSE over the whole log (a later step on a tie):
-        # Step 4's eq. 16 weighting, say, may buy large torques with reversals and the cold
-        # start, which only the whole log holds (docs/abstraction.md, "Parsimony").
+        # The step best with the lowest mean of the plain RMSE on the fitted samples and on
+        # the held-out ones (a later step on a tie): Step 4's eq. 16 weighting, say, may buy
+        # large torques with reversals and the cold start, which only the fitted samples
+        # hold; a refit buys the fitted samples with the held-out ones (docs/abstraction.md,
+        # "Parsimony").
         # A step best with a tangent pole inside its input's range is passed over while
         # another is sound (validation.fragile_rows).
         # Each step best is also refitted on the whole training part: one that learnt a law
@@ -696,7 +698,7 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
                                 reject_poles=cfg.steps[-1].ga.reject_poles)
         sound = [q for q, c in enumerate(cands)
                  if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
-        scored = [(scorer.whole_rmse(replace(comp, matrix=cands[q][0])), -q)
+        scored = [(scorer.balanced_rmse(replace(comp, matrix=cands[q][0])), -q)
                   for q in (sound or range(len(cands)))]
         q = -min(scored)[1]
         comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]

@@ -32,8 +32,8 @@ _KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit")
 #: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
 #: final step's weighting.
 CRITERIA = ("rmse", "fitness")
-#: Which model the pruning starts from: the step best with the lowest plain RMSE over the
-#: whole abstraction log, or the last step's best.
+#: Which model the pruning starts from: the step best with the lowest mean of the plain
+#: RMSEs on the fitted and on the held-out samples, or the last step's best.
 STARTS = ("best-step", "last-step")
 _SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?)$")
 
@@ -61,9 +61,10 @@ class ParsimonySettings:
         ``"rmse"`` (default): the plain RMSE on the held-out part;
         ``"fitness"``: eq. 8 there with the final step's weighting.
     start : str
-        ``"best-step"`` (default): prune the step best with the lowest plain
-        RMSE over the whole abstraction log; ``"last-step"``: the last step's
-        best (the paper's model).
+        ``"best-step"`` (default): prune the step best with the lowest mean
+        of the plain RMSEs on the fitted samples and on the held-out ones
+        (:meth:`~edm_sym.engines.abstraction.validation.Scorer.balanced_rmse`);
+        ``"last-step"``: the last step's best (the paper's model).
     refit : int
         With ``start = "best-step"``: before choosing, each step best's
         parameters are refitted by least squares on the whole training part
