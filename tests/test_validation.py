@@ -324,21 +324,12 @@ def _whole_rmse(res: object, log: DataLog, matrix: object) -> float:
     return float(np.sqrt(np.mean(e ** 2)))
 
 
-def _balanced_rmse(res: object, log: DataLog, matrix: object) -> float:
-    """The mean of the plain RMSEs on the fitted samples and on the held-out blocks."""
-    from dataclasses import replace
-
-    comp = replace(res.compensator, matrix=matrix)
-    e = log.columns["tau_ext"] - plain_loop(comp, log).sum(axis=0)
-    return float(np.sqrt(np.mean(e[TRAIN] ** 2)) + np.sqrt(np.mean(e[HELD] ** 2))) / 2
-
-
 NO_REFIT = {**TINY, "parsimony": {"refit": 0}}
 
 
-def test_pruning_starts_from_the_step_best_of_the_lowest_balanced_rmse(log: DataLog) -> None:
-    res = run(log, NO_REFIT)
-    rmse = [_balanced_rmse(res, log, s.matrix) for s in res.steps]
+def test_pruning_starts_from_the_step_best_of_the_lowest_whole_log_rmse(log: DataLog) -> None:
+    res = run(log, {**TINY, "parsimony": {"refit": 0, "tie": 0.0}})
+    rmse = [_whole_rmse(res, log, s.matrix) for s in res.steps]
     best = min(range(len(rmse)), key=lambda q: (rmse[q], -q))
     assert res.parsimony["start_step"] == res.steps[best].step
     assert res.parsimony["criterion"] == "validation.rmse+training"
@@ -349,9 +340,8 @@ def test_pruning_starts_from_the_step_best_of_the_lowest_balanced_rmse(log: Data
     _guarded_criterion(res, log, "rmse")
 
 
-def test_a_step_best_that_buys_the_fitted_samples_with_the_held_out_ones_is_not_the_start(
-        ) -> None:
-    """Over the whole log (80 % fitted) step 2 wins; the held-out blocks count half: step 1."""
+def test_step_bests_tied_on_the_whole_log_are_told_apart_by_the_held_out_blocks() -> None:
+    """Step 2 is 1 % better over the whole log (80 % fitted) and far worse held out."""
     from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
     from edm_sym.core.result import StepRecord
     from edm_sym.engines.abstraction.run import finish
@@ -359,25 +349,44 @@ def test_a_step_best_that_buys_the_fitted_samples_with_the_held_out_ones_is_not_
 
     t = np.arange(1500) * TS
     omega, s = np.sin(2 * np.pi * 0.7 * t), np.cos(2 * np.pi * 3.1 * t)
-    # A disturbance s on the fitted samples only: step 2 models 1.2 s, step 1 leaves it.
+    # A disturbance s on the fitted samples only: step 1 leaves it, step 2 models k s with
+    # k chosen so that its mean square over the whole log is 0.98 times step 1's.
     tau = np.sign(omega) + s
     tau[HELD] = np.sign(omega[HELD])
+    fit, held = np.sum(s[TRAIN] ** 2), np.sum(s[HELD] ** 2)
+    k = max(np.roots([fit + held, -2.0 * fit, 0.02 * fit]).real)
     data = DataLog({"t": t, "omega": omega, "s": s, "tau_ext": tau}, TS, "made.csv")
-    cfg = parse_config({**NO_REFIT, "ranges": {"gain": {"low": 0.0, "high": 2.0}}}, "test.toml")
-    cfg = replace(cfg, validation=replace(cfg.validation, unit="N m"))
-    hold = plan_holdout(data, target="tau_ext", inputs=["omega", "s"], settings=cfg.validation)
     through = Gene(0, 0.0)
     coulomb = Row(0, (Gene(19, 0.0), through, through))
     one = ElementMatrix(("omega", "s"), (coulomb,))
-    two = ElementMatrix(("omega", "s"), (coulomb, Row(1, (Gene(3, 0.6), through, through))))
-    ranges = cfg.resolve_ranges(TS, 1.5)
-    steps = [StepRecord(k, m, 0.0, ()) for k, m in ((1, one), (2, two))]
-    whole = [_whole_rmse(SimpleNamespace(compensator=Compensator(m, TS, ranges, 1.5)), data, m)
-             for m in (one, two)]
-    assert whole[1] < whole[0]  # what the whole log would have chosen: step 2
-    _, record, _ = finish(steps, Compensator(two, TS, ranges, 1.5), hold, cfg)
+    two = ElementMatrix(("omega", "s"), (coulomb, Row(1, (Gene(3, k / 2), through, through))))
+    steps = [StepRecord(q, m, 0.0, ()) for q, m in ((1, one), (2, two))]
+
+    def start(tie: float) -> dict:
+        cfg = parse_config({**TINY, "parsimony": {"refit": 0, "tie": tie},
+                            "ranges": {"gain": {"low": 0.0, "high": 2.0}}}, "test.toml")
+        cfg = replace(cfg, validation=replace(cfg.validation, unit="N m"))
+        hold = plan_holdout(data, target="tau_ext", inputs=["omega", "s"],
+                            settings=cfg.validation)
+        ranges = cfg.resolve_ranges(TS, 1.5)
+        whole = [_whole_rmse(SimpleNamespace(compensator=Compensator(m, TS, ranges, 1.5)),
+                             data, m) for m in (one, two)]
+        assert 0.985 * whole[0] < whole[1] < 0.995 * whole[0]  # 1 % better over the whole log
+        return finish(steps, Compensator(two, TS, ranges, 1.5), hold, cfg)[1]
+
+    record = start(0.02)  # the default
     assert record["start_step"] == 1
     assert record["front"][-1]["change"] == "search (step 1 best)"
+    assert [(c["step"], c["tied"], c["chosen"]) for c in record["start_candidates"]] == [
+        (1, True, True), (2, True, False)]
+    held_out = [c["held_out_rmse"][0] for c in record["start_candidates"]]
+    assert held_out[0] < 1e-12 < 1.0 < held_out[1]
+    assert record["start_tie"] == 0.02
+    # Not tied: the whole log alone chooses step 2.
+    record = start(0.005)
+    assert record["start_step"] == 2
+    assert [(c["tied"], c["chosen"]) for c in record["start_candidates"]] == [
+        (False, False), (True, True)]
 
 
 def _start_matrix(res: object) -> object:

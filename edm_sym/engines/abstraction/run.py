@@ -683,12 +683,13 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     """
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
     start_step, refitted, refit = steps[-1].step, False, 0
+    candidates: list[dict[str, Any]] = []
     if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
-        # The step best with the lowest mean of the plain RMSE on the fitted samples and on
-        # the held-out ones (a later step on a tie): Step 4's eq. 16 weighting, say, may buy
-        # large torques with reversals and the cold start, which only the fitted samples
-        # hold; a refit buys the fitted samples with the held-out ones (docs/abstraction.md,
-        # "Parsimony").
+        # The step best with the lowest plain RMSE over the whole log: Step 4's eq. 16
+        # weighting, say, may buy large torques with reversals and the cold start, which
+        # only the whole log holds. Step bests within ``tie`` of it are tied, and the
+        # held-out blocks choose among them (then a later step): a refit lowers the fitted
+        # samples' RMSE by construction (docs/abstraction.md, "Parsimony").
         # A step best with a tangent pole inside its input's range is passed over while
         # another is sound (validation.fragile_rows).
         # Each step best is also refitted on the whole training part: one that learnt a law
@@ -698,13 +699,47 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
                                 reject_poles=cfg.steps[-1].ga.reject_poles)
         sound = [q for q, c in enumerate(cands)
                  if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
-        scored = [(scorer.balanced_rmse(replace(comp, matrix=cands[q][0])), -q)
-                  for q in (sound or range(len(cands)))]
-        q = -min(scored)[1]
+        pool = sound or list(range(len(cands)))
+        q, candidates = start_candidate([replace(comp, matrix=cands[q][0]) for q in pool],
+                                        scorer, cfg.parsimony.tie)
+        q = pool[q]
         comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]
+        for c, r in zip(candidates, pool, strict=True):
+            c.update(step=cands[r][1], refitted=cands[r][2])
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
                                       refit=refit, refitted=refitted)
+    if parsimony and candidates:
+        parsimony["start_tie"] = cfg.parsimony.tie
+        parsimony["start_candidates"] = candidates
     return comp, parsimony, scorer.report(comp)
+
+
+def start_candidate(comps: Sequence[Compensator], scorer: Scorer, tie: float
+                    ) -> tuple[int, list[dict[str, Any]]]:
+    """Which candidate the pruning starts from, and each one's scores (result.json).
+
+    The lowest plain RMSE over the whole abstraction log wins, unless others are
+    within ``tie`` (relative) of it: then the lowest held-out RMSE among those
+    (a later candidate on a tie). With nothing held out, the whole log alone.
+
+    Returns
+    -------
+    index, candidates
+        The index into ``comps``; per candidate ``{"whole_rmse": [v, unit],
+        "held_out_rmse": [v or None, unit], "tied": bool, "chosen": bool}``.
+    """
+    whole = [scorer.whole_rmse(c) for c in comps]
+    held = [scorer.held_out_rmse(c) for c in comps]
+    low = min(whole)
+    tied = [q for q, w in enumerate(whole) if w <= low * (1.0 + tie)]
+    q = min(tied, key=lambda q: (whole[q] if held[q] is None else held[q], whole[q], -q))
+    unit = scorer.holdout.unit
+
+    def finite(v: float | None) -> float | None:
+        return v if v is not None and math.isfinite(v) else None
+
+    return q, [{"whole_rmse": [finite(whole[k]), unit], "held_out_rmse": [finite(held[k]), unit],
+                "tied": k in tied, "chosen": k == q} for k in range(len(comps))]
 
 
 def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig, *,

@@ -28,12 +28,13 @@ from edm_sym.core.errors import ConfigError
 from edm_sym.engines.abstraction.tables import settings_from_table
 
 KNEE_WITHIN = 1.5
-_KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit")
+_KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit", "tie")
 #: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
 #: final step's weighting.
 CRITERIA = ("rmse", "fitness")
-#: Which model the pruning starts from: the step best with the lowest mean of the plain
-#: RMSEs on the fitted and on the held-out samples, or the last step's best.
+#: Which model the pruning starts from: the step best with the lowest plain RMSE over the
+#: whole abstraction log (the held-out RMSE choosing among those within ``tie``), or the
+#: last step's best.
 STARTS = ("best-step", "last-step")
 _SELECT = re.compile(r"^(best|knee|simplest-within=(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?)$")
 
@@ -61,15 +62,20 @@ class ParsimonySettings:
         ``"rmse"`` (default): the plain RMSE on the held-out part;
         ``"fitness"``: eq. 8 there with the final step's weighting.
     start : str
-        ``"best-step"`` (default): prune the step best with the lowest mean
-        of the plain RMSEs on the fitted samples and on the held-out ones
-        (:meth:`~edm_sym.engines.abstraction.validation.Scorer.balanced_rmse`);
+        ``"best-step"`` (default): prune the step best with the lowest plain
+        RMSE over the whole abstraction log, or among those within ``tie``
+        of it the one with the lowest held-out RMSE
+        (:func:`~edm_sym.engines.abstraction.run.start_candidate`);
         ``"last-step"``: the last step's best (the paper's model).
     refit : int
         With ``start = "best-step"``: before choosing, each step best's
         parameters are refitted by least squares on the whole training part
         (Lambda = 1), at most this many evaluations each (default 600; 0: no
         refit); the refitted and the original step bests are the candidates.
+    tie : float
+        With ``start = "best-step"``: candidates whose whole-log RMSE is
+        within this share of the lowest are tied, and the held-out RMSE
+        chooses among them (default 0.02; 0: the whole log alone).
     """
 
     prune: bool = True
@@ -78,6 +84,7 @@ class ParsimonySettings:
     criterion: str = "rmse"
     start: str = "best-step"
     refit: int = 600
+    tie: float = 0.02
 
     def __post_init__(self) -> None:
         if not isinstance(self.prune, bool):
@@ -87,6 +94,11 @@ class ParsimonySettings:
                 math.isfinite(t) and 0 <= t <= 1):
             raise ConfigError("parsimony.tolerance", f"expected a number in [0, 1], found {t!r}")
         object.__setattr__(self, "tolerance", float(t) + 0.0)  # -0.0 is 0
+        t = self.tie
+        if isinstance(t, bool) or not isinstance(t, int | float) or not (
+                math.isfinite(t) and 0 <= t <= 1):
+            raise ConfigError("parsimony.tie", f"expected a number in [0, 1], found {t!r}")
+        object.__setattr__(self, "tie", float(t) + 0.0)
         if self.select is not None:
             check_select(self.select, "parsimony.select")
         if self.criterion not in CRITERIA:
@@ -107,7 +119,8 @@ class ParsimonySettings:
     def to_json(self) -> dict[str, Any]:
         """The settings as a config table."""
         return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection,
-                "criterion": self.criterion, "start": self.start, "refit": self.refit}
+                "criterion": self.criterion, "start": self.start, "refit": self.refit,
+                "tie": self.tie}
 
 
 def check_select(text: Any, where: str) -> str:

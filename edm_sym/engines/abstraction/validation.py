@@ -398,20 +398,23 @@ class Scorer:
             if all(math.isfinite(v) and v > 0 for v in (v0, t0)):
                 self._reference = (v0, t0)
 
-    def balanced_rmse(self, comp: Compensator) -> float:
-        """The mean of the plain RMSE on the fitted samples and on the held-out ones.
+    def whole_rmse(self, comp: Compensator) -> float:
+        """The plain RMSE over every sample of the abstraction log, fitted and held out.
 
-        Each part counts half, whatever its share of the log: the fitted
-        samples hold what happens once (the cold start), the held-out ones
-        are the only samples no candidate was fitted to (a refit lowers the
-        fitted samples' RMSE by construction). With nothing held out: the
-        RMSE on the fitted samples. Non-finite: ``inf``
-        (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
+        Non-finite: ``inf``.
         """
-        values = [self.score(comp, part)["rmse"][0] for part in self.parts]
-        if any(v is None for v in values):
-            return float("inf")
-        return float(sum(values) / len(values))
+        p = self.holdout.training
+        e = p.y - self.outputs(comp, "training")
+        with np.errstate(all="ignore"):
+            value = float(np.sqrt(np.mean(e * e)))
+        return value if math.isfinite(value) else float("inf")
+
+    def held_out_rmse(self, comp: Compensator) -> float | None:
+        """The plain RMSE on the held-out samples (None: nothing held out; ``inf``: not finite)."""
+        if "validation" not in self.parts:
+            return None
+        value = self.score(comp, "validation")["rmse"][0]
+        return float("inf") if value is None else float(value)
 
     @property
     def criterion_name(self) -> str:
