@@ -176,6 +176,29 @@ def test_the_report_says_what_held_out_blocks_of_the_same_log_cannot_test(
     assert not said(replace(example, validation=second))
 
 
+def test_the_report_lists_the_candidates_the_search_model_was_chosen_from(
+        tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from edm_sym.core.result import load_result
+
+    example = load_result(Path(__file__).resolve().parents[1] / "examples/auger/result.json")
+    model = edm_sym.decode(example)
+    cands = [{"step": 2, "refitted": False, "whole_rmse": [0.0503, "N m"],
+              "held_out_rmse": [0.0607, "N m"], "tied": True, "chosen": True},
+             {"step": 4, "refitted": True, "whole_rmse": [0.0496, "N m"],
+              "held_out_rmse": [0.0665, "N m"], "tied": True, "chosen": False}]
+    parsimony = {**example.parsimony, "start_tie": 0.02, "start_candidates": cands}
+    tex = write_report(replace(example, parsimony=parsimony), tmp_path, model=model)[0]
+    text = " ".join(tex.read_text().split())
+    assert "among those within 2 \\% of it (tied)" in text
+    assert ("2 & no & $0.0503$~N\\,m & $0.0607$~N\\,m & yes & $\\leftarrow$ \\\\" in text)
+    assert "4 & yes & $0.0496$~N\\,m & $0.0665$~N\\,m & yes & \\\\" in text
+    # A result without them (older, or --no-prune) has no such table.
+    plain = write_report(example, tmp_path / "plain", model=model)[0].read_text()
+    assert "RMSE, whole log" not in plain
+
+
 def test_report_with_data_writes_named_deterministic_figures(tmp_path: Path, example, logs) -> None:
     a, e, lugre = logs
     first = write_report(example, tmp_path / "1", data=a, eval_data=e, lugre=lugre, prefix="axis")

@@ -88,8 +88,16 @@ def front_context(p: EdmLatexPrinter, result: Any, figures: Mapping[str, str]) -
             "change": p.text(m.get("change", "")),
             "mark": r"$\leftarrow$" if m["member"] == par["selected"] else "",
         } for m in par["front"]]
+        candidates = [{
+            "step": str(c["step"]), "refitted": p.text("yes" if c["refitted"] else "no"),
+            "whole": _quantity(p, c["whole_rmse"]), "held": _quantity(p, c["held_out_rmse"]),
+            "tied": p.text("yes" if c["tied"] else "no"),
+            "mark": r"$\leftarrow$" if c["chosen"] else "",
+        } for c in par.get("start_candidates", [])]
         fig = figures.get(FIGURE)
         front.append({
+            "candidates": candidates,
+            "tie": p.text(f"{100 * par.get('start_tie', 0.0):g} %"),
             "members": members,
             "criterion": p.mono(par["criterion"]),
             "rule": p.mono(par["select"]),
