@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from test_abstraction import friction_log
 
-from edm_sym.application.abstract_cli import checkpoint_path
+from edm_sym.application.abstract_cli import checkpoint_path, start_line
 from edm_sym.application.cli import main
 from edm_sym.core.data import write_csv
 from edm_sym.core.result import load_result
@@ -63,10 +63,46 @@ def test_abstract_writes_the_result_and_prints_fitness_and_path(
                      f"rmse {va['rmse'][0]:.6g} N m",
                      f"parsimony: complexity {par['search_complexity']} -> "
                      f"{par['front'][par['selected'] - 1]['complexity']} (front member "
-                     f"{par['selected']} of {len(par['front'])}, simplest-within=1)"]
+                     f"{par['selected']} of {len(par['front'])}, simplest-within=1)",
+                     start_line(par)]
+    (chosen,) = (c for c in par["start_candidates"] if c["chosen"])
+    assert lines[-1].startswith(f"search's model: step {chosen['step']} best")
+    assert f"whole-log RMSE {chosen['whole_rmse'][0]:.4g} N m" in lines[-1]
     assert res.inputs == ("omega", "alpha") and res.target == "tau_ext"
     assert res.provenance["seed"] == 3 and len(res.provenance["data_sha256"]) == 64
     assert not checkpoint_path(out).exists()
+
+
+def test_the_search_models_line_says_when_the_held_out_blocks_chose() -> None:
+    cands = [{"step": 2, "refitted": True, "whole_rmse": [0.05029, "N m"],
+              "held_out_rmse": [0.06072, "N m"], "tied": True, "chosen": True},
+             {"step": 4, "refitted": True, "whole_rmse": [0.04958, "N m"],
+              "held_out_rmse": [0.06651, "N m"], "tied": True, "chosen": False},
+             {"step": 3, "refitted": False, "whole_rmse": [0.4487, "N m"],
+              "held_out_rmse": [0.456, "N m"], "tied": False, "chosen": False}]
+    assert start_line({"start_tie": 0.02, "start_candidates": cands}) == (
+        "search's model: step 2 best, refitted (whole-log RMSE 0.05029 N m, held out "
+        "0.06072 N m; tied within 2 % with 1 other candidate: the held-out RMSE chose)")
+    alone = [{**cands[1], "chosen": True}, {**cands[2]}]
+    assert start_line({"start_tie": 0.02, "start_candidates": alone}) == (
+        "search's model: step 4 best, refitted (whole-log RMSE 0.04958 N m, held out "
+        "0.06651 N m; the lowest whole-log RMSE of 2 candidates)")
+    assert start_line({"front": []}) is None  # an older result, or --last-step
+
+
+def test_prune_tolerance_keeps_the_configs_other_parsimony_keys(
+    data_csv: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "res.json"
+    cfg = _config(tmp_path, QUICK + '\n[parsimony]\nstart = "last-step"\n')
+    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+               "--config", str(cfg), "--prune-tolerance", "0.02", "-o", str(out),
+               "--workers", "1", "--quiet"])
+    assert rc == 0
+    par = load_result(out).parsimony
+    assert par["tolerance"] == 0.02
+    # The last step's best, as the config asks: no candidates, no refit.
+    assert par["start_step"] == 1 and par["refit"] == 0 and "start_candidates" not in par
 
 
 def test_time_limit_exits_0_with_the_best_so_far(

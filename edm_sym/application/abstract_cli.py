@@ -122,6 +122,9 @@ def run_cli(args: argparse.Namespace) -> int:
         member = par["front"][par["selected"] - 1]
         print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
               f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
+        line = start_line(par)
+        if line:
+            print(line)
     _warn_flags(result, output, data)
     # How the run ended is the last line, after the summary's flags.
     if reason == "interrupted":
@@ -130,6 +133,29 @@ def run_cli(args: argparse.Namespace) -> int:
     elif reason == "time_limit":
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     return 130 if reason == "interrupted" else 0
+
+
+def start_line(par: dict) -> str | None:
+    """How the search's model was chosen, in one line (None: the result does not say).
+
+    ``search's model: step 2 best, refitted (whole-log RMSE 0.0503 N m, held out 0.0607 N m;
+    tied within 2 % with 1 other candidate: the held-out RMSE chose)``.
+    """
+    cands = par.get("start_candidates")
+    if not cands:
+        return None
+    (c,) = (c for c in cands if c["chosen"])
+    others = sum(1 for d in cands if d["tied"]) - 1
+
+    def q(v: list) -> str:
+        return "--" if v[0] is None else f"{v[0]:.4g} {v[1]}"
+
+    held = "" if c["held_out_rmse"][0] is None else f", held out {q(c['held_out_rmse'])}"
+    why = (f"tied within {100 * par['start_tie']:g} % with {others} other candidate"
+           f"{'s' if others > 1 else ''}: the held-out RMSE chose" if others
+           else f"the lowest whole-log RMSE of {len(cands)} candidates")
+    return (f"search's model: step {c['step']} best{', refitted' if c['refitted'] else ''} "
+            f"(whole-log RMSE {q(c['whole_rmse'])}{held}; {why})")
 
 
 def _unit(args: argparse.Namespace) -> str:
@@ -187,17 +213,18 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
 
 
 def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
-    from edm_sym.engines.abstraction.selection import ParsimonySettings, check_select
+    from edm_sym.engines.abstraction.selection import check_select
 
+    # The options change their own keys only: the config's criterion, start, refit, tie stay.
     par = config.parsimony
     tol = getattr(args, "prune_tolerance", None)
     if tol is not None:
         try:
-            par = ParsimonySettings(par.prune, tol, par.select)
+            par = replace(par, tolerance=tol)
         except ConfigError as exc:
             raise ConfigError("--prune-tolerance", exc.problem) from None
     if getattr(args, "no_prune", False):
-        par = ParsimonySettings(False, par.tolerance, par.select)
+        par = replace(par, prune=False)
     if getattr(args, "select", None) is not None:
         check_select(args.select, "--select")
     return replace(config, parsimony=par)
