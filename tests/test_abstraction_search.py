@@ -85,6 +85,46 @@ def test_least_squares_never_returns_a_worse_individual(problem) -> None:  # noq
     assert used <= 6 and f <= f0
 
 
+def test_a_relay_band_inside_the_noise_at_rest_is_widened_by_the_scan() -> None:
+    """An axis at rest with velocity noise of 0.01 rad/s while the torque is still 0.
+
+    A Coulomb relay whose band (0.004 rad/s) is inside the noise switches on it
+    and holds the wrong level until the axis moves; the least squares' forward
+    differences do not see the band's step, the scan does.
+    """
+    from edm_sym.engines.abstraction.local_search import scan_relay_bands
+
+    t = np.arange(2000) * TS
+    omega = np.sin(2 * np.pi * 1.3 * (t - 0.3)) * (t >= 0.3)
+    rest = t < 0.3
+    omega[rest] = 0.01 * np.sin(2 * np.pi * 37.0 * t[rest] + 1.0)  # noise of the axis at rest
+    tau = np.where(rest, 0.0, np.sign(omega))
+    ranges = default_ranges(TS, len(t) * TS)
+    relay = BY_NAME["hysteresis"]
+    ind = Population(np.array([[0]]), np.array([[[relay.code, BY_NAME["gain"].code]]]),
+                     np.array([[[ranges["hysteresis"].encode(0.004),
+                                 ranges["gain"].encode(1.0)]]]))
+    with Evaluator(omega[None, :], tau, TS, ranges, workers=1) as ev:
+        f0 = float(ev.evaluate(ind.inputs, ind.codes, ind.ps)[0])
+        assert f0 > 0.3  # latched on the noise: a wrong level of 1 for most of 0.3 s of 2 s
+        tuned, _, _ = tune_parameters(ev, ind, f0, max_evaluations=200)
+        assert ranges["hysteresis"].decode(tuned.ps[0, 0, 0]) < 0.01  # still inside the noise
+        out, f2, used = scan_relay_bands(ev, ind, f0, ranges)
+        band = ranges["hysteresis"].decode(out.ps[0, 0, 0])
+        # The narrowest band of the scan above the noise (0.004 * 2^(6/4)): it switches
+        # once the axis moves, a sample late at each reversal.
+        assert band == pytest.approx(0.004 * 2 ** 1.5, rel=1e-9) and used == 16
+        assert f2 < 0.3 * f0
+        assert f2 == pytest.approx(float(ev.evaluate(out.inputs, out.codes, out.ps)[0]),
+                                   rel=1e-12)
+        # Nothing to scan, or nothing better: the individual comes back unchanged.
+        again, f3, _ = scan_relay_bands(ev, out, f2, ranges)
+        assert f3 == f2 and np.array_equal(again.ps, out.ps)
+        sign = Population(ind.inputs, np.array([[[BY_NAME["sign"].code, ind.codes[0, 0, 1]]]]),
+                          ind.ps.copy())
+        assert scan_relay_bands(ev, sign, 1.0, ranges)[1:] == (1.0, 0)
+
+
 def test_a_step_stagnating_calls_the_local_search_unless_it_is_off(
         log: DataLog, monkeypatch: pytest.MonkeyPatch) -> None:
     calls: list[float] = []

@@ -15,16 +15,22 @@ number of workers.
 
 Parameters that only exist on a grid (a dead time in samples) get a zero or
 a crude derivative and are left where they are, which is the GA's job.
+
+A relay's band (``hysteresis``) moves the samples where the relay switches:
+the forward differences see no change until a sample crosses it. After the
+search, :func:`step_candidates` also scans each relay's band over factors
+1/4 .. 4 (:func:`scan_relay_bands`) and refits around the best one
+(docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from edm_sym.core.elements import REGISTRY
+from edm_sym.core.elements import REGISTRY, ParamRange
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.evaluator import Evaluator
@@ -36,6 +42,11 @@ PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not 
 
 #: Forward-difference step in p (a parameter near its upper bound steps down).
 STEP = 1e-4
+
+#: Element codes whose parameter is a relay's band (it switches, or not, on a sample).
+RELAY_BANDS = frozenset(code for code, el in REGISTRY.items() if el.name == "hysteresis")
+#: Factors on a relay's band tried by :func:`scan_relay_bands`: 1/4 .. 4 in steps of 2^(1/4).
+BAND_FACTORS = tuple(2.0 ** (k / 4) for k in range(-8, 9) if k)
 
 
 class _Budget(Exception):
@@ -137,6 +148,46 @@ def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
     return out, state["best_f"], state["evals"]
 
 
+def scan_relay_bands(evaluator: Evaluator, best: Population, fitness: float,
+                     ranges: Mapping[str, ParamRange]) -> tuple[Population, float, int]:
+    """Each relay's band scaled by :data:`BAND_FACTORS`, one relay after another.
+
+    A relay's band moves the samples where it switches, a step the least
+    squares' forward differences do not see: a band inside the noise of its
+    input at rest switches on that noise (the axis standing still at the
+    start of a log, the observer's estimate rising from 0), and a slightly
+    wider one does not. Each relay's factors are evaluated in one batch;
+    the best is kept where it lowers eq. 8, before the next relay.
+
+    Returns
+    -------
+    individual, fitness, evaluations
+        As :func:`tune_parameters`.
+    """
+    codes = best.codes[0]
+    relays = [(j, i) for j in range(codes.shape[0]) for i in range(codes.shape[1])
+              if int(codes[j, i]) in RELAY_BANDS]
+    if not relays or not np.isfinite(fitness):
+        return best, fitness, 0
+    out, evals = best.take([0]), 0
+    for j, i in relays:
+        rng = ranges[REGISTRY[int(codes[j, i])].name]
+        band = rng.decode(float(out.ps[0, j, i]))
+        points = sorted({rng.encode(band * f) for f in BAND_FACTORS} - {float(out.ps[0, j, i])})
+        if not points:
+            continue
+        ps = np.repeat(out.ps, len(points), axis=0)
+        ps[:, j, i] = points
+        fit = evaluator.evaluate(np.repeat(out.inputs, len(points), axis=0),
+                                 np.repeat(out.codes, len(points), axis=0), ps)
+        evals += len(points)
+        k = int(np.argmin(fit))
+        if fit[k] < fitness:
+            fitness = float(fit[k])
+            out.ps[0, j, i] = points[k]
+    return out, fitness, evals
+
+
 def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout, *,
                     max_evaluations: int, reject_poles: bool = True
                     ) -> list[tuple[ElementMatrix, int, bool]]:
@@ -179,6 +230,11 @@ def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdou
             pop = Population.from_matrix(s.matrix)
             f0 = float(ev.evaluate(pop.inputs, pop.codes, pop.ps)[0])
             tuned, f1, _ = tune_parameters(ev, pop, f0, max_evaluations=max_evaluations)
+            tuned, f1 = (tuned, f1) if f1 < f0 else (pop, f0)
+            scanned, f2, _ = scan_relay_bands(ev, tuned, f1, comp.ranges)
+            if f2 < f1:
+                # A band moved: the other parameters settle around it again.
+                tuned, f1, _ = tune_parameters(ev, scanned, f2, max_evaluations=max_evaluations)
             if f1 < f0:
                 out.append((tuned.matrix(0, s.matrix.inputs), s.step, True))
     return out
