@@ -96,8 +96,10 @@ def front_context(p: EdmLatexPrinter, result: Any, figures: Mapping[str, str]) -
         } for c in par.get("start_candidates", [])]
         fig = figures.get(FIGURE)
         front.append({
-            "candidates": candidates,
-            "tie": p.text(f"{100 * par.get('start_tie', 0.0):g} %"),
+            # The candidates of the search's model: one table, or none (an older result).
+            "start": [{"candidates": candidates,
+                       "tie": p.text(f"{100 * par.get('start_tie', 0.0):g} %")}]
+            if candidates else [],
             "members": members,
             "criterion": p.mono(par["criterion"]),
             "rule": p.mono(par["select"]),
