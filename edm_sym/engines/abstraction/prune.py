@@ -2,8 +2,8 @@
 
 After the search, a deterministic greedy backward elimination starts from the
 search's model (by default the step best, refitted or as the GA left it, of
-the lowest mean of the plain RMSEs on the fitted and on the held-out samples:
-``abstraction.run.finish``). At
+the lowest plain RMSE over the whole log, the held-out RMSE choosing among
+those within ``[parsimony] tie`` of it: ``abstraction.run.start_candidate``). At
 every stage it tries each simplification:
 
 * replace one element by ``through``;
