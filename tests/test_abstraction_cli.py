@@ -163,8 +163,9 @@ def test_bad_input_exits_2_with_one_line(
 # -- a real process, interrupted and resumed ---------------------------------------
 
 # Long enough that a checkpoint (every CHECKPOINT_SECONDS, and at each step's end) shows a
-# generation of the first step before it ends, whatever the machine's speed: the interrupt
-# must land mid-step (no patience: the step runs all its generations).
+# step in progress before the run ends: the interrupt must land mid-step (no patience: a
+# step runs all its generations). The first step (about 1.5 s here) may end before the
+# first checkpoint; the second, about 6 s, holds at least two.
 LONG = """
 [ga]
 population = 32
@@ -179,6 +180,7 @@ n_elements = 4
 [[step]]
 n_rows = 3
 n_elements = 4
+generations = 1600
 """
 
 
