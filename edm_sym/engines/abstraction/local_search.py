@@ -16,10 +16,11 @@ number of workers.
 Parameters that only exist on a grid (a dead time in samples) get a zero or
 a crude derivative and are left where they are, which is the GA's job.
 
-A relay's band (``hysteresis``) moves the samples where the relay switches:
-the forward differences see no change until a sample crosses it. After the
-search, :func:`step_candidates` also scans each relay's band over factors
-1/4 .. 4 (:func:`scan_relay_bands`) and refits around the best one
+A relay's band (a :class:`~edm_sym.core.elements.RelayElement`, ``hysteresis``)
+moves the samples where the relay switches: the forward differences see no
+change until a sample crosses it. After the search, :func:`step_candidates`
+also scans each relay's band over factors 1/4 .. 4 (:func:`scan_relay_bands`)
+and refits around the best one
 (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front).
 """
 
@@ -30,7 +31,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from edm_sym.core.elements import REGISTRY, ParamRange
+from edm_sym.core.elements import REGISTRY, ParamRange, RelayElement
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.evaluator import Evaluator
@@ -44,7 +45,7 @@ PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not 
 STEP = 1e-4
 
 #: Element codes whose parameter is a relay's band (it switches, or not, on a sample).
-RELAY_BANDS = frozenset(code for code, el in REGISTRY.items() if el.name == "hysteresis")
+RELAY_BANDS = frozenset(code for code, el in REGISTRY.items() if issubclass(el, RelayElement))
 #: Factors on a relay's band tried by :func:`scan_relay_bands`: 1/4 .. 4 in steps of 2^(1/4).
 BAND_FACTORS = tuple(2.0 ** (k / 4) for k in range(-8, 9) if k)
 
