@@ -49,7 +49,9 @@ from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progr
 from edm_sym.engines.abstraction.local_search import step_candidates, tune_parameters
 from edm_sym.engines.abstraction.polish import GAIN, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
+from edm_sym.engines.abstraction.rowsim import default_workers, warm_up
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
+from edm_sym.engines.abstraction.searches import search_seeds, side_by_side
 from edm_sym.engines.abstraction.validation import (
     Holdout,
     Scorer,
@@ -430,6 +432,7 @@ def abstract(
     select: str | None = None,
     axis: str = "rotary",
     scheduler: Any = None,
+    searches: int | None = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -485,6 +488,14 @@ def abstract(
     axis : str
         ``"rotary"`` or ``"linear"``: the SI units of the log (docs/data.md#units),
         recorded in the result; the scores' unit when the config sets none.
+    searches : int, optional
+        Independent searches of the whole schedule, each from its own seed
+        (search 0 from ``seed``); None: the config's ``searches`` (default
+        1). On this machine they run side by side, one process each, on
+        ``workers`` cores; with ``scheduler`` or ``executor`` one after
+        another, each on all of it. The search's model is chosen among the
+        step bests of all of them; ``provenance.searches`` records each one
+        (docs/abstraction.md#independent-searches).
 
     Returns
     -------
@@ -523,6 +534,11 @@ def abstract(
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int | np.integer)
                                 or workers < 1):
         raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
+    if searches is not None:
+        try:
+            cfg = replace(cfg, searches=searches)
+        except ConfigError as exc:
+            raise ConfigError("searches", exc.problem) from None
     try:
         units = axis_units(axis)
     except ValueError as exc:
@@ -555,65 +571,186 @@ def abstract(
     n = len(data)
     ranges = cfg.resolve_ranges(ts, n * ts)
     human = _human_rows(cfg, inputs, ranges)
-    fingerprint = _fingerprint(cfg, target, inputs, int(seed), x, y, ts)
-    rng = np.random.default_rng(int(seed))
+    count = cfg.searches
+    seeds = search_seeds(int(seed), count)
     checkpoint = Path(checkpoint) if checkpoint is not None else None
-    if resume and checkpoint is not None and checkpoint.exists():
-        state = load_checkpoint(checkpoint, fingerprint)
-        rng.bit_generator.state = state.rng_state
-    else:
-        state = RunState(fingerprint, rng.bit_generator.state)
-    batch = max(s.ga.population * s.n_rows for s in cfg.steps)
+    files = checkpoint_files(checkpoint, count)
     client, own_client = _dask_client(scheduler)
-    evaluator = Evaluator(x, y, ts, ranges, executor=executor, workers=workers,
-                          cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
-                          client=client)
+    job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
+                     human=human, mask=hold.mask, executor=executor, client=client)
     try:
-        evaluator.start()
-    except BaseException:
-        if own_client:
-            client.close()
-        raise
-    runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=ranges, human=human, inputs=inputs,
-                     evaluator=evaluator, state=state, rng=rng, checkpoint=checkpoint,
-                     time_limit=time_limit, callback=callback, mask=hold.mask)
-    reason = "completed"
-    try:
-        # One BLAS thread in this process's lane too (see rowsim.worker_init).
-        with threadpool_limits(1):
-            runner.run()
-    except _Stop as stop:
-        reason = stop.reason
-        runner.save()
-    except KeyboardInterrupt:
-        reason = "interrupted"
-        evaluator.abort()
-        runner.save()
-        if not runner.records():
-            raise
+        if count == 1:
+            outcomes = [job.run(int(seed), workers, files[0], resume, time_limit, callback)]
+        else:
+            # Side by side on this machine's cores (one process each, sharing nothing);
+            # one after another on a cluster or an executor, each search on all of it.
+            lanes = 1 if client is not None or executor is not None else (
+                workers or default_workers())
+            per = max(1, (workers or default_workers()) // min(count, lanes))
+            if lanes > 1:
+                warm_up()  # the row kernel, loaded once before the searches are forked
+
+            def one(k: int, limit: float | None, report: Callable[[GenerationInfo], bool | None]
+                    ) -> tuple[list[StepRecord], str, list]:
+                steps, why = job.run(seeds[k], per if lanes > 1 else workers, files[k], resume,
+                                     limit, report)
+                # The refits of this search's step bests, made here, beside the other searches.
+                made = (search_candidates(steps, Compensator(steps[-1].matrix, ts, ranges, n * ts),
+                                          hold, cfg) if steps else [])
+                return steps, why, made
+
+            outcomes = []
+            for value, error in side_by_side(count, lanes, one, callback, time_limit):
+                if error is not None and not isinstance(error, KeyboardInterrupt):
+                    raise error
+                outcomes.append(value)
     finally:
-        evaluator.close()
         if own_client:
             client.close()
-    steps = []
-    for r in runner.records():
-        matrix = r.best.matrix(0, inputs)
-        lam = mask_weights(cfg.steps[r.step - 1].weighting.weights(t, y), hold.mask)
-        steps.append(StepRecord(step=r.step, matrix=matrix,
-                                fitness=_reference_fitness(matrix, ts, ranges, x, y, lam,
-                                                           r.fitness, r.step),
-                                history=tuple(r.history), generations=r.generations,
-                                evaluations=r.evaluations, weighting=r.weighting))
-    comp, parsimony, final = finish(steps, Compensator(steps[-1].matrix, ts, ranges, n * ts),
-                                     hold, cfg, select)
+    groups = [o[0] if o is not None else [] for o in outcomes]
+    reasons = [o[1] if o is not None else "stopped" for o in outcomes]
+    made = [o[2] if o is not None else [] for o in outcomes] if count > 1 else None
+    ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, ts, ranges, n * ts)
+    comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, hold, cfg, select, made)
+    steps = groups[chosen]
+    reason = next((r for r in reasons if r != "completed"), "completed")
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
-    provenance = {"seed": int(seed), "package_version": __version__,
-                  "data_sha256": data.sha256, "stop_reason": reason}
-    if reason == "completed" and checkpoint is not None and checkpoint.exists():
-        checkpoint.unlink()
+    provenance: dict[str, Any] = {"seed": int(seed), "package_version": __version__,
+                                  "data_sha256": data.sha256, "stop_reason": reason}
+    if count > 1:
+        provenance["searches"] = [
+            {"search": k, "seed": seeds[k], "stop_reason": reasons[k],
+             "evaluations": sum(s.evaluations for s in g),
+             "step_fitness": [s.fitness if math.isfinite(s.fitness) else None for s in g],
+             "chosen": k == chosen} for k, g in enumerate(groups)]
+    if reason == "completed":
+        for f in files:
+            if f is not None and f.exists():
+                f.unlink()
     logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=logs)
+
+
+def checkpoint_files(checkpoint: Path | None, count: int) -> list[Path | None]:
+    """The checkpoint file of each search: ``checkpoint`` itself for one search,
+    ``<checkpoint>.search<k>`` for each of several."""
+    if checkpoint is None:
+        return [None] * count
+    if count == 1:
+        return [checkpoint]
+    return [checkpoint.with_name(f"{checkpoint.name}.search{k}") for k in range(count)]
+
+
+@dataclass(frozen=True)
+class _SearchJob:
+    """What every search of a run shares: the config, the training data, where to evaluate."""
+
+    cfg: AbstractionConfig
+    target: str
+    inputs: tuple[str, ...]
+    x: np.ndarray
+    y: np.ndarray
+    t: np.ndarray
+    ts: float
+    ranges: dict[str, ParamRange]
+    human: Population | None
+    mask: np.ndarray | None
+    executor: Executor | None
+    client: Any
+
+    def run(self, seed: int, workers: int | None, checkpoint: Path | None, resume: bool,
+            time_limit: float | None, callback: Callable[[GenerationInfo], bool | None] | None
+            ) -> tuple[list[StepRecord], str]:
+        """One search of the schedule from ``seed``: its step bests and how it ended.
+
+        Raises
+        ------
+        KeyboardInterrupt
+            Only when interrupted before the first population was evaluated.
+        """
+        cfg, x, y, t, ts = self.cfg, self.x, self.y, self.t, self.ts
+        fingerprint = _fingerprint(cfg, self.target, self.inputs, int(seed), x, y, ts)
+        rng = np.random.default_rng(int(seed))
+        if resume and checkpoint is not None and checkpoint.exists():
+            state = load_checkpoint(checkpoint, fingerprint)
+            rng.bit_generator.state = state.rng_state
+        else:
+            state = RunState(fingerprint, rng.bit_generator.state)
+        batch = max(s.ga.population * s.n_rows for s in cfg.steps)
+        evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
+                              cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
+                              client=self.client)
+        evaluator.start()
+        runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
+                         inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
+                         checkpoint=checkpoint, time_limit=time_limit, callback=callback,
+                         mask=self.mask)
+        reason = "completed"
+        try:
+            # One BLAS thread in this process's lane too (see rowsim.worker_init).
+            with threadpool_limits(1):
+                runner.run()
+        except _Stop as stop:
+            reason = stop.reason
+            runner.save()
+        except KeyboardInterrupt:
+            reason = "interrupted"
+            evaluator.abort()
+            runner.save()
+            if not runner.records():
+                raise
+        finally:
+            evaluator.close()
+        steps = []
+        for r in runner.records():
+            matrix = r.best.matrix(0, self.inputs)
+            lam = mask_weights(cfg.steps[r.step - 1].weighting.weights(t, y), self.mask)
+            steps.append(StepRecord(step=r.step, matrix=matrix,
+                                    fitness=_reference_fitness(matrix, ts, self.ranges, x, y, lam,
+                                                               r.fitness, r.step),
+                                    history=tuple(r.history), generations=r.generations,
+                                    evaluations=r.evaluations, weighting=r.weighting))
+        return steps, reason
+
+
+def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,
+                    cfg: AbstractionConfig, select: str | None = None,
+                    cands: Sequence[Sequence[tuple[ElementMatrix, int, bool]]] | None = None
+                    ) -> tuple[Compensator, dict[str, Any], dict[str, Any], int]:
+    """:func:`finish` over the step bests of one or several searches; also which search won.
+
+    With ``[parsimony] start = "best-step"`` (the default) the step bests of
+    every search are the candidates of one choice (each candidate names its
+    search); otherwise the search whose last step best has the lowest
+    fitness (eq. 8 of that step's weighting) is finished alone. A search
+    without any step (stopped before its first population) is passed over.
+    ``cands``: each search's :func:`search_candidates`, when already made.
+    """
+    ran = [k for k, g in enumerate(groups) if g]
+    if len(groups) == 1 or not (cfg.parsimony.prune and cfg.parsimony.start == "best-step"):
+        chosen = min(ran, key=lambda k: (groups[k][-1].fitness, k))
+        steps = groups[chosen]
+        out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select)
+        return (*out, chosen)
+    pooled = [s for k in ran for s in groups[k]]
+    made = [(*c, k) for k in ran for c in (cands[k] if cands is not None
+                                            else search_candidates(groups[k], comp, hold, cfg))]
+    comp, parsimony, final = finish(pooled, comp, hold, cfg, select, candidates_in=made)
+    chosen = next(c["search"] for c in parsimony["start_candidates"] if c["chosen"])
+    return comp, parsimony, final, chosen
+
+
+def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
+                      cfg: AbstractionConfig) -> list[tuple[ElementMatrix, int, bool]]:
+    """One search's candidates for the search's model: its step bests and their refits
+    (:func:`~edm_sym.engines.abstraction.local_search.step_candidates`); made where the
+    search ran, side by side with the other searches'."""
+    if not (steps and cfg.parsimony.prune and cfg.parsimony.start == "best-step"):
+        return []
+    return step_candidates(steps, replace(comp, matrix=steps[-1].matrix), hold,
+                           max_evaluations=cfg.parsimony.refit,
+                           reject_poles=cfg.steps[-1].ga.reject_poles)
 
 
 def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
@@ -660,7 +797,8 @@ def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
 
 
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
-           cfg: AbstractionConfig, select: str | None = None
+           cfg: AbstractionConfig, select: str | None = None, *,
+           candidates_in: Sequence[tuple[ElementMatrix, int, bool, int]] | None = None
            ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
     """After the search: choose the search's model, prune it, score the exported one.
 
@@ -675,6 +813,10 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     cfg : AbstractionConfig
     select : str, optional
         A selection rule overriding the config's.
+    candidates_in : sequence of (ElementMatrix, int, bool, int), optional
+        The candidates of the search's model already made (several searches:
+        each made its own, :func:`search_candidates`): matrix, step, refitted,
+        search. Each of ``start_candidates`` then names its ``search``.
 
     Returns
     -------
@@ -695,8 +837,9 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         # Each step best is also refitted on the whole training part: one that learnt a law
         # on eq. 15's windows often beats the others there (docs/abstraction.md#seed-robustness).
         refit = cfg.parsimony.refit
-        cands = step_candidates(steps, comp, hold, max_evaluations=refit,
-                                reject_poles=cfg.steps[-1].ga.reject_poles)
+        cands = (list(candidates_in) if candidates_in is not None
+                 else [(*c, 0) for c in step_candidates(steps, comp, hold, max_evaluations=refit,
+                                                        reject_poles=cfg.steps[-1].ga.reject_poles)])
         sound = [q for q, c in enumerate(cands)
                  if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
         pool = sound or list(range(len(cands)))
@@ -706,6 +849,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]
         for c, r in zip(candidates, pool, strict=True):
             c.update(step=cands[r][1], refitted=cands[r][2])
+            if candidates_in is not None:
+                c["search"] = cands[r][3]
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
                                       refit=refit, refitted=refitted)
     if parsimony and candidates:

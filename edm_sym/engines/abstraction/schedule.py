@@ -33,6 +33,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 CONTINUE_MODES = ("no", "improving", "always")
+#: The most independent searches one run may make (``searches``).
+MAX_SEARCHES = 64
 
 # name: (kind, minimum, maximum); kind "int", "float", "prob", "mode" or "names".
 _GA_FIELDS: dict[str, tuple[str, float | None, float | None]] = {
@@ -243,6 +245,11 @@ class AbstractionConfig:
     axis : str or None
         ``"rotary"`` or ``"linear"`` (the top-level ``axis`` key); None: rotary
         unless ``--axis`` says otherwise.
+    searches : int
+        Independent searches of the whole schedule (the top-level ``searches``
+        key, default 1), each from its own seed, run side by side on the
+        workers; the search's model is chosen among the step bests of all of
+        them (docs/abstraction.md#independent-searches).
     """
 
     steps: tuple[StepConfig, ...] = ()
@@ -254,8 +261,13 @@ class AbstractionConfig:
     parsimony: ParsimonySettings = field(default_factory=ParsimonySettings)
     columns: ColumnRoles | None = None
     axis: str | None = None
+    searches: int = 1
 
     def __post_init__(self) -> None:
+        if (isinstance(self.searches, bool) or not isinstance(self.searches, int)
+                or not 1 <= self.searches <= MAX_SEARCHES):
+            raise ConfigError(f"{self.source}: searches", f"expected an integer from 1 to "
+                                                          f"{MAX_SEARCHES}, found {_found(self.searches)}")
         if self.axis is not None and (not isinstance(self.axis, str) or self.axis not in AXES):
             raise ConfigError(f"{self.source}: axis",
                               f"expected {' or '.join(AXES)}, found {_found(self.axis)}")
@@ -418,7 +430,7 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
-             "parsimony", "columns", "axis")
+             "parsimony", "columns", "axis", "searches")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -496,7 +508,7 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
         except DataFormatError as exc:
             raise ConfigError(exc.where, exc.problem) from None
     return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
-                             parsimony, columns, doc.get("axis"))
+                             parsimony, columns, doc.get("axis"), doc.get("searches", 1))
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:

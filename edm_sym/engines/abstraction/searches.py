@@ -1,0 +1,188 @@
+"""Independent searches side by side (``searches`` > 1): one process per search.
+
+One search of the hierarchical schedule synchronises its workers every
+generation (the GA ranks a whole generation before it breeds the next), and
+on a small machine that synchronisation costs a share of every core
+(docs/abstraction.md#measuring-it). K independent searches of the same
+schedule, each from its own seed, share nothing until they end: each runs in
+a process of its own, forked from this one, with its own row stores, and only
+its generation reports and its step bests come back. The search's model is
+then chosen among the step bests of all of them
+(:func:`edm_sym.engines.abstraction.run.finish`).
+
+A search's outcome depends only on the data, the config and its seed
+(:func:`search_seeds`), so the run's result does not depend on how many
+searches ran at once, nor on which ended first.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable
+from dataclasses import replace
+from multiprocessing.connection import wait
+from typing import Any
+
+import numpy as np
+
+#: (search index, its time limit, its callback) -> the search's outcome.
+SearchFn = Callable[[int, "float | None", "Callable[[Any], bool | None] | None"], Any]
+
+# The job of the processes forked by side_by_side: set before the fork, so a
+# child reads it from its copy of this process (nothing is pickled to start it).
+_JOB: SearchFn | None = None
+_STOP: Any = None
+
+
+def search_seeds(seed: int, count: int) -> list[int]:
+    """The seed of each search: search 0 has the run's own, search k > 0 one drawn from it.
+
+    Drawn with :meth:`numpy.random.SeedSequence.spawn` (independent streams)
+    and kept below 2**53, so a result.json reader in any language reads it
+    exactly. Search 0 of a run with K searches is the run with one search:
+    more searches never lose the model one search finds.
+    """
+    children = np.random.SeedSequence(int(seed)).spawn(count)
+    return [int(seed)] + [int(c.generate_state(1, np.uint64)[0]) >> 11 for c in children[1:]]
+
+
+def side_by_side(count: int, lanes: int, job: SearchFn,
+                 callback: Callable[[Any], bool | None] | None,
+                 time_limit: float | None) -> list[tuple[Any, BaseException | None]]:
+    """Run ``job(k, limit, report)`` for each search k, at most ``lanes`` at a time.
+
+    Parameters
+    ----------
+    count : int
+        Searches.
+    lanes : int
+        How many run at once: 1 runs them one after another in this process;
+        more fork a process per search (where the system can fork).
+    job : callable
+        One search: its index, its time limit (seconds or None) and the
+        callback it reports each generation to (a true return value stops it).
+    callback : callable, optional
+        The run's callback: called in this process with each search's
+        reports, tagged ``search=k`` and ``searches=count``; a true return
+        value stops every search at its next generation.
+    time_limit : float, optional
+        The run's wall time: each search gets ``time_limit * lanes / count``
+        (the searches run in ``count / lanes`` waves).
+
+    Returns
+    -------
+    list of (outcome, exception)
+        Per search, in order: its outcome and None, or None and what it
+        raised (a search not started because the run was stopped first:
+        ``(None, None)``).
+    """
+    global _JOB, _STOP
+    lanes = max(1, min(int(lanes), count))
+    limit = None if time_limit is None else time_limit * lanes / count
+    if lanes == 1 or "fork" not in multiprocessing.get_all_start_methods():
+        return _one_after_another(count, job, callback, limit)
+    ctx = multiprocessing.get_context("fork")
+    _JOB, _STOP = job, ctx.Event()
+    out: list[tuple[Any, BaseException | None]] = [(None, None)] * count
+    running: dict[Any, tuple[int, Any]] = {}
+    queued = list(range(count))
+    interrupted = False
+    try:
+        while queued or running:
+            while queued and len(running) < lanes and not _STOP.is_set():
+                k = queued.pop(0)
+                conn, child = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_child, args=(child, k, limit, os.getpid()),
+                                   name=f"edm_sym-search-{k}")
+                proc.start()
+                child.close()
+                running[conn] = (k, proc)
+            if _STOP.is_set():
+                queued.clear()
+            try:
+                ready = wait(list(running))
+            except KeyboardInterrupt:
+                # Every search got the same Ctrl-C: each saves and returns its best so far.
+                interrupted = True
+                _STOP.set()
+                continue
+            for conn in ready:
+                k, proc = running[conn]
+                try:
+                    kind, value = conn.recv()
+                except (EOFError, OSError):
+                    kind, value = "error", RuntimeError(f"search {k} ended without an answer "
+                                                        f"(exit code {proc.exitcode})")
+                except KeyboardInterrupt:
+                    interrupted = True
+                    _STOP.set()
+                    continue
+                if kind == "info":
+                    if callback is not None and callback(replace(value, search=k, searches=count)):
+                        _STOP.set()
+                    continue
+                out[k] = (value, None) if kind == "done" else (None, value)
+                del running[conn]
+                conn.close()
+                proc.join()
+    finally:
+        for conn, (_, proc) in running.items():  # pragma: no cover (an error in this process)
+            proc.kill()
+            proc.join()
+            conn.close()
+        _JOB, _STOP = None, None
+    if interrupted and all(v is None for v, _ in out):
+        raise KeyboardInterrupt
+    return out
+
+
+def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool | None] | None,
+                       limit: float | None) -> list[tuple[Any, BaseException | None]]:
+    """The searches in this process, in order (a stop ends the one running and skips the rest)."""
+    stopped = False
+    out: list[tuple[Any, BaseException | None]] = []
+    for k in range(count):
+        if stopped:
+            out.append((None, None))
+            continue
+
+        def report(info: Any, k: int = k) -> bool:
+            nonlocal stopped
+            if callback is not None and callback(replace(info, search=k, searches=count)):
+                stopped = True
+            return stopped
+
+        try:
+            out.append((job(k, limit, report), None))
+        except KeyboardInterrupt:
+            if any(v is not None for v, _ in out):
+                out.append((None, None))
+                stopped = True
+                continue
+            raise
+        except Exception as exc:  # noqa: BLE001 (returned to the caller, who raises it)
+            out.append((None, exc))
+    return out
+
+
+def _child(conn: Any, k: int, limit: float | None, parent: int) -> None:
+    """A forked search: run it, send each report and then its outcome (or its error)."""
+    assert _JOB is not None and _STOP is not None
+    stop = _STOP
+
+    def report(info: Any) -> bool:
+        if os.getppid() != parent:  # the run's process is gone: so is its result
+            os._exit(1)
+        conn.send(("info", info))
+        return stop.is_set()
+
+    try:
+        msg = ("done", _JOB(k, limit, report))
+    except BaseException as exc:  # noqa: BLE001 (sent to the run's process)
+        msg = ("error", exc)
+    try:
+        conn.send(msg)
+    except Exception as exc:  # noqa: BLE001 (an outcome that does not pickle)
+        conn.send(("error", RuntimeError(f"search {k}: {type(exc).__name__}: {exc}")))
+    conn.close()
