@@ -203,6 +203,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--workers", type=int, default=None, help="processes (default: all cores)")
+    p.add_argument("--searches", type=int, default=None, metavar="K",
+                   help="independent searches from seeds drawn from --seed, side by side on the "
+                        "workers; the model is chosen among all their step bests (default: the "
+                        "config's searches, 1)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="a dask scheduler (tcp://host:8786): evaluate on its workers instead "
                         "(needs edm_sym[dask]; docs/abstraction.md)")

@@ -89,6 +89,7 @@ class ProgressReporter:
         self._bar: Any = None
         self._last_line: float | None = None
         self._last_key: object = None
+        self._last_by_key: dict[object, float] = {}
         self._generations = 0
         self.lines_written = 0
 
@@ -106,6 +107,9 @@ class ProgressReporter:
             left = min(left, max(0.0, info.time_limit - elapsed))
         n_el, n_rows = info.shape
         where = f"step {info.step}/{info.steps} ({n_el}x{n_rows}) gen {info.generation}"
+        searches = getattr(info, "searches", 1)
+        if searches > 1:  # several searches side by side: each reports its own
+            where = f"search {info.search + 1}/{searches} {where}"
         if self.mode == "bar":
             bar = self._tqdm("gen")
             bar.total = bar.n + 1 + info.generations_left
@@ -113,7 +117,7 @@ class ProgressReporter:
                                     f"{rate:.0f} eval/s", refresh=False)
             bar.update(1)
             return
-        self._line(info.step, f"{where} | best {info.best:.6g}{self.unit} | {rate:.0f} eval/s"
+        self._line((getattr(info, "search", 0), info.step), f"{where} | best {info.best:.6g}{self.unit} | {rate:.0f} eval/s"
                               f" | time left ~{format_seconds(left)} "
                               f"| elapsed {format_seconds(elapsed)}")
 
@@ -157,10 +161,13 @@ class ProgressReporter:
 
     def _line(self, key: object, text: str) -> None:
         now = self.clock()
-        if (self._last_line is not None and key == self._last_key
-                and now - self._last_line < self.interval):
+        # A line per key (a step; a search's step) at most every interval: the searches
+        # of a run report in turns, each at its own pace.
+        last = self._last_by_key.get(key)
+        if last is not None and now - last < self.interval:
             return
         self._last_line, self._last_key = now, key
+        self._last_by_key[key] = now
         print(f"{self.prog}: {text}", file=self.stream, flush=True)
         self.lines_written += 1
 

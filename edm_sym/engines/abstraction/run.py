@@ -603,17 +603,20 @@ def abstract(
             for value, error in side_by_side(count, lanes, one, callback, time_limit):
                 if error is not None and not isinstance(error, KeyboardInterrupt):
                     raise error
-                outcomes.append(value)
+                # Not run: the run was stopped (or interrupted) before this search began.
+                outcomes.append(value if value is not None else
+                                ([], "interrupted" if error is not None else "stopped", []))
     finally:
         if own_client:
             client.close()
-    groups = [o[0] if o is not None else [] for o in outcomes]
-    reasons = [o[1] if o is not None else "stopped" for o in outcomes]
-    made = [o[2] if o is not None else [] for o in outcomes] if count > 1 else None
+    groups = [o[0] for o in outcomes]
+    reasons = [o[1] for o in outcomes]
+    made = [o[2] for o in outcomes] if count > 1 else None
     ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, ts, ranges, n * ts)
     comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, hold, cfg, select, made)
     steps = groups[chosen]
-    reason = next((r for r in reasons if r != "completed"), "completed")
+    reason = ("interrupted" if "interrupted" in reasons
+              else next((r for r in reasons if r != "completed"), "completed"))
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": int(seed), "package_version": __version__,
                                   "data_sha256": data.sha256, "stop_reason": reason}

@@ -33,6 +33,7 @@ SearchFn = Callable[[int, "float | None", "Callable[[Any], bool | None] | None"]
 # child reads it from its copy of this process (nothing is pickled to start it).
 _JOB: SearchFn | None = None
 _STOP: Any = None
+_INTERRUPT: Any = None
 
 
 def search_seeds(seed: int, count: int) -> list[int]:
@@ -75,15 +76,20 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
     list of (outcome, exception)
         Per search, in order: its outcome and None, or None and what it
         raised (a search not started because the run was stopped first:
-        ``(None, None)``).
+        ``(None, None)``; interrupted first: ``(None, KeyboardInterrupt())``).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        When interrupted before any search evaluated its first population.
     """
-    global _JOB, _STOP
+    global _JOB, _STOP, _INTERRUPT
     lanes = max(1, min(int(lanes), count))
     limit = None if time_limit is None else time_limit * lanes / count
     if lanes == 1 or "fork" not in multiprocessing.get_all_start_methods():
         return _one_after_another(count, job, callback, limit)
     ctx = multiprocessing.get_context("fork")
-    _JOB, _STOP = job, ctx.Event()
+    _JOB, _STOP, _INTERRUPT = job, ctx.Event(), ctx.Event()
     out: list[tuple[Any, BaseException | None]] = [(None, None)] * count
     running: dict[Any, tuple[int, Any]] = {}
     queued = list(range(count))
@@ -103,8 +109,10 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
             try:
                 ready = wait(list(running))
             except KeyboardInterrupt:
-                # Every search got the same Ctrl-C: each saves and returns its best so far.
+                # Each search saves its checkpoint and returns its best so far (a Ctrl-C
+                # reaches them all at once; a SIGTERM to this process only, so they are told).
                 interrupted = True
+                _INTERRUPT.set()
                 _STOP.set()
                 continue
             for conn in ready:
@@ -116,6 +124,7 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
                                                         f"(exit code {proc.exitcode})")
                 except KeyboardInterrupt:
                     interrupted = True
+                    _INTERRUPT.set()
                     _STOP.set()
                     continue
                 if kind == "info":
@@ -131,9 +140,12 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
             proc.kill()
             proc.join()
             conn.close()
-        _JOB, _STOP = None, None
-    if interrupted and all(v is None for v, _ in out):
-        raise KeyboardInterrupt
+        _JOB, _STOP, _INTERRUPT = None, None, None
+    if interrupted:
+        if all(v is None for v, _ in out):
+            raise KeyboardInterrupt
+        # Not started, or stopped before its first population: interrupted too.
+        out = [(v, KeyboardInterrupt() if v is None and e is None else e) for v, e in out]
     return out
 
 
@@ -155,9 +167,9 @@ def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool
 
         try:
             out.append((job(k, limit, report), None))
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
             if any(v is not None for v, _ in out):
-                out.append((None, None))
+                out.append((None, exc))
                 stopped = True
                 continue
             raise
@@ -168,12 +180,14 @@ def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool
 
 def _child(conn: Any, k: int, limit: float | None, parent: int) -> None:
     """A forked search: run it, send each report and then its outcome (or its error)."""
-    assert _JOB is not None and _STOP is not None
-    stop = _STOP
+    assert _JOB is not None and _STOP is not None and _INTERRUPT is not None
+    stop, interrupt = _STOP, _INTERRUPT
 
     def report(info: Any) -> bool:
         if os.getppid() != parent:  # the run's process is gone: so is its result
             os._exit(1)
+        if interrupt.is_set():
+            raise KeyboardInterrupt  # the search saves its checkpoint: --resume continues it
         conn.send(("info", info))
         return stop.is_set()
 
