@@ -127,6 +127,8 @@ def test_time_limit_exits_0_with_the_best_so_far(
     (["--inputs", "omega,speed"], "log.csv: column 'speed': expected a input column"),
     (["--inputs", "omega,,alpha"], "--inputs: expected comma-separated column names"),
     (["--workers", "0"], "--workers: expected an integer >= 1"),
+    (["--searches", "0"], "--searches: expected an integer from 1 to 64, found integer 0"),
+    (["--config", "{searches}"], "cfg.toml: searches: expected an integer from 1 to 64, found string"),
     (["--seed", "-4"], "--seed: expected an integer >= 0"),
     # Nothing listens on the discard port: refused within the 10 s connect timeout.
     (["--scheduler", "tcp://127.0.0.1:9"],
@@ -136,7 +138,7 @@ def test_bad_input_exits_2_with_one_line(
     data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str
 ) -> None:
     texts = {"bad": "[ga]\npopulaton = 3\n", "type": "[ga]\npopulation = '64'\n",
-             "toml": "[ga\n"}
+             "toml": "[ga\n", "searches": "searches = '2'\n"}
     fixed = []
     for a in args:
         if a.startswith("{"):

@@ -97,7 +97,13 @@ class GenerationInfo:
         restarts left, and every later step's shortest run): a time-left
         estimate for progress lines, not a promise.
     time_limit : float or None
-        The run's wall-time limit in seconds.
+        The run's wall-time limit in seconds (with several searches, the
+        search's share of it).
+    search : int
+        Which of the run's independent searches reports (0-based; config
+        ``searches``).
+    searches : int
+        The run's independent searches.
     """
 
     step: int
@@ -111,6 +117,8 @@ class GenerationInfo:
     shape: tuple[int, int] = (0, 0)
     generations_left: int = 0
     time_limit: float | None = None
+    search: int = 0
+    searches: int = 1
 
 
 def _fewest_generations(ga: GaSettings, generation: int, since_improvement: int,
