@@ -133,3 +133,20 @@ def test_a_bad_number_of_searches_is_refused_naming_the_key(log: DataLog, value:
     with pytest.raises(ConfigError) as err:
         run(log, SMALL, seed=1, workers=1, searches=value)
     assert err.value.where == "searches"
+
+
+def test_searches_on_a_dask_cluster_run_one_worker_each_and_give_the_same_bytes(
+    log: DataLog, two_one_worker: str
+) -> None:
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        seen: list[GenerationInfo] = []
+        res = run(log, TWO, seed=5, scheduler=client, callback=seen.append)
+        assert dumps(res) == two_one_worker
+        # Each search was a task of its own: both report, from the workers' processes.
+        assert {i.search for i in seen} == {0, 1}
+        # A stop from this process reaches the searches on the workers.
+        stopped = run(log, TWO, seed=5, scheduler=client, callback=lambda info: True)
+        assert stopped.provenance["stop_reason"] == "stopped"

@@ -117,9 +117,9 @@ class ProgressReporter:
                                     f"{rate:.0f} eval/s", refresh=False)
             bar.update(1)
             return
-        self._line((getattr(info, "search", 0), info.step), f"{where} | best {info.best:.6g}{self.unit} | {rate:.0f} eval/s"
-                              f" | time left ~{format_seconds(left)} "
-                              f"| elapsed {format_seconds(elapsed)}")
+        self._line((getattr(info, "search", 0), info.step),
+                   f"{where} | best {info.best:.6g}{self.unit} | {rate:.0f} eval/s"
+                   f" | time left ~{format_seconds(left)} | elapsed {format_seconds(elapsed)}")
 
     def lugre(self, info: Any) -> None:
         """``progress`` of :func:`edm_sym.engines.lugre.identify_lugre`."""

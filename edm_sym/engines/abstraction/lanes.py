@@ -226,17 +226,22 @@ class LaneActor:
     """
 
     def __init__(self) -> None:
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL("libc.so.6")
-            libc.mallopt(-3, 32 * 2**20)  # M_MMAP_THRESHOLD
-        except (OSError, AttributeError):  # pragma: no cover (not glibc)
-            pass
+        tune_malloc()
 
     def call(self, fn: Callable[..., Any], *args: Any) -> Any:
         """``fn(*args)`` in the worker's process."""
         return fn(*args)
+
+
+def tune_malloc() -> None:
+    """Keep signal-sized temporaries out of fresh mappings in a dask worker (see :class:`LaneActor`)."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 32 * 2**20)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):  # pragma: no cover (not glibc)
+        pass
 
 
 class DaskLane:

@@ -16,6 +16,7 @@ clock, and it ends a run at a generation boundary.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -51,7 +52,7 @@ from edm_sym.engines.abstraction.polish import GAIN, scale_places
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.rowsim import default_workers, warm_up
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
-from edm_sym.engines.abstraction.searches import search_seeds, side_by_side
+from edm_sym.engines.abstraction.searches import on_cluster, search_seeds, side_by_side
 from edm_sym.engines.abstraction.validation import (
     Holdout,
     Scorer,
@@ -585,30 +586,30 @@ def abstract(
     files = checkpoint_files(checkpoint, count)
     client, own_client = _dask_client(scheduler)
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
-                     human=human, mask=hold.mask, executor=executor, client=client)
+                     human=human, hold=hold, executor=executor, client=client, n=n)
     try:
         if count == 1:
             outcomes = [job.run(int(seed), workers, files[0], resume, time_limit, callback)]
         else:
-            # Side by side on this machine's cores (one process each, sharing nothing);
-            # one after another on a cluster or an executor, each search on all of it.
-            lanes = 1 if client is not None or executor is not None else (
-                workers or default_workers())
-            per = max(1, (workers or default_workers()) // min(count, lanes))
-            if lanes > 1:
-                warm_up()  # the row kernel, loaded once before the searches are forked
-
-            def one(k: int, limit: float | None, report: Callable[[GenerationInfo], bool | None]
-                    ) -> tuple[list[StepRecord], str, list]:
-                steps, why = job.run(seeds[k], per if lanes > 1 else workers, files[k], resume,
-                                     limit, report)
-                # The refits of this search's step bests, made here, beside the other searches.
-                made = (search_candidates(steps, Compensator(steps[-1].matrix, ts, ranges, n * ts),
-                                          hold, cfg) if steps else [])
-                return steps, why, made
-
+            task = functools.partial(_one_search, replace(job, executor=None, client=None), seeds,
+                                     files, resume)
+            if client is not None:
+                # Each search a task of its own on the cluster, run by one worker alone.
+                ended = on_cluster(client, count, task, callback, time_limit)
+            else:
+                # Side by side on this machine's cores (one process each, sharing nothing);
+                # one after another with an executor, each search on all of it.
+                lanes = 1 if executor is not None else (workers or default_workers())
+                if lanes > 1:
+                    warm_up()  # the row kernel, loaded once before the searches are forked
+                    per = max(1, lanes // min(count, lanes))
+                    task = functools.partial(task, workers=per)
+                else:
+                    task = functools.partial(_one_search, job, seeds, files, resume,
+                                             workers=workers)
+                ended = side_by_side(count, lanes, task, callback, time_limit)
             outcomes = []
-            for value, error in side_by_side(count, lanes, one, callback, time_limit):
+            for value, error in ended:
                 if error is not None and not isinstance(error, KeyboardInterrupt):
                     raise error
                 # Not run: the run was stopped (or interrupted) before this search began.
@@ -666,9 +667,16 @@ class _SearchJob:
     ts: float
     ranges: dict[str, ParamRange]
     human: Population | None
-    mask: np.ndarray | None
+    hold: Holdout
     executor: Executor | None
     client: Any
+    #: Samples of the abstraction log (the record length of the ranges).
+    n: int = 0
+
+    @property
+    def mask(self) -> np.ndarray | None:
+        """The held-out samples' mask (Lambda is 0 there), or None."""
+        return self.hold.mask
 
     def run(self, seed: int, workers: int | None, checkpoint: Path | None, resume: bool,
             time_limit: float | None, callback: Callable[[GenerationInfo], bool | None] | None
@@ -723,6 +731,18 @@ class _SearchJob:
                                     history=tuple(r.history), generations=r.generations,
                                     evaluations=r.evaluations, weighting=r.weighting))
         return steps, reason
+
+
+def _one_search(job: _SearchJob, seeds: Sequence[int], files: Sequence[Path | None], resume: bool,
+                k: int, limit: float | None, report: Callable[[GenerationInfo], bool | None], *,
+                workers: int | None = 1) -> tuple[list[StepRecord], str, list]:
+    """Search ``k`` of a run with several, and its candidates for the search's model.
+
+    The refits of its step bests are made where it ran, beside the other searches'.
+    """
+    steps, why = job.run(seeds[k], workers, files[k], resume, limit, report)
+    comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts) if steps else None
+    return steps, why, search_candidates(steps, comp, job.hold, job.cfg) if steps else []
 
 
 def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,

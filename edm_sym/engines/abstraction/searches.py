@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
 from collections.abc import Callable
 from dataclasses import replace
 from multiprocessing.connection import wait
@@ -200,3 +201,96 @@ def _child(conn: Any, k: int, limit: float | None, parent: int) -> None:
     except Exception as exc:  # noqa: BLE001 (an outcome that does not pickle)
         conn.send(("error", RuntimeError(f"search {k}: {type(exc).__name__}: {exc}")))
     conn.close()
+
+
+#: Seconds between two reports a search on a cluster sends (each is a scheduler round trip).
+CLUSTER_REPORT_SECONDS = 0.5
+
+
+def on_cluster(client: Any, count: int, task: Callable[[int, float | None, Callable], Any],
+               callback: Callable[[Any], bool | None] | None,
+               time_limit: float | None) -> list[tuple[Any, BaseException | None]]:
+    """Each search a task of its own on a dask cluster: a worker runs it alone, start to end.
+
+    ``task`` (picklable: it goes to the workers) runs one search as ``job``
+    does in :func:`side_by_side`. Its reports come back through a
+    ``distributed.Queue`` at most every :data:`CLUSTER_REPORT_SECONDS` (and
+    at each step's end), pickled; a true return of ``callback`` sets a
+    ``distributed.Event`` the searches look at as they report. Each search
+    gets ``time_limit * workers / count`` seconds.
+
+    Returns and raises as :func:`side_by_side`.
+    """
+    import time
+    import uuid
+
+    from distributed import Event, Queue
+
+    name = f"edm_sym-searches-{uuid.uuid4().hex}"
+    reports = Queue(name, client=client)
+    stop, interrupt = Event(name, client=client), Event(name + "-interrupt", client=client)
+    lanes = max(1, min(count, len(client.scheduler_info()["workers"])))
+    limit = None if time_limit is None else time_limit * lanes / count
+    futures = [client.submit(_cluster_search, task, k, limit, name, pure=False,
+                             key=f"{name}-{k}") for k in range(count)]
+    interrupted = False
+
+    def forward() -> None:
+        for blob in reports.get(batch=True):
+            k, info = pickle.loads(blob)
+            if callback is not None and callback(replace(info, search=k, searches=count)):
+                stop.set()
+
+    try:
+        while not all(f.done() for f in futures):
+            try:
+                time.sleep(0.1)
+                forward()
+            except KeyboardInterrupt:
+                interrupted = True
+                interrupt.set()
+                stop.set()
+        forward()
+        out: list[tuple[Any, BaseException | None]] = []
+        for f in futures:
+            try:
+                out.append((f.result(), None))
+            except BaseException as exc:  # noqa: BLE001 (returned to the caller, who raises it)
+                out.append((None, exc))
+    finally:
+        for f in futures:
+            f.cancel()
+        reports.close()
+    if interrupted:
+        if all(v is None for v, _ in out):
+            raise KeyboardInterrupt
+        out = [(v, KeyboardInterrupt() if v is None and e is None else e) for v, e in out]
+    return out
+
+
+def _cluster_search(task: Callable[[int, float | None, Callable], Any], k: int,
+                    limit: float | None, name: str) -> Any:
+    """On a dask worker: run search ``k``, reporting through the run's queue."""
+    import time
+
+    from distributed import Event, Queue
+
+    from edm_sym.engines.abstraction.lanes import tune_malloc
+
+    tune_malloc()
+    reports = Queue(name)
+    stop, interrupt = Event(name), Event(name + "-interrupt")
+    last = {"sent": -float("inf"), "step": 0, "stopped": False}
+
+    def report(info: Any) -> bool:
+        now = time.monotonic()
+        if now - last["sent"] < CLUSTER_REPORT_SECONDS and info.step == last["step"]:
+            return last["stopped"]
+        last["sent"], last["step"] = now, info.step
+        if interrupt.is_set():
+            raise KeyboardInterrupt  # the search saves its checkpoint: --resume continues it
+        reports.put(pickle.dumps((k, info), protocol=pickle.HIGHEST_PROTOCOL))
+        last["stopped"] = stop.is_set()
+        return last["stopped"]
+
+    return task(k, limit, report)
