@@ -15,11 +15,16 @@ Prints, with ratios measured in the same run rather than verdicts:
    the peak resident memory of each worker process; with ``--bound``, also
    N independent one-worker runs at once: the speed-up this machine allows
    the same work when nothing is serial and nothing is shared;
-3. optionally (``--plant``) the default schedule on the auger preset under a
+3. with ``--searches K``, K independent searches of the auger schedule
+   (``edm abstract --searches K``): one worker running them one after
+   another against ``--workers N`` side by side, a LocalCluster and a
+   scheduler (a task each), on the same evaluations;
+4. optionally (``--plant``) the default schedule on the auger preset under a
    time limit and the RMSE of the result on the evaluation log.
 
 Run ``python benchmarks/bench_ga.py [--workers N] [--scheduler ADDRESS]
-[--dask-local K] [--generations G] [--repeat R] [--bound] [--skip-batched] [--plant]``
+[--dask-local K] [--generations G] [--repeat R] [--bound] [--searches K] [--skip-batched]
+[--plant]``
 (``--repeat``: the scaling comparison R times, then each figure as median
 [min-max]). The machine's
 load (``os.getloadavg``) is printed with the figures: on a shared machine
@@ -29,6 +34,7 @@ the parallel figures are noisy.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import multiprocessing
 import os
@@ -464,6 +470,109 @@ def bench_scaling(generations: int, workers: int, scheduler: str | None, dask_lo
                      else ""))
 
 
+def _auger_searches(evaluations: int, searches: int, seed: int = 1, **kwargs) -> dict:  # noqa: ANN003
+    """``searches`` independent searches of the auger schedule, each until ``evaluations``.
+
+    Each search's figures are those of its last report (on a cluster a
+    search reports about every 0.5 s, so it may run a little past the
+    budget; what it ran is what is counted). The rate is every search's
+    evaluations over the longest search's wall time.
+    """
+    from edm_sym.engines.abstraction import load_config
+    from edm_sym.engines.sources import load_data
+
+    log = load_data("plant:auger/abstraction", require=[*AUGER_INPUTS, "tau_ext"])
+    cfg = load_config(Path(__file__).resolve().parent.parent / "examples/auger/abstraction.toml")
+    last: dict[int, GenerationInfo] = {}
+
+    def stop(info: GenerationInfo) -> bool:
+        last[info.search] = info
+        return (len(last) == searches
+                and min(i.stats.individuals for i in last.values()) >= evaluations)
+
+    abstract(log, target="tau_ext", inputs=AUGER_INPUTS, config=cfg, seed=seed, callback=stop,
+             searches=searches, **kwargs)
+    done = sum(i.stats.individuals for i in last.values())
+    wall = max(i.elapsed for i in last.values())
+    peak: dict = {}
+    for i in last.values():
+        peak.update(i.stats.peak_rss)
+    return {"evaluations": done, "elapsed": wall, "rate": done / wall,
+            "hit_rate": float(np.mean([i.stats.hit_rate for i in last.values()])),
+            "own_share": float(np.mean([1.0 - i.stats.eval_seconds / i.elapsed
+                                        for i in last.values()])),
+            "peak_rss": peak, "searches": len(last)}
+
+
+def bench_searches(generations: int, searches: int, workers: int, dask_local: int,
+                   scheduler: str | None, repeat: int = 1) -> None:
+    """Independent searches side by side against the same searches one after another.
+
+    The work: ``searches`` searches of the auger schedule (seeds drawn from
+    seed 1, as ``edm abstract --seed 1 --searches K`` makes them), each
+    until the evaluations of the first ``generations`` generations of seed 1.
+    One worker runs them one after another (each alone, in this process);
+    ``--workers N`` side by side, a process each; a LocalCluster
+    (``--dask-local K``) and a scheduler a task each.
+    """
+    from edm_sym.engines.abstraction.searches import search_seeds
+
+    figures: dict[str, list[float]] = {}
+    budget = _auger_run(generations, workers=1)["evaluations"]
+    seeds = search_seeds(1, searches)
+    mib = 2.0**20
+
+    def show(title: str, run: dict, base: dict | None, lanes: int) -> None:
+        line = (f"{title:34s} {run['rate']:8.1f} evaluations/s  ({run['evaluations']} in "
+                f"{run['elapsed']:.1f} s)")
+        if base is not None:
+            speed = run["rate"] / base["rate"]
+            figures.setdefault(title, []).append(speed)
+            line += f"  speed-up {speed:.2f}  efficiency {speed / lanes:.2f}"
+        print(line)
+        workers_mib = ", ".join(f"{v / mib:.0f}" for _, v in sorted(run["peak_rss"].items()))
+        print(f"{'':34s} cache hit rate {run['hit_rate']:.3f}   GA outside evaluation "
+              f"{100 * run['own_share']:.1f} %   peak memory per worker [MiB]: {workers_mib}")
+
+    for k in range(repeat):
+        print(f"== independent searches: {searches} searches of the auger schedule (seeds "
+              f"{', '.join(map(str, seeds))}), {budget} evaluations each (load average "
+              f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)"
+              + (f", run {k + 1} of {repeat}" if repeat > 1 else ""))
+        alone = [_auger_searches(budget, 1, seed=s, workers=1) for s in seeds]
+        one = {"evaluations": sum(r["evaluations"] for r in alone),
+               "elapsed": sum(r["elapsed"] for r in alone),
+               "hit_rate": float(np.mean([r["hit_rate"] for r in alone])),
+               "own_share": float(np.mean([r["own_share"] for r in alone])),
+               "peak_rss": alone[-1]["peak_rss"]}
+        one["rate"] = one["evaluations"] / one["elapsed"]
+        show("1 worker, one after another", one, None, 1)
+        if workers > 1:
+            run = _auger_searches(budget, searches, workers=workers)
+            show(f"{workers} workers, side by side", run, one, workers)
+        for title, address, count in (("dask LocalCluster", None, dask_local),
+                                      ("dask scheduler", scheduler, 0)):
+            if not (address or count):
+                continue
+            import distributed
+
+            with contextlib.ExitStack() as stack:
+                if address is None:
+                    cluster = stack.enter_context(distributed.LocalCluster(
+                        n_workers=count, threads_per_worker=1, processes=True,
+                        dashboard_address=None))
+                    address = cluster.scheduler_address
+                client = stack.enter_context(distributed.Client(address))
+                lanes = len(client.scheduler_info()["workers"])
+                _auger_searches(500, searches, scheduler=client)  # warms every worker
+                run = _auger_searches(budget, searches, scheduler=client)
+            show(f"{title}, {lanes} workers", run, one, lanes)
+    if repeat > 1:
+        print(f"== summary over {repeat} runs: speed-up of the searches, median [min-max]")
+        for title, values in figures.items():
+            print(f"{title:34s} {_spread(values)}")
+
+
 def bench_plant(time_limit: float, workers: int) -> None:
     """The default schedule on the auger preset, judged on the evaluation log."""
     try:
@@ -505,6 +614,9 @@ def main() -> None:
     ap.add_argument("--bound", action="store_true",
                     help="also run --workers independent 1-worker runs at once: the speed-up "
                          "this machine allows the workload")
+    ap.add_argument("--searches", type=int, default=0, metavar="K",
+                    help="also K independent searches: one worker one after another against "
+                         "--workers side by side, --dask-local and --scheduler a task each")
     ap.add_argument("--skip-batched", action="store_true", help="no batched-evaluation figures")
     ap.add_argument("--skip-scaling", action="store_true", help="no scaling runs")
     ap.add_argument("--synthetic", action="store_true",
@@ -523,6 +635,9 @@ def main() -> None:
     if not args.skip_scaling:
         bench_scaling(args.generations, workers, args.scheduler, args.dask_local, args.repeat,
                       args.bound)
+    if args.searches > 1:
+        bench_searches(args.generations, args.searches, workers, args.dask_local, args.scheduler,
+                       args.repeat)
     if args.synthetic:
         bench_ga(log, workers)
     if args.plant:

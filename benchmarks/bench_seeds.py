@@ -13,7 +13,11 @@ callback's own evaluation time is not counted as the run's CPU); then
 min/median/max over the seeds. ``--json`` prints the same as one JSON object.
 
     python benchmarks/bench_seeds.py [--config FILE] [--seeds K] [--first-seed S]
-                                     [--jobs J] [--threshold 0.45] [--json]
+                                     [--jobs J] [--workers W] [--searches N]
+                                     [--threshold 0.45] [--json]
+
+With ``--searches N`` each run makes N independent searches (``edm abstract
+--searches N``); its search 0 is the one-search run of the same seed.
 """
 
 from __future__ import annotations
@@ -54,7 +58,7 @@ def lugre_rmse(lugre_file: Path, log) -> float:  # noqa: ANN001
 
 
 def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: int,
-             out_dir: str | None = None, until: bool = False) -> dict:
+             out_dir: str | None = None, until: bool = False, searches: int = 1) -> dict:
     """One run; returns its figures (executed in a worker process).
 
     With ``until`` the run stops at the generation its best first falls
@@ -90,7 +94,7 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
 
     c0, w0 = time.process_time(), time.perf_counter()
     res = abstract(abst, target=TARGET, inputs=INPUTS, config=cfg, seed=seed,
-                   workers=workers, callback=callback)
+                   workers=workers, callback=callback, searches=searches)
     cpu = time.process_time() - c0 - track["cpu"]
     wall = time.perf_counter() - w0
     edm = _rmse(y_eval - simulate(res, evl).total)
@@ -104,7 +108,9 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
            "below_threshold_s": track["first"],
            "fitness": res.fitness, "step_fitness": [s.fitness for s in res.steps],
            "generations": [s.generations for s in res.steps],
-           "evaluations": sum(s.evaluations for s in res.steps)}
+           "evaluations": sum(s.evaluations for s in res.steps),
+           "chosen_search": next((s["search"] for s in res.provenance.get("searches", ())
+                                  if s["chosen"]), 0)}
     if out_dir is not None:
         (Path(out_dir) / f"seed{seed}.json").write_text(json.dumps(out, sort_keys=True) + "\n")
     return out
@@ -119,6 +125,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--first-seed", type=int, default=1, help="seeds S .. S+K-1 (default 1)")
     ap.add_argument("--jobs", type=int, default=2, help="runs in parallel (default 2)")
     ap.add_argument("--workers", type=int, default=1, help="processes per run (default 1)")
+    ap.add_argument("--searches", type=int, default=1,
+                    help="independent searches per run (edm abstract --searches; default 1)")
     ap.add_argument("--threshold", type=float, default=0.45,
                     help="EDM/LuGre whose first crossing time is reported (default 0.45)")
     ap.add_argument("--until-threshold", action="store_true",
@@ -133,7 +141,8 @@ def main(argv: list[str] | None = None) -> dict:
     w0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         futures = [pool.submit(run_seed, args.config, s, lugre, args.threshold, args.workers,
-                               args.out_dir, args.until_threshold) for s in seeds]
+                               args.out_dir, args.until_threshold, args.searches)
+                   for s in seeds]
         runs = []
         for f in futures:
             runs.append(f.result())
@@ -143,7 +152,9 @@ def main(argv: list[str] | None = None) -> dict:
                          else f"{r['below_threshold_s']:.0f} s")
                 print(f"seed {r['seed']:3d}  EDM/LuGre {r['ratio']:.3f}  cpu {r['cpu_s']:6.0f} s"
                       f"  wall {r['wall_s']:6.0f} s  < {args.threshold:g} at {below}"
-                      f"  generations {r['generations']}", flush=True)
+                      f"  generations {r['generations']}"
+                      + (f"  from search {r['chosen_search']}" if args.searches > 1 else ""),
+                      flush=True)
     ratios = [r["ratio"] for r in runs]
     cpus = [r["cpu_s"] for r in runs]
     below = [r["below_threshold_s"] for r in runs]
