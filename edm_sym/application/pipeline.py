@@ -370,7 +370,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
             result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
                               seed=pipe.seed, time_limit=pipe.time_limit,
                               callback=reporter.abstraction,
-                              checkpoint=ckpt, resume=reuse and ckpt.exists(), axis=pipe.axis)
+                              checkpoint=ckpt, resume=reuse, axis=pipe.axis)
         stored = {"data": pipe.abstraction_data}
         if pipe.evaluation_data:
             stored["eval_data"] = pipe.evaluation_data
