@@ -244,3 +244,39 @@ def test_an_interrupted_process_resumes_to_the_uninterrupted_result(
     assert done.returncode == 0, done.stderr
     assert out.read_bytes() == ref.read_bytes()
     assert not ckpt.exists()
+
+
+@pytest.mark.slow
+def test_an_interrupted_run_of_two_searches_resumes_on_one_worker_to_the_same_bytes(
+    tmp_path: Path
+) -> None:
+    log, _ = friction_log(4.0)
+    data = write_csv(tmp_path / "log.csv", log.columns)
+    cfg = _config(tmp_path, LONG)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    two = ("--searches", "2", "--workers", "2")
+    ref = tmp_path / "ref.json"
+    subprocess.run(_cmd(data, cfg, ref, *two), check=True, env=env, capture_output=True)
+
+    out = tmp_path / "out.json"
+    ckpts = [checkpoint_path(out).with_name(f"out.json.checkpoint.search{k}") for k in range(2)]
+    proc = subprocess.Popen(_cmd(data, cfg, out, *two), env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        for ckpt in ckpts:  # both searches run at once, each with its own checkpoint
+            _wait_for_generation(ckpt, proc, 6)
+        proc.send_signal(signal.SIGTERM)  # to the run's process only: it tells the searches
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130 and "Traceback" not in err
+    part = load_result(out)
+    assert [s["stop_reason"] for s in part.provenance["searches"]] == ["interrupted"] * 2
+    assert all(c.exists() for c in ckpts)
+    done = subprocess.run(_cmd(data, cfg, out, "--resume", "--searches", "2", "--workers", "1"),
+                          env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes() == ref.read_bytes()
+    assert not any(c.exists() for c in ckpts)
