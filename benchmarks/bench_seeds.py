@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import time
@@ -55,6 +56,12 @@ def lugre_rmse(lugre_file: Path, log) -> float:  # noqa: ANN001
     lugre = load_lugre(lugre_file)
     tau = simulate_lugre(lugre.params, log.columns[lugre.velocity_name], log.ts)
     return _rmse(log.columns[TARGET] - tau)
+
+
+def _children_cpu() -> float:
+    """CPU seconds of the ended child processes this process waited for."""
+    t = os.times()
+    return t.children_user + t.children_system
 
 
 def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: int,
@@ -92,10 +99,11 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
         track["wall"] += time.perf_counter() - w0
         return until and track["first"] is not None
 
-    c0, w0 = time.process_time(), time.perf_counter()
+    c0, w0, k0 = time.process_time(), time.perf_counter(), _children_cpu()
     res = abstract(abst, target=TARGET, inputs=INPUTS, config=cfg, seed=seed,
                    workers=workers, callback=callback, searches=searches)
-    cpu = time.process_time() - c0 - track["cpu"]
+    # With several workers or searches, the processes the run forked and joined count too.
+    cpu = time.process_time() - c0 - track["cpu"] + _children_cpu() - k0
     wall = time.perf_counter() - w0
     edm = _rmse(y_eval - simulate(res, evl).total)
     if out_dir is not None:
