@@ -147,6 +147,23 @@ def test_searches_on_a_dask_cluster_run_one_worker_each_and_give_the_same_bytes(
         assert dumps(res) == two_one_worker
         # Each search was a task of its own: both report, from the workers' processes.
         assert {i.search for i in seen} == {0, 1}
-        # A stop from this process reaches the searches on the workers.
-        stopped = run(log, TWO, seed=5, scheduler=client, callback=lambda info: True)
-        assert stopped.provenance["stop_reason"] == "stopped"
+        # A stop from this process reaches the searches on the workers (at their next
+        # report, within about 0.5 s): each would run 400 generations.
+        long = {**TWO, "ga": {**TWO["ga"], "generations": 400, "patience": 0},
+                "step": TWO["step"][:1]}
+        stopped = run(log, long, seed=5, scheduler=client, callback=lambda info: True)
+        assert [s["stop_reason"] for s in stopped.provenance["searches"]] == ["stopped"] * 2
+        assert all(s.generations < 400 for s in stopped.steps)
+
+
+def test_with_the_last_step_rule_the_search_of_the_lowest_last_step_fitness_is_taken(
+    log: DataLog
+) -> None:
+    doc = {**TWO, "parsimony": {"start": "last-step"}}
+    res = run(log, doc, seed=5, workers=2)
+    found = res.provenance["searches"]
+    last = [s["step_fitness"][-1] for s in found]
+    (chosen,) = [s for s in found if s["chosen"]]
+    assert chosen["search"] == min(range(2), key=lambda k: (last[k], k))
+    assert [s.fitness for s in res.steps] == chosen["step_fitness"]
+    assert "start_candidates" not in res.parsimony

@@ -753,14 +753,16 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
 
     With ``[parsimony] start = "best-step"`` (the default) the step bests of
     every search are the candidates of one choice (each candidate names its
-    search); otherwise the search whose last step best has the lowest
-    fitness (eq. 8 of that step's weighting) is finished alone. A search
+    search); otherwise, of the searches that ran the most steps, the one whose
+    last step best has the lowest fitness (eq. 8 of that step's weighting) is
+    finished alone. A search
     without any step (stopped before its first population) is passed over.
     ``cands``: each search's :func:`search_candidates`, when already made.
     """
     ran = [k for k, g in enumerate(groups) if g]
     if len(groups) == 1 or not (cfg.parsimony.prune and cfg.parsimony.start == "best-step"):
-        chosen = min(ran, key=lambda k: (groups[k][-1].fitness, k))
+        # The search that ran the most steps (a stopped one may not have reached the last).
+        chosen = min(ran, key=lambda k: (-len(groups[k]), groups[k][-1].fitness, k))
         steps = groups[chosen]
         out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select)
         return (*out, chosen)
