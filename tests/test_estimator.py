@@ -95,11 +95,11 @@ def test_unknown_attribute_is_still_an_attribute_error() -> None:
 def test_params_clone_and_set_params_round_trip() -> None:
     roles = {"x": "velocity"}
     est = EDMRegressor(sample_time=2e-3, config=TINY_CONFIG, seed=7, time_limit=3.0, roles=roles,
-                       target_name="tau", workers=2, progress=True, axis="linear")
+                       target_name="tau", workers=2, searches=2, progress=True, axis="linear")
     params = est.get_params()
     assert params == {"sample_time": 2e-3, "config": TINY_CONFIG, "seed": 7, "time_limit": 3.0,
-                      "roles": roles, "target_name": "tau", "workers": 2, "progress": True,
-                      "axis": "linear"}
+                      "roles": roles, "target_name": "tau", "workers": 2, "searches": 2,
+                      "progress": True, "axis": "linear"}
     twin = clone(est)
     assert twin is not est and twin.get_params() == params
     assert EDMRegressor(**params).get_params() == params
@@ -159,6 +159,16 @@ def test_workers_do_not_change_the_result(fitted: EDMRegressor, log: pd.DataFram
     pooled = clone(fitted).set_params(workers=2).fit(log[["omega", "alpha"]], log["tau_ext"])
     assert pooled.result_.compensator == fitted.result_.compensator
     assert pooled.result_.fitness == fitted.result_.fitness
+
+
+def test_searches_reach_the_abstraction(log: pd.DataFrame) -> None:
+    est = EDMRegressor(sample_time=TS, config=TINY_CONFIG, seed=1, searches=2, workers=2)
+    est.fit(log[["omega", "alpha"]], log["tau_ext"])
+    found = est.result_.provenance["searches"]
+    assert [s["seed"] for s in found][0] == 1 and len(found) == 2
+    with pytest.raises(edm_sym.ConfigError, match="searches"):
+        EDMRegressor(sample_time=TS, config=TINY_CONFIG, searches=0).fit(
+            log[["omega", "alpha"]], log["tau_ext"])
 
 
 def test_config_from_a_toml_file(log: pd.DataFrame) -> None:

@@ -86,6 +86,10 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         exported code's ``TARGET``); must differ from every feature name.
     workers : int, default 1
         Processes of the abstraction (None: every usable core).
+    searches : int or None, default None
+        Independent searches of the schedule, side by side on ``workers``
+        (None: the config's ``searches``, 1); the model is chosen among all
+        of them (docs/abstraction.md#independent-searches).
     progress : bool, default False
         Show the abstraction's progress on stderr: a bar on a terminal, a
         line every few seconds elsewhere (a notebook's log, CI).
@@ -128,6 +132,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         roles: Mapping[str, str | None] | None = None,
         target_name: str = "tau_ext",
         workers: int | None = 1,
+        searches: int | None = None,
         progress: bool = False,
         axis: str = "rotary",
     ) -> None:
@@ -138,6 +143,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         self.roles = roles
         self.target_name = target_name
         self.workers = workers
+        self.searches = searches
         self.progress = progress
         self.axis = axis
 
@@ -169,7 +175,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             infinity, fewer than 2 samples, ``y`` of another length), names
             that are not unique or equal ``target_name``.
         ConfigError
-            A bad ``config``, ``seed``, ``workers``, ``time_limit``, ``target_name`` or
+            A bad ``config``, ``seed``, ``workers``, ``searches``, ``time_limit``, ``target_name`` or
             ``roles`` (a subclass of ValueError).
         DataFormatError
             A constant ``y``: nothing to model (a subclass of ValueError).
@@ -205,7 +211,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         with ProgressReporter("EDMRegressor.fit", quiet=not self.progress) as reporter:
             result = abstract(data, target=self.target_name, inputs=names,
                               config=self._config(), seed=self.seed, time_limit=self.time_limit,
-                              workers=self.workers, callback=reporter.abstraction, axis=axis)
+                              workers=self.workers, callback=reporter.abstraction, axis=axis,
+                              searches=self.searches)
         self.result_ = result
         self.n_features_in_ = X.shape[1]
         self.feature_names_in_ = np.asarray(names, dtype=object)
