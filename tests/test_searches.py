@@ -167,3 +167,13 @@ def test_with_the_last_step_rule_the_search_of_the_lowest_last_step_fitness_is_t
     assert chosen["search"] == min(range(2), key=lambda k: (last[k], k))
     assert [s.fitness for s in res.steps] == chosen["step_fitness"]
     assert "start_candidates" not in res.parsimony
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_an_error_in_a_search_ends_the_run_with_that_error(log: DataLog, workers: int) -> None:
+    # A weighting that is zero on every sample is found when a search starts its step.
+    doc = {**TWO, "step": [{"n_rows": 2, "n_elements": 3,
+                            "weighting": {"windows": [[900.0, 901.0, 1.0]], "otherwise": 0.0}}]}
+    with pytest.raises(ConfigError) as err:
+        run(log, doc, seed=5, workers=workers)
+    assert "weighting" in err.value.where and "all zero" in err.value.problem

@@ -133,6 +133,8 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
                         _STOP.set()
                     continue
                 out[k] = (value, None) if kind == "done" else (None, value)
+                if kind != "done" and not isinstance(value, KeyboardInterrupt):
+                    _STOP.set()  # the run fails with this error: the others need not go on
                 del running[conn]
                 conn.close()
                 proc.join()
@@ -152,7 +154,8 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
 
 def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool | None] | None,
                        limit: float | None) -> list[tuple[Any, BaseException | None]]:
-    """The searches in this process, in order (a stop ends the one running and skips the rest)."""
+    """The searches in this process, in order (a stop ends the one running and skips the rest;
+    a search's error ends the run)."""
     stopped = False
     out: list[tuple[Any, BaseException | None]] = []
     for k in range(count):
@@ -174,8 +177,6 @@ def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool
                 stopped = True
                 continue
             raise
-        except Exception as exc:  # noqa: BLE001 (returned to the caller, who raises it)
-            out.append((None, exc))
     return out
 
 
