@@ -159,6 +159,8 @@ class _Info:
     shape: tuple[int, int] = (4, 2)
     generations_left: int = 10
     time_limit: float | None = None
+    search: int = 0
+    searches: int = 1
 
 
 def test_lines_come_every_interval_and_at_a_new_step() -> None:
@@ -177,6 +179,20 @@ def test_lines_come_every_interval_and_at_a_new_step() -> None:
     # gen 3: 400 evaluations in 6 s; 10 generations left at 6 s / 4 generations = 15 s
     assert lines[1].split(" | ")[1:] == ["best 0.5 N m", "67 eval/s", "time left ~15s",
                                          "elapsed 6s"]
+
+
+def test_searches_reporting_in_turns_each_get_a_line_every_interval() -> None:
+    now = [0.0]
+    out = io.StringIO()
+    rep = ProgressReporter("edm abstract", stream=out, interval=5.0, clock=lambda: now[0])
+    for k, t in enumerate([0, 0.5, 1, 1.5, 5.2, 5.6]):
+        now[0] = t
+        rep.abstraction(_Info(1, k, 0.5, t + 1.0, _Stats(10), search=k % 2, searches=2))
+    assert [ln.split(" | ")[0] for ln in out.getvalue().splitlines()] == [
+        "edm abstract: search 1/2 step 1/2 (4x2) gen 0",
+        "edm abstract: search 2/2 step 1/2 (4x2) gen 1",
+        "edm abstract: search 1/2 step 1/2 (4x2) gen 4",
+        "edm abstract: search 2/2 step 1/2 (4x2) gen 5"]
 
 
 def test_time_left_is_capped_by_the_time_limit_and_quiet_writes_nothing() -> None:

@@ -107,9 +107,8 @@ class ProgressReporter:
             left = min(left, max(0.0, info.time_limit - elapsed))
         n_el, n_rows = info.shape
         where = f"step {info.step}/{info.steps} ({n_el}x{n_rows}) gen {info.generation}"
-        searches = getattr(info, "searches", 1)
-        if searches > 1:  # several searches side by side: each reports its own
-            where = f"search {info.search + 1}/{searches} {where}"
+        if info.searches > 1:  # several searches side by side: each reports its own
+            where = f"search {info.search + 1}/{info.searches} {where}"
         if self.mode == "bar":
             bar = self._tqdm("gen")
             bar.total = bar.n + 1 + info.generations_left
@@ -117,7 +116,7 @@ class ProgressReporter:
                                     f"{rate:.0f} eval/s", refresh=False)
             bar.update(1)
             return
-        self._line((getattr(info, "search", 0), info.step),
+        self._line((info.search, info.step),
                    f"{where} | best {info.best:.6g}{self.unit} | {rate:.0f} eval/s"
                    f" | time left ~{format_seconds(left)} | elapsed {format_seconds(elapsed)}")
 

@@ -591,10 +591,10 @@ def abstract(
         if count == 1:
             outcomes = [job.run(int(seed), workers, files[0], resume, time_limit, callback)]
         else:
-            task = functools.partial(_one_search, replace(job, executor=None, client=None), seeds,
-                                     files, resume)
             if client is not None:
                 # Each search a task of its own on the cluster, run by one worker alone.
+                task = functools.partial(_one_search, replace(job, client=None), seeds, files,
+                                         resume, workers=1)
                 ended = on_cluster(client, count, task, callback, time_limit)
             else:
                 # Side by side on this machine's cores (one process each, sharing nothing);
@@ -602,11 +602,8 @@ def abstract(
                 lanes = 1 if executor is not None else (workers or default_workers())
                 if lanes > 1:
                     warm_up()  # the row kernel, loaded once before the searches are forked
-                    per = max(1, lanes // min(count, lanes))
-                    task = functools.partial(task, workers=per)
-                else:
-                    task = functools.partial(_one_search, job, seeds, files, resume,
-                                             workers=workers)
+                per = max(1, lanes // min(count, lanes)) if lanes > 1 else workers
+                task = functools.partial(_one_search, job, seeds, files, resume, workers=per)
                 ended = side_by_side(count, lanes, task, callback, time_limit)
             outcomes = []
             for value, error in ended:
@@ -755,12 +752,12 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
     every search are the candidates of one choice (each candidate names its
     search); otherwise, of the searches that ran the most steps, the one whose
     last step best has the lowest fitness (eq. 8 of that step's weighting) is
-    finished alone. A search
-    without any step (stopped before its first population) is passed over.
+    finished alone. A search without any step (stopped before its first
+    population) is passed over.
     ``cands``: each search's :func:`search_candidates`, when already made.
     """
     ran = [k for k, g in enumerate(groups) if g]
-    if len(groups) == 1 or not (cfg.parsimony.prune and cfg.parsimony.start == "best-step"):
+    if len(groups) == 1 or not cfg.parsimony.from_step_bests:
         # The search that ran the most steps (a stopped one may not have reached the last).
         chosen = min(ran, key=lambda k: (-len(groups[k]), groups[k][-1].fitness, k))
         steps = groups[chosen]
@@ -779,7 +776,7 @@ def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Hold
     """One search's candidates for the search's model: its step bests and their refits
     (:func:`~edm_sym.engines.abstraction.local_search.step_candidates`); made where the
     search ran, side by side with the other searches'."""
-    if not (steps and cfg.parsimony.prune and cfg.parsimony.start == "best-step"):
+    if not (steps and cfg.parsimony.from_step_bests):
         return []
     return step_candidates(steps, replace(comp, matrix=steps[-1].matrix), hold,
                            max_evaluations=cfg.parsimony.refit,
@@ -859,7 +856,7 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
     start_step, refitted, refit = steps[-1].step, False, 0
     candidates: list[dict[str, Any]] = []
-    if cfg.parsimony.prune and cfg.parsimony.start == "best-step":
+    if cfg.parsimony.from_step_bests:
         # The step best with the lowest plain RMSE over the whole log: Step 4's eq. 16
         # weighting, say, may buy large torques with reversals and the cold start, which
         # only the whole log holds. Step bests within ``tie`` of it are tied, and the

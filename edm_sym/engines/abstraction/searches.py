@@ -129,7 +129,7 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
                     _STOP.set()
                     continue
                 if kind == "info":
-                    if callback is not None and callback(replace(value, search=k, searches=count)):
+                    if _tell(callback, value, k, count):
                         _STOP.set()
                     continue
                 out[k] = (value, None) if kind == "done" else (None, value)
@@ -144,12 +144,21 @@ def side_by_side(count: int, lanes: int, job: SearchFn,
             proc.join()
             conn.close()
         _JOB, _STOP, _INTERRUPT = None, None, None
-    if interrupted:
-        if all(v is None for v, _ in out):
-            raise KeyboardInterrupt
-        # Not started, or stopped before its first population: interrupted too.
-        out = [(v, KeyboardInterrupt() if v is None and e is None else e) for v, e in out]
-    return out
+    return _interrupted(out) if interrupted else out
+
+
+def _tell(callback: Callable[[Any], bool | None] | None, info: Any, k: int, count: int) -> bool:
+    """Hand search ``k``'s report to the run's callback, tagged; whether it asks to stop."""
+    return callback is not None and bool(callback(replace(info, search=k, searches=count)))
+
+
+def _interrupted(out: list[tuple[Any, BaseException | None]]
+                 ) -> list[tuple[Any, BaseException | None]]:
+    """The outcomes of an interrupted run: a search with none was interrupted too (not started,
+    or stopped before its first population); with none at all, the interrupt goes on."""
+    if all(v is None for v, _ in out):
+        raise KeyboardInterrupt
+    return [(v, KeyboardInterrupt() if v is None and e is None else e) for v, e in out]
 
 
 def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool | None] | None,
@@ -165,7 +174,7 @@ def _one_after_another(count: int, job: SearchFn, callback: Callable[[Any], bool
 
         def report(info: Any, k: int = k) -> bool:
             nonlocal stopped
-            if callback is not None and callback(replace(info, search=k, searches=count)):
+            if _tell(callback, info, k, count):
                 stopped = True
             return stopped
 
@@ -239,7 +248,7 @@ def on_cluster(client: Any, count: int, task: Callable[[int, float | None, Calla
     def forward() -> None:
         for blob in reports.get(batch=True):
             k, info = pickle.loads(blob)
-            if callback is not None and callback(replace(info, search=k, searches=count)):
+            if _tell(callback, info, k, count):
                 stop.set()
 
     try:
@@ -262,11 +271,7 @@ def on_cluster(client: Any, count: int, task: Callable[[int, float | None, Calla
         for f in futures:
             f.cancel()
         reports.close()
-    if interrupted:
-        if all(v is None for v, _ in out):
-            raise KeyboardInterrupt
-        out = [(v, KeyboardInterrupt() if v is None and e is None else e) for v, e in out]
-    return out
+    return _interrupted(out) if interrupted else out
 
 
 def _cluster_search(task: Callable[[int, float | None, Callable], Any], k: int,

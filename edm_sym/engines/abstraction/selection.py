@@ -86,6 +86,11 @@ class ParsimonySettings:
     refit: int = 600
     tie: float = 0.02
 
+    @property
+    def from_step_bests(self) -> bool:
+        """Whether the search's model is chosen among the step bests (pruning, ``best-step``)."""
+        return self.prune and self.start == "best-step"
+
     def __post_init__(self) -> None:
         if not isinstance(self.prune, bool):
             raise ConfigError("parsimony.prune", f"expected true or false, found {self.prune!r}")
