@@ -206,7 +206,7 @@ def test_complexity_counts_active_elements_and_state() -> None:
 def test_json_shape_is_the_documented_one(log: DataLog) -> None:
     desc = edm_sym.describe(HANDWRITTEN, log).to_json()
     jsonschema.validate(desc, _describe_schema())
-    assert list(desc) == ["rows", "fitness", "complexity"]
+    assert list(desc) == ["rows", "fitness", "complexity", "physics"]
     assert list(desc["rows"][0]) == ["index", "input", "expression", "contribution", "terms",
                                      "flags"]
     assert list(desc["rows"][0]["terms"][0]) == ["kind", "parameters", "flags"]

@@ -25,6 +25,7 @@ from edm_sym.core.data import ColumnRoles, DataLog, drift, is_plant_spec, match_
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.result import EdmResult, load_result
 from edm_sym.core.units import axis_units
+from edm_sym.engines.physics import ranges_from_result
 from edm_sym.engines.sources import load_data
 from edm_sym.engines.symbolic.classify import ClassifyOptions
 from edm_sym.engines.symbolic.roles import input_roles
@@ -73,6 +74,10 @@ class Description:
         ``data`` (measured here on the data log, or None).
     complexity : int
         Active (non-``through``) elements plus state size (:func:`edm_sym.core.bounds.complexity`).
+    physics : Physics or None
+        The laws the whole model holds, named by its behaviour on probe motions
+        (:func:`edm_sym.engines.physics.model_physics`); None when they could not
+        be measured (the reason is in ``notes``).
     source : str
         The result described.
     threshold : float
@@ -90,6 +95,7 @@ class Description:
     threshold: float = 0.01
     notes: tuple[str, ...] = field(default=())
     axis: str = "rotary"
+    physics: Any = None
 
     def to_json(self) -> dict[str, Any]:
         """The stable JSON shape of ``edm describe --json`` (docs/describe.md)."""
@@ -101,7 +107,10 @@ class Description:
             rows.append({"index": r.index, "input": r.input, "expression": r.expression,
                          "contribution": r.contribution, "terms": terms,
                          "flags": [f.to_json() for f in r.flags]})
-        return {"rows": rows, "fitness": _plain(self.fitness), "complexity": self.complexity}
+        doc = {"rows": rows, "fitness": _plain(self.fitness), "complexity": self.complexity}
+        if self.physics is not None:
+            doc["physics"] = self.physics.to_json()
+        return doc
 
     def table(self) -> str:
         """The description for people: a summary table, then each row's terms and flags."""
@@ -116,6 +125,10 @@ class Description:
         for r in self.rows:
             share = "-" if r.contribution is None else f"{100 * r.contribution:.3g} %"
             lines.append(f"{r.index:>3}  {r.input:<10} {share:>12}  {_names(r)}")
+        if self.physics is not None:
+            lines += ["", "physics, named by what the whole model does on probe motions:"]
+            lines += self.physics.lines(self.axis)
+            lines += [f"  note: {n}" for n in self.physics.notes]
         for r in self.rows:
             lines += ["", f"row {r.index}: {r.input} ({r.role or 'no role'})", f"  {r.expression}"]
             for jt in r.terms:
@@ -453,9 +466,15 @@ def describe(
             data_fit["rows"] = list(held) if isinstance(held, tuple) else held
     # Shapes are judged over the velocities the data reaches, not a fixed range:
     # a gentle saturation that looks viscous over +-10 rad/s acts as Coulomb at 60.
+    role_map = input_roles(comp.matrix.inputs, {**getattr(result, "roles", {}), **(roles or {})})
+    recorded = ranges_from_result(result, role_map)
     classify = (classify_on(result, x, roles=roles,
                             part=held_out_selector(held) if held is not None else slice(None))
                 if inputs is not None else ClassifyOptions.for_axis(result.axis))
+    if inputs is None and recorded is not None:
+        # Without data, shapes are judged over the velocities the result records, not
+        # the axis's default range (+-0.5 m/s judged a +-0.13 m/s axis's Coulomb as viscous).
+        classify = replace(classify, velocity_range=recorded.velocity)
     model = decode(result, roles=roles, systems=False, classify=classify)
     accelerations = None
     if inputs is not None:
@@ -490,8 +509,62 @@ def describe(
                  for row, j in zip(model.rows, judged, strict=True))
     fitness = {**recorded_fitness(result), "data": data_fit}
     threshold = getattr(options, "threshold", 0.01) if options is not None else 0.01
+    g_used = None
+    if inputs is not None:
+        g_used = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
+            "observer_bandwidth")
+    elif observer_bandwidth is not None:
+        g_used = observer_bandwidth
+    physics = _physics(result, role_map, recorded, threshold, g_used, log,
+                       full_inputs if inputs is not None else None,
+                       full_outputs if inputs is not None else None,
+                       held_out_selector(held) if inputs is not None and held is not None
+                       else slice(None), notes)
     return Description(rows, fitness, complexity(comp), result.source or "<memory>",
-                       threshold, tuple(notes), result.axis)
+                       threshold, tuple(notes), result.axis, physics)
+
+
+def _physics(result: EdmResult, role_map: Mapping[str, str | None], recorded: Any,
+             threshold: float, g: float | None, log: DataLog | None,
+             inputs: list[np.ndarray] | None, outputs: np.ndarray | None,
+             part: slice | np.ndarray, notes: list[str]) -> Any:
+    """The model's laws by behaviour (:mod:`edm_sym.engines.physics`), over the data's motion
+    when there is data (its shares measured on ``part``), else over the recorded ranges."""
+    from edm_sym.engines.physics import PhysicsOptions, model_physics, ranges_from_data
+    from edm_sym.engines.symbolic.inertia import motion_signals
+
+    comp = result.compensator
+    names = comp.matrix.inputs
+    roles = [role_map[n] for n in names]
+    opts = PhysicsOptions(threshold=threshold)
+    data = None
+    ranges = recorded
+    if log is not None and inputs is not None and outputs is not None:
+        x = log.stack(names)
+        motion = motion_signals(list(x), roles, log.ts)
+        if motion is not None:
+            vel, acc = motion
+            angle = next((x[i] for i, r in enumerate(roles) if r == "angle"), None)
+            if angle is None:
+                angle = next((x[i] for i, r in enumerate(roles) if r == "angle_wrapped"), None)
+            ranges = ranges_from_data(vel, acc, angle, str(log.source)) or recorded
+            rows = np.asarray(outputs, dtype=float)
+            if g is not None and rows.shape[1] > 2:
+                rows = rows + np.gradient(rows, log.ts, axis=1) / float(g)
+            target = log.column(result.target, role="target column")
+            data = {"velocity": vel[part], "acceleration": acc[part],
+                    "angle": None if angle is None else angle[part],
+                    "target": target[part], "rows": rows[:, part]}
+    if ranges is None:
+        notes.append("the physics is not named by behaviour: no data, and the result records "
+                     "no velocity range to probe over")
+        return None
+    try:
+        return model_physics(comp, roles, ranges, axis=result.axis,
+                             bandwidth=None if g is None else float(g), data=data, options=opts)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        notes.append(f"the physics could not be named by behaviour ({exc})")
+        return None
 
 
 def _expression(expr: Any) -> str:
