@@ -2,7 +2,7 @@
 
 Prints the time of :func:`edm_sym.engines.symbolic.decode` (expressions, bounded
 simplification, classification and python-control systems) and of its parts,
-against the budgets of the issue (2 s for 4x5, 5 s for the nasty matrix). No
+against their budgets (2 s for 4x5, 5 s for the nasty matrix). No
 wall-clock assertions: these are figures to read, not tests.
 
     python benchmarks/bench_decode.py

@@ -58,7 +58,7 @@ NOMINAL_MASS = 90.0
 #: Share of the log used for abstraction when no test log is given; the rest is held out.
 TRAIN = 0.7
 PUBLISHED = 4.0834
-#: The issue's goal: EDM's held-out error at most this share of the reference's.
+#: The goal: EDM's held-out error at most this share of the reference's.
 GOAL = 0.8
 
 

@@ -1,4 +1,4 @@
-"""Benchmark of the abstraction's genetic algorithm (issues 7 and 17).
+"""Benchmark of the abstraction's genetic algorithm: evaluation speed and scaling.
 
 Prints, with ratios measured in the same run rather than verdicts:
 

@@ -1,4 +1,4 @@
-"""Seed robustness of the abstraction: K seeds of one config on the auger preset (issue 13).
+"""Seed robustness of the abstraction: K seeds of one config on the auger preset.
 
 Each seed is one run of ``abstract()`` on ``plant:auger/abstraction`` in its
 own process with one core (``workers=1``), under the config's own generation

@@ -1,4 +1,4 @@
-"""Hierarchical abstraction (issue 7): recovery, determinism, resume, the result file."""
+"""Hierarchical abstraction: recovery, determinism, resume, the result file."""
 
 from __future__ import annotations
 

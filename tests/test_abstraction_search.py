@@ -1,4 +1,4 @@
-"""Robust search (issue 13): least-squares tuning of the elite, restarts of a stagnating step."""
+"""Robust search: least-squares tuning of the elite, restarts of a stagnating step."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""What the C header and the Python module say about the inputs (issue 16, item 6).
+"""What the C header and the Python module say about the inputs.
 
 Each input with its SI unit (from its role and the result's axis) and its
 expected range (the abstraction log's min/max, recorded in result.json
@@ -209,7 +209,7 @@ def test_the_c_step_never_reads_the_slot_of_an_input_no_row_reads(tmp_path: Path
 
 
 def test_export_builds_the_model_on_the_results_axis(tmp_path: Path, monkeypatch) -> None:
-    """The C/Python model is built with the linear axis, not a rotary default (issue 14 item 2)."""
+    """The C/Python model is built with the linear axis, not a rotary default."""
     import edm_sym.application.exporting as exporting
     from edm_sym.engines.symbolic import build_model
     from edm_sym.outputs.render import render

@@ -222,7 +222,7 @@ def test_array_names_and_feature_names(log: pd.DataFrame) -> None:
 
 
 def test_a_linear_axis_reaches_the_result_and_its_outputs(tmp_path: Path) -> None:
-    """Issue 16 item 2 / issue 14 item 2: axis="linear" gives N, m/s and N s/m everywhere."""
+    """axis="linear" gives N, m/s and N s/m everywhere."""
     t = np.arange(2000) * TS
     v = 0.15 * np.sin(2 * np.pi * 1.5 * t) + 0.08 * np.sin(2 * np.pi * 4.1 * t + 0.3)
     force = 20.0 * np.sign(v) + 60.0 * v + 0.2 * np.random.default_rng(0).standard_normal(len(t))

@@ -1,4 +1,4 @@
-"""Pole-bearing elements in generated C, float and double, against the simulator (issue 18, part 5).
+"""Pole-bearing elements in generated C, float and double, against the simulator.
 
 Each element with a pole, a domain edge or an overflow on its way (the
 tangents, the sines with a phase, arc sine and cosine, the guarded logarithm

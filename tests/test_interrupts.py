@@ -176,7 +176,7 @@ def test_lugre_writes_nothing(tmp_path: Path, log: Path, sig: signal.Signals) ->
 # Flaky under load (about one run in three with the machine's 2 cores busy): the process
 # sometimes dies by the signal (-2) or aborts in interpreter finalisation (-6) after
 # printing "interrupted" and choosing 130. Not understood yet; out of the default run
-# until it is (the session note of issue 18 says so).
+# until it is.
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", SIGNALS)
 def test_export_of_the_report_leaves_whole_files_only(tmp_path: Path, sig: signal.Signals) -> None:
@@ -208,7 +208,7 @@ out_dir = "gen"
 # Flaky under load (about one run in three with the machine's 2 cores busy): the process
 # sometimes dies by the signal (-2) or aborts in interpreter finalisation (-6) after
 # printing "interrupted" and choosing 130. Not understood yet; out of the default run
-# until it is (the session note of issue 18 says so).
+# until it is.
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", SIGNALS)
 def test_pipeline_in_its_lugre_phase(tmp_path: Path, sig: signal.Signals) -> None:

@@ -42,7 +42,7 @@ TINY = dataclasses.replace(LUGRE_GA, population=8, generations=3, continue_mode=
 
 
 def accuracy(truth: LuGreParams, found: LuGreParams, v: np.ndarray, clean: np.ndarray, ts: float):
-    """Issue 8's two measures: max steady-state error and friction RMS error, relative."""
+    """The two acceptance measures: max steady-state error and friction RMS error, relative."""
     grid = np.linspace(-np.max(np.abs(v)), np.max(np.abs(v)), 4000)
     true_ss = steady_state(truth, grid)
     ss = np.max(np.abs(steady_state(found, grid) - true_ss)) / np.max(np.abs(true_ss))
@@ -73,7 +73,7 @@ def test_ga_is_registered():
 
 def test_ga_identifies_friction_on_a_short_log():
     # 2000 samples at 10 ms over the paper's speed range: the GA with its default
-    # settings must meet issue 8's acceptance (3 % steady state, 5 % RMS);
+    # settings must meet the LuGre acceptance (3 % steady state, 5 % RMS);
     # observed 0.11 % and 0.10 %.
     v, clean, noisy, ts = short_log(COMPLIANT)
     result = identify_lugre(noisy, v, ts, method="ga", seed=0)

@@ -1,4 +1,4 @@
-"""Issue 8's acceptance on the plant: LuGre identified on a log whose friction is LuGre.
+"""The LuGre acceptance on the plant: LuGre identified on a log whose friction is LuGre.
 
 The `lugre` preset's friction is exactly a LuGre model plus viscous friction
 (no ripple, exact nominal inertia), so the identified steady-state curve and

@@ -1,4 +1,4 @@
-"""Parsimony (issue 13, part 3): pruning, the front, selection, export of a member."""
+"""Parsimony: pruning, the front, selection, export of a member."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The report's parameter units, traced along each row (issue 16, item 5)."""
+"""The report's parameter units, traced along each row."""
 
 from __future__ import annotations
 
@@ -74,7 +74,7 @@ def test_every_scaling_element_declares_its_output_unit_scaled() -> None:
 
 
 def test_a_linear_axis_report_reads_n_m_s_and_kg_everywhere(tmp_path, monkeypatch) -> None:
-    """Issue 14 item 2: the report's tables, sentences and figures follow the result's axis."""
+    """The report's tables, sentences and figures follow the result's axis."""
     import dataclasses
 
     import update_golden_report as ugr  # tests/ is on sys.path (pytest rootdir)

@@ -1,4 +1,4 @@
-"""Plants with known truth (issue 13, part 6): what `edm describe` names is what the plant holds.
+"""Plants with known truth: what `edm describe` names is what the plant holds.
 
 Each preset of docs/plant.md#plants-with-known-truth has one clear mix of
 disturbances. The abstraction runs as a user runs it, through the CLI
@@ -79,7 +79,7 @@ def check_truth(preset: str, doc: dict) -> None:
     if "viscous" in p.true_terms:
         assert abs(got["viscous"] / (scale * p.viscous) - 1) <= TOLERANCE, got
     if "acceleration" in p.true_terms:
-        # Not in the issue's check: the inertia error's sign, and its size within a
+        # Beyond the named terms: the inertia error's sign, and its size within a
         # factor of 2. The observer's low-pass makes tau_ext lag, which on these logs
         # looks like -6e-5 to -7e-5 kg m^2 of inertia (docs/abstraction.md), and the
         # search splits that between filters and acceleration rows; a wrong sign is

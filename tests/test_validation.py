@@ -1,4 +1,4 @@
-"""Held-out validation (issue 13, part 2): what the GA never fits, and both scores."""
+"""Held-out validation: what the GA never fits, and both scores."""
 
 from __future__ import annotations
 

@@ -46,7 +46,7 @@ def _python(model: Any, source: Any, *, prefix: str, real: str) -> dict[str, Any
     return python_context(model, source, prefix=prefix)  # Python has one real type
 
 
-#: The fixed table of targets. "latex" joins it with the report (a later issue).
+#: The fixed table of code targets; "latex" (the report) is written by the report package.
 TARGETS: Mapping[str, Target] = {
     "c": Target(c_context, (Output("c_header.h.j2", "{prefix}.h"),
                             Output("c_source.c.j2", "{prefix}.c"))),
