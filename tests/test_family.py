@@ -16,7 +16,7 @@ import pytest
 from edm_sym.application.cli import main
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.engines.plant import PRESETS, lowpass, simulate_plant
-from edm_sym.engines.plant.anchor import centred_motion, fit_anchor
+from edm_sym.engines.plant.anchor import centred_motion, fit_anchor, law_torque
 from edm_sym.engines.plant.family import (
     PRESENCE_SHARE,
     TRUTH_UNITS,
@@ -197,3 +197,21 @@ def test_centred_motion_is_the_motion_at_the_previous_sample() -> None:
     np.testing.assert_allclose(q[2:], theta[1:-1])
     np.testing.assert_allclose(w[2:], 6.0 * t[1:-1], atol=1e-12)
     np.testing.assert_allclose(a[2:], 6.0, rtol=1e-6)
+
+
+def test_the_static_law_with_the_truth_explains_the_log() -> None:
+    # The truth's parameters in the documented laws leave a small residual (presliding
+    # at reversals and the noise); the anchor's own fit does as well; a law without
+    # its Coulomb term does not.
+    fp = draw_plant(0)
+    p = fp.preset
+    log = simulate_plant(p, "evaluation", seed=1)
+    target = rms(log.tau_ext)
+    law = law_torque(log.columns, fp.truth, g_rtob=p.g_rtob, ts=log.ts)
+    assert rms(log.tau_ext - law) < 0.05 * target
+    fitted = fit_anchor(log.columns, g_rtob=p.g_rtob, ts=log.ts).physics()
+    law_fit = law_torque(log.columns, fitted, g_rtob=p.g_rtob, ts=log.ts)
+    assert rms(log.tau_ext - law_fit) < 1.5 * rms(log.tau_ext - law)
+    partial = {k: v for k, v in fp.truth.items() if k != "coulomb"}
+    assert rms(log.tau_ext - law_torque(log.columns, partial, g_rtob=p.g_rtob, ts=log.ts)) > (
+        0.5 * target)

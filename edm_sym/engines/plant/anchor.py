@@ -27,7 +27,7 @@ import numpy as np
 
 from edm_sym.engines.plant.filters import lowpass
 
-__all__ = ["AnchorFit", "centred_motion", "fit_anchor"]
+__all__ = ["AnchorFit", "centred_motion", "fit_anchor", "law_torque"]
 
 #: The angle harmonics fitted by default: 1 to 8 cycles per revolution.
 DEFAULT_HARMONICS = tuple(range(1, 9))
@@ -200,3 +200,51 @@ def _sliding_rows(omega: np.ndarray, min_speed: float, memory: int) -> np.ndarra
     slow = (np.abs(omega) < min_speed).astype(float)
     recent = np.convolve(slow, np.ones(memory + 1))[: omega.size]
     return recent == 0.0
+
+
+def law_torque(
+    columns: Mapping[str, np.ndarray], physics: Mapping[str, Mapping[str, float]], *,
+    g_rtob: float, ts: float,
+) -> np.ndarray:
+    """The documented static laws with given parameters, on a log, as the observer sees them.
+
+    ``Q(s)[Fc sgn(omega) + Fs sgn(omega) exp(-(omega/v_s)^2) + D omega + dJ alpha
+    + c0 + A sin(k theta + phi)]`` with the motion of :func:`centred_motion`:
+    what the model :func:`fit_anchor` fits predicts with these parameters. With
+    a family plant's truth it is the plant's law without its presliding
+    dynamics and noise.
+
+    Parameters
+    ----------
+    columns : mapping of str to numpy.ndarray
+        The log columns (``theta_uw`` is used).
+    physics : mapping of str to mapping of str to float
+        Kind to parameters, as :attr:`FamilyPlant.truth
+        <edm_sym.engines.plant.family.FamilyPlant.truth>` or
+        :meth:`AnchorFit.physics` give them; kinds not listed are zero.
+    g_rtob, ts : float
+        The observer's cut-off [rad/s] and the sample time [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The predicted ``tau_ext`` [N m].
+    """
+    theta, omega, alpha = centred_motion(np.asarray(columns["theta_uw"], dtype=float), ts)
+    sign = np.sign(omega)
+    law = np.zeros_like(omega)
+    if "coulomb" in physics:
+        law += physics["coulomb"]["level"] * sign
+    if "stribeck" in physics:
+        st = physics["stribeck"]
+        law += st["peak"] * sign * np.exp(-(omega / st["stribeck_velocity"]) ** 2)
+    if "viscous" in physics:
+        law += physics["viscous"]["coefficient"] * omega
+    if "acceleration" in physics:
+        law += physics["acceleration"]["inertia"] * alpha
+    if "offset" in physics:
+        law += physics["offset"]["level"]
+    if "spatial" in physics:
+        sp = physics["spatial"]
+        law += sp["amplitude"] * np.sin(sp["cycles_per_revolution"] * theta + sp.get("phase", 0.0))
+    return lowpass(law, g_rtob, ts)
