@@ -95,7 +95,7 @@ def named_physics(describe_json: dict) -> dict[str, dict[str, float]]:
         if kind == "spatial":
             if "dominant_cycles" in params:
                 params["cycles_per_revolution"] = params["dominant_cycles"]
-            if abs(params.get("amplitude", 0.0)) >= abs(have.get("amplitude", -1.0)):
+            if "amplitude" not in have or abs(params.get("amplitude", 0.0)) > abs(have["amplitude"]):
                 have.update({k: v for k, v in params.items() if k != "count"})
             continue
         biggest = abs(params.get("peak", 0.0)) >= abs(have.get("peak", 0.0))

@@ -215,3 +215,44 @@ def test_the_static_law_with_the_truth_explains_the_log() -> None:
     partial = {k: v for k, v in fp.truth.items() if k != "coulomb"}
     assert rms(log.tau_ext - law_torque(log.columns, partial, g_rtob=p.g_rtob, ts=log.ts)) > (
         0.5 * target)
+
+
+def _bench():  # noqa: ANN202
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_naming.py"
+    spec = importlib.util.spec_from_file_location("edm_bench_naming", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_benchmark_reads_both_namings_alike() -> None:
+    bench = _bench()
+
+    def term(kind: str, **params: float) -> dict:
+        return {"kind": kind, "parameters": {k: [v, "-"] for k, v in params.items()}}
+
+    rows = {"rows": [{"terms": [term("coulomb", level=0.3), term("viscous", coefficient=0.004)]},
+                     {"terms": [term("coulomb", level=0.2),
+                                term("spatial", cycles_per_revolution=1.0, amplitude=0.02)]},
+                     {"terms": [term("spatial", cycles_per_revolution=5.0, amplitude=0.18)]}]}
+    whole = {"rows": [], "physics": {"terms": [term("coulomb", level=0.5),
+                                               term("viscous", coefficient=0.004),
+                                               term("spatial", cycles_per_revolution=5.0,
+                                                    amplitude=0.18)]}}
+    for doc in (rows, whole):
+        got = bench.named_physics(doc)
+        assert math.isclose(got["coulomb"]["level"], 0.5)
+        assert got["spatial"]["cycles_per_revolution"] == 5.0
+        assert got["spatial"]["amplitude"] == 0.18
+    truth = {"coulomb": {"level": 0.52}, "viscous": {"coefficient": 0.0045},
+             "spatial": {"cycles_per_revolution": 5.0, "amplitude": 0.2}}
+    assert bench.compare(bench.named_physics(whole), truth)["pass"]
+    # 10 % Coulomb, an offset the plant lacks, a wrong order: each fails the run.
+    for bad in ({"coulomb": {"level": 0.58}},
+                {"offset": {"level": 0.01}},
+                {"spatial": {"cycles_per_revolution": 4.0, "amplitude": 0.2}}):
+        named = {**bench.named_physics(whole), **bad}
+        assert not bench.compare(named, truth)["pass"], bad
