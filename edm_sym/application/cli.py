@@ -243,7 +243,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
     p.add_argument("--preset", required=True, metavar="NAME",
-                   help="the plant: auger, ballscrew or lugre (docs/plant.md)")
+                   help="the plant: a preset of docs/plant.md (auger, ballscrew, lugre, ...) or "
+                        "family-N, draw N of the family of plants with known truth")
     p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"],
                    help="velocity steps then the chirp of eq. 9 (abstraction), or eq. 17 (evaluation)")
     p.add_argument("-o", "--output", metavar="DATA.csv",
@@ -422,13 +423,14 @@ def _time_name(data) -> str:  # noqa: ANN001
 def _cmd_plant(args: argparse.Namespace) -> int:
     from edm_sym.core.data import write_csv
     from edm_sym.engines.plant import PRESETS, simulate_plant
+    from edm_sym.engines.plant.family import FAMILY_PREFIX, family_draw, resolve_preset
 
-    if args.preset not in PRESETS:
-        raise UsageError(f"edm plant: --preset: expected one of {', '.join(sorted(PRESETS))}, "
-                         f"found {args.preset!r}")
+    if args.preset not in PRESETS and family_draw(args.preset) is None:
+        raise UsageError(f"edm plant: --preset: expected one of {', '.join(sorted(PRESETS))} "
+                         f"or {FAMILY_PREFIX}N (a draw of the family), found {args.preset!r}")
     out = Path(args.output) if args.output else Path(f"{args.preset}_{args.excitation}.csv")
     check_outputs([out])
-    log = simulate_plant(args.preset, args.excitation, seed=args.seed)
+    log = simulate_plant(resolve_preset(args.preset), args.excitation, seed=args.seed)
     write_csv(out, log.columns)
     print(f"wrote {out}")
     return 0

@@ -2,7 +2,8 @@
 
 A data spec is a path (CSV, .npz, .mat: read by :mod:`edm_sym.core.data`) or
 ``plant:PRESET/EXCITATION[@SEED]``, the log ``edm plant`` would write, simulated
-on the fly (docs/data.md). Resolving the second needs the plant engine, so the
+on the fly (docs/data.md); PRESET is a named preset or ``family-N``, draw N of
+the family of plants with known truth (docs/plant.md). Resolving the second needs the plant engine, so the
 resolver lives here, one layer above the file readers (docs/architecture.md).
 """
 
@@ -18,6 +19,7 @@ from edm_sym.core import data as _files
 from edm_sym.core.data import PLANT_SCHEME, ColumnRoles, DataLog, is_plant_spec, with_roles
 from edm_sym.core.errors import DataFormatError
 from edm_sym.engines.plant import EXCITATIONS, PRESETS, simulate_plant
+from edm_sym.engines.plant.family import FAMILY_PREFIX, family_draw, resolve_preset
 
 __all__ = ["load_data", "plant_log"]
 
@@ -44,9 +46,9 @@ def plant_log(spec: str) -> DataLog:
     body = spec[len(PLANT_SCHEME):]
     body, _, seed_text = body.partition("@")
     preset, _, excitation = body.partition("/")
-    if preset not in PRESETS:
-        raise DataFormatError(f"{spec}: preset", f"expected one of {', '.join(sorted(PRESETS))}, "
-                              f"found {preset!r}")
+    if preset not in PRESETS and family_draw(preset) is None:
+        raise DataFormatError(f"{spec}: preset", f"expected one of {', '.join(sorted(PRESETS))} "
+                              f"or {FAMILY_PREFIX}N (a draw of the family), found {preset!r}")
     if excitation not in EXCITATIONS:
         raise DataFormatError(f"{spec}: excitation",
                               f"expected one of {', '.join(EXCITATIONS)}, found {excitation!r}")
@@ -58,11 +60,12 @@ def plant_log(spec: str) -> DataLog:
         raise DataFormatError(f"{spec}: seed", f"expected an integer, found {seed_text!r}") from None
     if seed < 0:
         raise DataFormatError(f"{spec}: seed", f"expected an integer >= 0, found {seed}")
-    cols = dict(simulate_plant(preset, excitation, seed=seed).columns)
+    plant = resolve_preset(preset)
+    cols = dict(simulate_plant(plant, excitation, seed=seed).columns)
     digest = hashlib.sha256()
     for key, col in cols.items():
         digest.update(key.encode() + np.ascontiguousarray(col, dtype="<f8").tobytes())
     ts = float(cols["t"][1] - cols["t"][0])
     # The observer's bandwidth: what `edm describe` needs to take its lag out of tau_ext.
     return DataLog(cols, ts, spec, digest.hexdigest(),
-                   {"observer_bandwidth": float(PRESETS[preset].g_rtob)})
+                   {"observer_bandwidth": float(plant.g_rtob)})

@@ -9,6 +9,8 @@ abstraction and for checking identified models against the ground truth::
     log.columns["tau_ext"], log.truth["coulomb"], log.omega_cmd
 
 See ``docs/plant.md`` for the block diagram and every preset parameter.
+``family`` draws plants with known truth (``family-N`` wherever a preset name
+goes); ``anchor`` is the engineer's least squares that checks such a truth.
 """
 
 from __future__ import annotations
