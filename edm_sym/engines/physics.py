@@ -75,7 +75,8 @@ class PhysicsOptions:
         A law is named when its term's RMS is at least this share of the
         reference RMS (the target's on the data, else the model's on the probes).
     stribeck_ratio : float, default 1.1
-        A Stribeck hump is named when its peak is at least this many times the
+        A Stribeck hump is named when the level at rest (Coulomb plus its
+        ``peak``, the excess over Coulomb) is at least this many times the
         Coulomb level.
     max_harmonic : int, default 12
         The highest angle harmonic fitted (cycles per revolution).
@@ -397,11 +398,14 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     from rest at constant acceleration, then held for the settling time and a
     window of one revolution (rotary; the position span on a linear axis), at
     most ``options.max_window``. Positive runs start at the low end of the
-    recorded position, negative ones at the high end. Triangle waves: three
+    recorded position, negative ones at the high end. Triangle waves: four
     periods between ``-V`` and ``V`` (``V`` the fastest speed and a third of it)
-    at the constant acceleration that gives each half period four settling
-    times (at most the recorded acceleration); steady away from each reversal
-    of the acceleration and each zero crossing of the velocity.
+    at half and an eighth of the recorded acceleration (the log's time scales:
+    a filter's response there is what the search fitted, not its DC gain on a
+    minute-long ramp), from the middle of the position span; steady after the
+    first period (or the settling time) and away from each turn of the
+    acceleration and each zero crossing of the velocity (the settling time, at
+    most a third of a ramp).
     """
     lo, hi = ranges.position if ranges.position is not None else (0.0, 0.0)
     span = (hi - lo) if hi > lo else (TWO_PI if rotary else 0.0)
@@ -667,13 +671,13 @@ def model_physics(
                                "the motion, not friction")
     if vs is not None:
         fs = float(coef[idx["stribeck"]])
-        peak = fc + fs
-        if fc > 0 and peak >= opts.stribeck_ratio * fc:
+        if fc > 0 and fc + fs >= opts.stribeck_ratio * fc:
             consider(TermKind.STRIBECK, [idx["stribeck"]],
-                     {"peak": (peak, units.force), "stribeck_velocity": (vs, units.velocity)},
-                     {"peak": float(stderr[idx["stribeck"]] / peak)})
+                     {"peak": (fs, units.force), "level_at_rest": (fc + fs, units.force),
+                      "stribeck_velocity": (vs, units.velocity)},
+                     {"peak": rel(idx["stribeck"])})
         else:
-            left.append((TermKind.STRIBECK, f"peak {peak:.4g} {units.force} is below "
+            left.append((TermKind.STRIBECK, f"level at rest {fc + fs:.4g} {units.force} is below "
                                             f"{opts.stribeck_ratio:g} x the Coulomb level"))
     consider(TermKind.VISCOUS, [idx["viscous"]], {"coefficient": (d, units.viscous)},
              {"coefficient": rel(idx["viscous"])},

@@ -1,0 +1,196 @@
+"""The physics of a whole model, named by its behaviour on probe motions (edm_sym.engines.physics).
+
+Hand-written models with known laws, written the ways the search writes them
+(one row a law, a cancelling pair, velocity built from the integral of the
+acceleration), must be named with their parameters; what the model lacks
+must not be named. The shipped EMPS result, without its data, must agree with
+the engineer's least squares on the measured log (docs/describe.md#physics-named-by-behaviour).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import edm_sym
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.physics import (
+    MotionRange,
+    PhysicsOptions,
+    TermKind,
+    model_physics,
+    probe_runs,
+    ranges_from_data,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+TS = 1e-3
+INPUTS = ("theta_w", "theta_uw", "omega", "alpha")
+ROLES = ("angle_wrapped", "angle", "velocity", "acceleration")
+RANGE = MotionRange(velocity=20.0, slowest=0.5, acceleration=400.0, position=(0.0, 60.0),
+                    source="test ranges")
+
+
+def _comp(rows: list[tuple[str, list[tuple[str, float]]]], inputs=INPUTS) -> Compensator:  # noqa: ANN001
+    """A compensator from decoded parameter values (encoded with the default ranges)."""
+    ranges = default_ranges(TS, 20.0)
+    width = max(len(genes) for _, genes in rows)  # rows of one length, padded with `through`
+    rows = [(inp, [*genes, *[("through", 0.0)] * (width - len(genes))]) for inp, genes in rows]
+    enc = [(inp, [(name, ranges[name].encode(a) if name in ranges else 0.0) for name, a in genes])
+           for inp, genes in rows]
+    return Compensator(make_matrix(inputs, enc), TS, {})
+
+
+def _named(phys) -> dict:  # noqa: ANN001
+    return phys.named()
+
+
+def test_one_row_per_law_is_named_with_its_parameters() -> None:
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.5)]),
+                  ("omega", [("gain", 0.01)]),
+                  ("alpha", [("gain", 0.002)]),
+                  ("theta_w", [("gain", 3.0), ("sin_amp", 0.07)])])
+    phys = model_physics(comp, ROLES, RANGE)
+    named = _named(phys)
+    assert set(named) == {"coulomb", "viscous", "acceleration", "spatial"}
+    assert named["coulomb"]["level"] == pytest.approx(0.5, rel=0.01)
+    assert named["viscous"]["coefficient"] == pytest.approx(0.01, rel=0.02)
+    assert named["acceleration"]["inertia"] == pytest.approx(0.002, rel=0.02)
+    assert named["spatial"]["cycles_per_revolution"] == 3
+    assert named["spatial"]["amplitude"] == pytest.approx(0.07, rel=0.02)
+    assert phys.explained > 0.999
+    # each law is carried by its own row
+    shares = {t.kind: t.rows for t in phys.terms}
+    assert shares[TermKind.COULOMB][0] == pytest.approx(1.0, abs=0.01)
+    assert shares[TermKind.SPATIAL][3] == pytest.approx(1.0, abs=0.01)
+    assert not any(b.reason for b in phys.rows)
+
+
+def test_a_cancelling_pair_is_named_as_the_law_it_makes_together() -> None:
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.3)]),
+                  ("omega", [("gain", 2.0)]),
+                  ("omega", [("gain", -1.99)])])
+    phys = model_physics(comp, ROLES, RANGE)
+    named = _named(phys)
+    assert named["viscous"]["coefficient"] == pytest.approx(0.01, rel=0.02)
+    rows = next(t.rows for t in phys.terms if t.kind is TermKind.VISCOUS)
+    assert rows[1] == pytest.approx(200.0, rel=0.02) and rows[2] == pytest.approx(-199.0, rel=0.02)
+    # the pair's viscous law is not named as anything else
+    assert set(named) == {"coulomb", "viscous"}
+
+
+def test_velocity_built_from_the_integral_of_the_acceleration_is_viscous() -> None:
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.4)]),
+                  ("alpha", [("integral", 1.0), ("gain", 0.02)])])
+    named = _named(model_physics(comp, ROLES, RANGE))
+    assert named["viscous"]["coefficient"] == pytest.approx(0.02, rel=0.03)
+    assert named["coulomb"]["level"] == pytest.approx(0.4, rel=0.02)
+    assert "acceleration" not in named
+
+
+def test_what_the_model_lacks_is_not_named_and_a_wrong_sign_is_said() -> None:
+    comp = _comp([("omega", [("sign", 0), ("gain", -0.5)]),
+                  ("omega", [("gain", 0.02)])])
+    phys = model_physics(comp, ROLES, RANGE)
+    assert set(phys.named()) == {"viscous"}
+    left = dict(phys.left_out)
+    assert "negative Coulomb" in left[TermKind.COULOMB]
+    assert "below" in left[TermKind.OFFSET]
+
+
+def test_a_tiny_law_is_left_out_below_the_threshold() -> None:
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.5)]),
+                  ("omega", [("gain", 1e-5)])])
+    phys = model_physics(comp, ROLES, RANGE, options=PhysicsOptions(threshold=0.01))
+    assert set(phys.named()) == {"coulomb"}
+    assert any(k is TermKind.VISCOUS for k, _ in phys.left_out)
+
+
+def test_observer_lag_is_taken_out_before_the_inertia_is_named() -> None:
+    # A viscous law seen through the observer's low-pass g/(s+g) lags: without the
+    # bandwidth it reads as an inertia of -D/g, with it as none.
+    g = 100.0
+    comp = _comp([("omega", [("gain", 0.05), ("lpf", g)]),
+                  ("omega", [("sign", 0), ("gain", 0.5), ("lpf", g)])])
+    with_g = model_physics(comp, ROLES, RANGE, bandwidth=g).named()
+    assert "acceleration" not in with_g
+    assert with_g["viscous"]["coefficient"] == pytest.approx(0.05, rel=0.03)
+    without = model_physics(comp, ROLES, RANGE, options=PhysicsOptions(threshold=0.001))
+    # -D/g to first order; the Coulomb step at each reversal, through the same
+    # low-pass, adds its tail inside the ramps (about a quarter more here).
+    assert without.named()["acceleration"]["inertia"] == pytest.approx(-0.05 / g, rel=0.3)
+    assert any(c == "lag_included" for t in without.terms for c, _ in t.flags)
+
+
+def test_probes_stay_in_the_velocity_range_and_start_from_rest() -> None:
+    runs = probe_runs(RANGE, TS, 0.05, rotary=True, options=PhysicsOptions())
+    for run in runs:
+        assert run.velocity[0] == 0.0
+        assert np.max(np.abs(run.velocity)) <= RANGE.velocity * (1 + 1e-9)
+        assert np.max(np.abs(run.acceleration[run.steady])) <= RANGE.acceleration * (1 + 1e-6)
+        assert run.steady.any()
+    # the constant-velocity runs go down to the slowest speed and up to the fastest
+    tops = sorted(float(np.max(np.abs(r.velocity))) for r in runs)
+    assert tops[0] == pytest.approx(RANGE.slowest, rel=1e-6)
+    assert tops[-1] == pytest.approx(RANGE.velocity, rel=1e-6)
+
+
+def test_ranges_from_data_are_the_motion_the_log_reaches() -> None:
+    t = np.arange(20000) * TS
+    v = 5.0 * np.sin(t)
+    r = ranges_from_data(v, 5.0 * np.cos(t), np.cumsum(v) * TS, "log")
+    assert r.velocity == pytest.approx(5.0, rel=0.01)
+    assert 0 < r.slowest < r.velocity
+    assert r.acceleration == pytest.approx(5.0, rel=0.01)
+
+
+def test_linear_axis_units_and_a_position_profile() -> None:
+    comp = _comp([("qd", [("sign", 0), ("gain", 8.0)]),
+                  ("qd", [("gain", 9.0)]),
+                  ("q", [("gain", 9.0), ("sin_amp", 2.0)])], inputs=("q", "qd", "qdd"))
+    rng = MotionRange(0.2, 0.01, 2.0, (0.0, 0.5), "test")
+    phys = model_physics(comp, ("angle", "velocity", None), rng, axis="linear")
+    terms = {t.kind.value: t.parameters for t in phys.terms}
+    assert terms["coulomb"]["level"][1] == "N"
+    assert terms["coulomb"]["level"][0] == pytest.approx(8.0, rel=0.02)
+    assert terms["viscous"]["coefficient"] == (pytest.approx(9.0, rel=0.05), "N s/m")
+    assert terms["spatial"]["amplitude"][0] == pytest.approx(2.0, rel=0.1)
+    assert any("held at zero" in n for n in phys.notes)
+
+
+# The engineer's least squares on the measured EMPS log (sgn v, v, a, 1), whole log:
+# Fc 20.32 N, Fv 204.3 N s/m, mass error 5.07 kg (benchmarks/bench_emps.py's regressors).
+EMPS_LS = {"coulomb": ("level", 20.32), "viscous": ("coefficient", 204.3),
+           "acceleration": ("inertia", 5.07)}
+
+
+def test_emps_without_data_agrees_with_least_squares_over_the_recorded_ranges() -> None:
+    desc = edm_sym.describe(ROOT / "examples" / "emps" / "result.json")
+    doc = desc.to_json()
+    phys = doc["physics"]
+    assert "records" in phys["ranges"]["source"]
+    assert phys["ranges"]["velocity"] == pytest.approx(0.1278, rel=0.01)
+    named = {t["kind"]: t["parameters"] for t in phys["terms"]}
+    for kind, (param, value) in EMPS_LS.items():
+        assert named[kind][param][0] == pytest.approx(value, rel=0.15), kind
+    assert phys["reference"] == "probes"
+    assert not math.isnan(phys["explained"]) and phys["explained"] > 0.95
+
+
+def test_describe_json_physics_reads_the_data_when_given(tmp_path: Path) -> None:
+    doc = edm_sym.describe(ROOT / "examples" / "auger" / "result.json",
+                           "plant:auger/evaluation").to_json()
+    named = {t["kind"]: t["parameters"] for t in doc["physics"]["terms"]}
+    # the auger plant (docs/plant.md): Coulomb 0.95 N m, viscous 0.005, inertia error
+    # 2e-4 kg m^2, a 1-cycle ripple of 0.06 N m
+    assert named["coulomb"]["level"][0] == pytest.approx(0.95, rel=0.05)
+    assert named["viscous"]["coefficient"][0] == pytest.approx(0.005, rel=0.1)
+    assert named["acceleration"]["inertia"][0] == pytest.approx(2e-4, rel=0.2)
+    assert named["spatial"]["cycles_per_revolution"][0] == 1
+    assert named["spatial"]["amplitude"][0] == pytest.approx(0.06, rel=0.2)
+    assert "offset" not in named and "stribeck" not in named
+    assert doc["physics"]["observer_bandwidth"] == 150.0
