@@ -2,7 +2,8 @@
 
 Hypothesis draws the commands' files near valid ones (a log, a result, a
 LuGre file, a config, a pipeline file, each either valid, cut short, with a
-slice replaced by random text, or - for JSON - with one value replaced) and
+slice replaced by random text, with a number replaced by an integer of
+hundreds or thousands of digits, or - for JSON - with one value replaced) and
 odd option values (nan, inf, negative, huge, empty, unknown names), and runs
 the commands in-process through ``edm_sym.application.cli.main`` and
 ``export_main``. Whatever comes in:
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -111,9 +113,15 @@ def _paths(doc: object, prefix: tuple = ()) -> list[tuple]:
 def variant(draw: st.DrawFn, name: str) -> str:
     """The file ``name``: valid (half the time), or cut, spliced or (JSON) with a value replaced."""
     text = VALID[name]
-    kind = draw(st.sampled_from(["valid", "valid", "valid", "cut", "splice", "value"]))
+    kind = draw(st.sampled_from(["valid", "valid", "valid", "cut", "splice", "value", "long"]))
     if kind == "valid":
         return text
+    if kind == "long":  # a number replaced by an integer no double holds (or Python reads)
+        numbers = list(re.finditer(r"[0-9][0-9.e+-]*", text))
+        if numbers:
+            m = draw(st.sampled_from(numbers))
+            digits = draw(st.sampled_from([310, 4301, 6000]))
+            return text[:m.start()] + "7" * digits + text[m.end():]
     if kind == "cut":
         return text[:draw(st.integers(0, len(text)))]
     if kind == "splice" or not name.endswith(".json"):
@@ -371,3 +379,59 @@ def test_the_valid_files_give_exit_0(capsys) -> None:  # noqa: ANN001
             assert export_main(["result.json", "--target", "python", "-o", "gen"]) == 0
         finally:
             os.chdir(cwd)
+
+
+# -- an integer no double holds, in every file a command reads ------------------------------------
+
+CHECKPOINT = {"format": "edm-abstraction-checkpoint", "version": 2, "current": {"generation": 1}}
+
+
+def _long_number(text: str, key: str, digits: int) -> str:
+    """``text`` with the number after ``key`` (``"key": 1`` or ``key = 1``) replaced."""
+    pattern = rf'((?:"{key}"\s*:|\b{key}\s*=)\s*)-?[0-9][0-9.e+-]*'
+    new, count = re.subn(pattern, lambda m: m.group(1) + "-" + "9" * digits, text, count=1)
+    assert count == 1, key
+    return new
+
+
+ABSTRACT = ["abstract", "log.csv", "--target", "tau_ext", "--inputs", "omega", "--config",
+            "tiny.toml", "-o", "r.json", "--quiet", "--workers", "1"]
+
+
+@pytest.mark.parametrize("digits", [310, 4301, 100_000])
+@pytest.mark.parametrize("entry, args, name, key, shown", [
+    (main, ABSTRACT, "tiny.toml", "population", "ga.population"),
+    (main, ABSTRACT, "tiny.toml", "cache_mb", "cache_mb"),
+    (main, ["pipeline", "pipeline.toml", "--quiet"], "pipeline.toml", "seed", "abstraction.seed"),
+    (main, ["describe", "result.json"], "result.json", "record_length", "record_length"),
+    (export_main, ["result.json", "--target", "python", "-o", "gen"], "result.json",
+     "sample_time", "sample_time"),
+    (main, ["simulate", "lugre.json", "log.csv", "-o", "s.csv"], "lugre.json", "evaluations",
+     "evaluations"),
+    (main, ["abstract", *ABSTRACT[1:], "--resume"], "r.json.checkpoint", "generation",
+     "current.generation"),
+], ids=["config", "config-top", "pipeline", "result", "export", "lugre", "checkpoint"])
+def test_an_integer_no_double_holds_is_refused_naming_the_file_and_key(
+    capsys, entry, args, name, key, shown, digits  # noqa: ANN001
+) -> None:
+    files = dict(VALID) | {"r.json.checkpoint": json.dumps(CHECKPOINT)}
+    files[name] = _long_number(files[name], key, digits)
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = entry(args)
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before
+    assert rc == 2, err
+    assert err.count("\n") == 1 and len(err) < 300, err
+    assert f"{name}: {shown}: expected a finite number, found an integer of " in err
+    assert ("more than 4300 digits" if digits > 4300 and name.endswith(".toml")
+            else f"{digits} digits") in err

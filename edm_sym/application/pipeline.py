@@ -45,15 +45,10 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, match_sample_time
-from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError, OutputError
-from edm_sym.core.fileio import check_outputs, write_atomic
+from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, OutputError
+from edm_sym.core.fileio import check_outputs, read_toml, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 SECTIONS = {
     "data": {"abstraction", "evaluation", "axis"},
@@ -109,16 +104,7 @@ def load_pipeline(path: str | Path) -> Pipeline:
         Naming the file and key, with what was expected and found.
     """
     path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(str(path), "expected UTF-8 TOML text, found binary data") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(str(path), f"expected TOML, found invalid text ({exc})") from None
-    except RecursionError:
-        raise ConfigError(str(path), TOO_DEEP) from None
+    doc = read_toml(path, ConfigError, where=str(path))
     name = path.name
     for section, table in doc.items():
         if section == "columns":

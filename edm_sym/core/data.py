@@ -476,6 +476,11 @@ def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
     return replace(log, roles=roles)
 
 
+def _cut(text: str, width: int = 30) -> str:
+    """``text`` cut for a message (a number of thousands of digits stays one short line)."""
+    return text if len(text) <= width else f"{text[:width - 12]}... ({len(text)} characters)"
+
+
 def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
     try:
         text = raw.decode("utf-8-sig")
@@ -517,7 +522,7 @@ def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
                                       f"expected a number, found {cell.strip()[:30]!r}") from None
             if not math.isfinite(v):
                 raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
-                                      f"expected a finite number, found {cell.strip()}")
+                                      f"expected a finite number, found {_cut(cell.strip())}")
             row.append(v)
         values.append(row)
     if not values:

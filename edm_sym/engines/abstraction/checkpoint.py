@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.errors import TOO_DEEP, ConfigError
-from edm_sym.core.fileio import write_atomic
+from edm_sym.core.errors import ConfigError
+from edm_sym.core.fileio import parse_json, write_atomic
 from edm_sym.engines.abstraction.ga import Population
 
 FORMAT = "edm-abstraction-checkpoint"
@@ -136,14 +136,15 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
     """
     path = Path(path)
     try:
-        doc = json.loads(path.read_text("utf-8"))
+        raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ConfigError(str(path), f"expected a checkpoint (JSON), found invalid text ({exc})"
-                          ) from None
-    except RecursionError:
-        raise ConfigError(str(path), TOO_DEEP) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "expected a checkpoint (JSON), found binary data") from None
+    # A checkpoint holds the fitness of failed individuals: infinities are written as such.
+    doc = parse_json(text, str(path), ConfigError, finite=False)
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ConfigError(f"{path}: format", f"expected {FORMAT!r} version {VERSION}, found "
                                              "something else")
