@@ -20,6 +20,7 @@ The default suite runs a few examples per command (well under a minute);
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
@@ -110,9 +111,10 @@ def _paths(doc: object, prefix: tuple = ()) -> list[tuple]:
 
 
 @st.composite
-def variant(draw: st.DrawFn, name: str) -> str:
-    """The file ``name``: valid (half the time), or cut, spliced or (JSON) with a value replaced."""
-    text = VALID[name]
+def variant(draw: st.DrawFn, name: str, text: str | None = None) -> str:
+    """The file ``name`` (``text``, default its valid text): valid (half the time), or cut,
+    spliced, with a long integer or (JSON) with a value replaced."""
+    text = VALID[name] if text is None else text
     kind = draw(st.sampled_from(["valid", "valid", "valid", "cut", "splice", "value", "long"]))
     if kind == "valid":
         return text
@@ -137,6 +139,41 @@ def variant(draw: st.DrawFn, name: str) -> str:
         node = node[key]
     node[path[-1]] = draw(JSON_VALUES)
     return json.dumps(doc)
+
+
+@functools.cache
+def _checkpoint_text() -> str:
+    """The checkpoint of ``edm abstract log.csv --target tau_ext --inputs omega --config
+    tiny.toml`` (seed 0) stopped after its first generation."""
+    from edm_sym.engines.abstraction import abstract, load_config
+
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "log.csv").write_text(VALID["log.csv"])
+        (folder / "tiny.toml").write_text(VALID["tiny.toml"])
+        ckpt = folder / "r.json.checkpoint"
+        abstract(load_data(folder / "log.csv"), target="tau_ext", inputs=["omega"],
+                 config=load_config(folder / "tiny.toml"), seed=0, workers=1, checkpoint=ckpt,
+                 callback=lambda info: True)
+        return ckpt.read_text()
+
+
+@st.composite
+def checkpoint_variant(draw: st.DrawFn) -> str:
+    """A checkpoint: of the drawn run, of another format version or run (sealed), or damaged."""
+    from edm_sym.engines.abstraction.checkpoint import _digest
+
+    doc = json.loads(_checkpoint_text())
+    kind = draw(st.sampled_from(["valid", "version", "run", "damaged"]))
+    if kind == "damaged":
+        return draw(variant("r.json.checkpoint", _checkpoint_text()))
+    if kind == "version":
+        doc["version"] = draw(st.sampled_from([1, 3, "2", None, 2.5]))
+    elif kind == "run":
+        doc["fingerprint"] = "0" * 64
+        doc["identity"]["seed"] = 9
+    doc["sha256"] = _digest(doc)
+    return json.dumps(doc, sort_keys=True)
 
 
 def odd(*valid: str) -> st.SearchStrategy[str]:
@@ -166,8 +203,11 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 
 
 def _run(capsys: pytest.CaptureFixture, entry: Callable, args: list[str], files: dict[str, str],
-         check: Callable[[Path, str], None]) -> None:
-    """Write ``files`` into a fresh folder, run the command there and check the outcome."""
+         check: Callable[[Path, str], None], consumed: tuple[str, ...] = ()) -> None:
+    """Write ``files`` into a fresh folder, run the command there and check the outcome.
+
+    ``consumed`` names inputs a command that succeeds may replace or remove (a checkpoint).
+    """
     capsys.readouterr()
     with tempfile.TemporaryDirectory() as d:
         folder = Path(d)
@@ -192,7 +232,7 @@ def _run(capsys: pytest.CaptureFixture, entry: Callable, args: list[str], files:
             assert after == before, f"exit 2 but files changed: {sorted(set(after) ^ set(before))}"
         else:
             for name in before:  # no input harmed
-                assert after[name] == before[name], f"{name} changed"
+                assert name in consumed or after[name] == before[name], f"{name} changed"
             assert not [n for n in after if n.endswith(".tmp")], sorted(after)
             check(folder, out)
 
@@ -250,6 +290,11 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
         if data.draw(st.booleans()):
             args += [option, data.draw(values)]
 
+    files = {"log.csv": data.draw(variant("log.csv")), "tiny.toml": data.draw(variant("tiny.toml"))}
+    if data.draw(st.booleans()):  # --resume, with a checkpoint of this run or not quite
+        args.append("--resume")
+        files["r.json.checkpoint"] = data.draw(checkpoint_variant())
+
     def check(folder: Path, out: str) -> None:
         res = load_result(folder / "r.json")
         assert res.compensator.matrix.rows
@@ -259,8 +304,7 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
         assert (folder / "r.json.checkpoint").exists() != completed
 
     with tiny_budget():
-        _run(capsys, main, args, {"log.csv": data.draw(variant("log.csv")),
-                                  "tiny.toml": data.draw(variant("tiny.toml"))}, check)
+        _run(capsys, main, args, files, check, consumed=("r.json.checkpoint",))
 
 
 test_abstract, test_abstract_many = _examples(20, 200)(_prop_abstract)
@@ -435,3 +479,30 @@ def test_an_integer_no_double_holds_is_refused_naming_the_file_and_key(
     assert f"{name}: {shown}: expected a finite number, found an integer of " in err
     assert ("more than 4300 digits" if digits > 4300 and name.endswith(".toml")
             else f"{digits} digits") in err
+
+
+def test_pipeline_reuse_refuses_a_checkpoint_of_another_version_before_any_work(capsys) -> None:  # noqa: ANN001
+    from edm_sym.engines.abstraction.checkpoint import _digest
+
+    doc = json.loads(_checkpoint_text())
+    doc["version"] = 3
+    doc["sha256"] = _digest(doc)
+    files = dict(VALID) | {"result.json.checkpoint": json.dumps(doc)}
+    del files["result.json"], files["lugre.json"]
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = main(["pipeline", "pipeline.toml", "--quiet", "--reuse"])
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before  # no lugre.json either: refused before the LuGre fit
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "result.json.checkpoint: version: expected checkpoint format version 2" in err
+    assert "found version 3" in err

@@ -59,6 +59,7 @@ def run_cli(args: argparse.Namespace) -> int:
         result so far is written anyway, and the checkpoint kept).
     """
     from edm_sym.core.result import save_result
+    from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
     from edm_sym.engines.abstraction.run import abstract, checkpoint_files
     from edm_sym.engines.abstraction.schedule import default_config, load_config
     from edm_sym.engines.sources import load_data
@@ -90,7 +91,8 @@ def run_cli(args: argparse.Namespace) -> int:
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches
-    if args.resume and not any(f.exists() for f in checkpoint_files(ckpt, max(1, count))):
+    if args.resume and not any(f.exists() for f in checkpoint_files(ckpt, max(1, count))) \
+            and not stray_checkpoints(ckpt, max(1, count)):
         print(f"edm abstract: no checkpoint {ckpt}; starting from the beginning",
               file=sys.stderr)
     from edm_sym.application.progress import ProgressReporter

@@ -275,7 +275,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, default_config, load_config
-    from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
+    from edm_sym.engines.abstraction.checkpoint import read_checkpoint
+    from edm_sym.engines.abstraction.run import (
+        check_budget,
+        check_data,
+        check_inputs,
+        checkpoint_files,
+    )
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 
@@ -326,6 +332,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     if not keep_result:
         check_budget(config or default_config(), len(abst), len(pipe.inputs),
                      time_limit=pipe.time_limit)
+    if reuse and not keep_result:
+        # A checkpoint --reuse cannot continue is refused before the LuGre identification
+        # (whether it is of this run is known once the abstraction has the training samples).
+        count = (config or default_config()).searches
+        for f in checkpoint_files(ckpt, count):
+            if f is not None and f.exists():
+                read_checkpoint(f)
 
     lugre = None
     if pipe.lugre is not None:
