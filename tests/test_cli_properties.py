@@ -506,3 +506,94 @@ def test_pipeline_reuse_refuses_a_checkpoint_of_another_version_before_any_work(
     assert rc == 2 and err.count("\n") == 1, err
     assert "result.json.checkpoint: version: expected checkpoint format version 2" in err
     assert "found version 3" in err
+
+
+# -- column names: what the first command accepts, every export target prints -------------------
+
+def _with_target(name: str) -> str:
+    doc = json.loads(VALID["result.json"])
+    doc["target"] = name
+    return json.dumps(doc)
+
+
+def _export_all(capsys, name: str) -> tuple[int, str, Path | None]:  # noqa: ANN001
+    """``edm-export result.json --target all`` of a result whose target is ``name``."""
+    capsys.readouterr()
+    d = tempfile.mkdtemp()
+    folder = Path(d)
+    (folder / "result.json").write_text(_with_target(name), encoding="utf-8")
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        rc = export_main(["result.json", "--target", "all", "-o", "gen"])
+    finally:
+        os.chdir(cwd)
+    return rc, capsys.readouterr().err, folder
+
+
+@settings(max_examples=25, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.text(min_size=1, max_size=12) | st.sampled_from(
+    ['tau"', '"tau', "a*/b", "%{}#~^&$_", "τ_ext", "tau ext", "x'''y", '""', "  ", "a/*b"]))
+def test_every_target_prints_every_name_the_rule_accepts(capsys, name: str) -> None:  # noqa: ANN001
+    from edm_sym.core.result import target_name_problem
+
+    rc, err, folder = _export_all(capsys, name)
+    problem = target_name_problem(name)
+    try:
+        if problem is not None:  # refused when read, by the same rule, with the reason
+            assert rc == 2 and err.count("\n") == 1, err
+            assert f"result.json: target: {problem}" in err
+            assert not (folder / "gen").exists()
+            return
+        assert rc == 0, err
+        module = (folder / "gen" / "edm_comp.py").read_text("utf-8")
+        scope: dict = {}
+        exec(compile(module, "edm_comp.py", "exec"), scope)  # noqa: S102
+        assert scope["TARGET"] == name
+        header = (folder / "gen" / "edm_comp.h").read_text("utf-8")
+        comment = next(line for line in header.splitlines() if "a model of" in line)
+        assert "*/" not in comment  # the comment goes on
+        assert (folder / "gen" / "edm_comp_report.tex").is_file()
+    finally:
+        import shutil
+
+        shutil.rmtree(folder)
+
+
+@pytest.mark.parametrize("name, found", [
+    ('tau"""x', "three double quotes in a row"), ("tau\\ext", "a backslash"),
+    ("tau\text", "the unprintable character U+0009"),
+    ("tau\u2028ext", "the unprintable character U+2028"),
+])
+@pytest.mark.parametrize("command", ["abstract", "lugre", "pipeline"])
+def test_a_name_an_export_cannot_print_is_refused_by_the_first_command(
+    capsys, name: str, found: str, command: str  # noqa: ANN001
+) -> None:
+    header, rest = VALID["log.csv"].split("\n", 1)
+    quoted = '"' + name.replace('"', '""') + '"'
+    log = header.replace("tau_ext", quoted) + "\n" + rest
+    args = {"abstract": ["abstract", "log.csv", "--target", name, "--inputs", "omega",
+                         "--config", "tiny.toml", "-o", "r.json", "--quiet", "--workers", "1"],
+            "lugre": ["lugre", "log.csv", "--target", name, "--velocity", "omega", "-o", "l.json"],
+            "pipeline": ["pipeline", "pipeline.toml", "--quiet"]}[command]
+    pipeline = VALID["pipeline.toml"].replace('target = "tau_ext"',
+                                              f"target = {json.dumps(name)}")
+    files = {"log.csv": log, "tiny.toml": VALID["tiny.toml"], "pipeline.toml": pipeline}
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        assert name in load_data(folder / "log.csv").columns
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = main(args)
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before
+    assert rc == 2 and err.count("\n") == 1, err
+    assert f"found {found}; rename the column" in err

@@ -221,6 +221,7 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
         A role given twice, or no target or no inputs named either way.
     """
     from edm_sym.core.data import ColumnRoles
+    from edm_sym.core.result import target_name_problem
 
     given = ColumnRoles.parse(getattr(args, "role", None) or (),
                               time_column=getattr(args, "time_column", None))
@@ -229,6 +230,9 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
     if target is None:
         raise ConfigError("--target", "expected the target column (--target COL, --role COL=target "
                                       "or [columns] in the config), found none")
+    problem = target_name_problem(target)
+    if problem:
+        raise ConfigError("--target" if args.target else "target", f"{target!r}: {problem}")
     columns = columns.with_role(target, "target")
     if args.inputs is not None:
         inputs = [name.strip() for name in str(args.inputs).split(",")]

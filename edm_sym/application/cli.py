@@ -487,6 +487,8 @@ def _option_or_role(value: str | None, given, role: str, option: str,  # noqa: A
 def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.application.progress import ProgressReporter
     from edm_sym.application.summary import print_summary
+    from edm_sym.core.errors import ConfigError
+    from edm_sym.core.result import target_name_problem
     from edm_sym.core.units import axis_units
     from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.sources import load_data
@@ -494,6 +496,10 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     given = _columns(args)
     target = _option_or_role(args.target, given, "target", "--target", "edm lugre")
     velocity = _option_or_role(args.velocity, given, "velocity", "--velocity", "edm lugre")
+    for option, name in (("--target", target), ("--velocity", velocity)):
+        problem = target_name_problem(name)  # the names LUGRE.json records, as a result's
+        if problem:
+            raise ConfigError(option, f"{name!r}: {problem}")
     if velocity == target:
         raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
                          f"{target!r}, found it")

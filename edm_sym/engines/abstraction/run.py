@@ -36,7 +36,7 @@ from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.fitness import magnitude_problem
 from edm_sym.core.matrix import Compensator, ElementMatrix
-from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
+from edm_sym.core.result import EdmResult, StepRecord, input_name_problem, target_name_problem
 from edm_sym.core.units import axis_units
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
@@ -795,13 +795,17 @@ def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Hold
 
 
 def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
-    """The input names as a tuple; refuses none, a repeated one, a bad name or the target.
+    """The input names as a tuple; refuses none, a repeated one, a bad name or the target
+    (and a target name an export cannot print).
 
     Raises
     ------
     ConfigError
         Naming ``inputs`` (and the name).
     """
+    problem = target_name_problem(target) if isinstance(target, str) else None
+    if problem:
+        raise ConfigError(f"target: {target!r}", problem)
     inputs = tuple(inputs)
     if not inputs:
         raise ConfigError("inputs", "expected at least one input column, found none")
