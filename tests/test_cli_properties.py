@@ -597,3 +597,78 @@ def test_a_name_an_export_cannot_print_is_refused_by_the_first_command(
         assert _snapshot(folder) == before
     assert rc == 2 and err.count("\n") == 1, err
     assert f"found {found}; rename the column" in err
+
+
+# -- logs too large for the machine ------------------------------------------------------------
+
+@pytest.mark.parametrize("entry, args", [
+    (main, ["simulate", "result.json", "log.csv", "-o", "s.csv"]),
+    (main, ["describe", "result.json", "--data", "log.csv"]),
+    (export_main, ["result.json", "--target", "c", "--data", "log.csv", "-o", "gen"]),
+    (export_main, ["result.json", "--target", "python", "--eval-data", "log.csv", "-o", "gen"]),
+], ids=["simulate", "describe", "export-data", "export-eval-data"])
+@pytest.mark.parametrize("available", [2**10, 2**16], ids=["file", "columns"])
+def test_a_log_too_large_for_the_machine_is_refused_up_front_with_the_figure(
+    capsys, entry, args, available: int  # noqa: ANN001
+) -> None:
+    from unittest import mock
+
+    from edm_sym.core import budget
+
+    size = len(VALID["log.csv"].encode())
+    assert 2**10 < size < 2**16 < budget.log_estimate(file_bytes=size, n_samples=400,
+                                                      n_columns=7).memory
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d, \
+            mock.patch.object(budget, "available_memory", lambda: available):
+        folder = Path(d)
+        for file in ("result.json", "log.csv"):
+            (folder / file).write_text(VALID[file], encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = entry(args)
+        finally:
+            os.chdir(cwd)
+        out, err = capsys.readouterr()
+        assert _snapshot(folder) == before and not out  # nothing written
+    assert rc == 2 and err.count("\n") == 1, err
+    shown = budget.format_bytes(available)
+    detail = "a " if available == 2**10 else "400 samples x 7 columns, a "
+    assert "log.csv: needs about " in err and f"of memory ({detail}" in err
+    assert f"more than the {shown} this machine has available; use a shorter log" in err
+
+
+def _peak_rss_kib(argv: list[str], cwd: Path) -> int:
+    """Peak resident memory [KiB] of a command run in its own process (it must exit 0)."""
+    import subprocess
+    import sys
+
+    code = ("import resource, subprocess, sys\n"
+            "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
+            "assert rc == 0, rc\n"
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n")
+    done = subprocess.run([sys.executable, "-c", code, sys.executable, "-m", "edm_sym", *argv],
+                          cwd=cwd, capture_output=True, text=True, check=True)
+    return int(done.stdout.split()[-1])
+
+
+@pytest.mark.slow
+def test_simulate_describe_and_export_of_a_two_million_sample_log_fit_in_2_gib(
+    tmp_path: Path
+) -> None:
+    n, ts = 2_000_000, 1e-3
+    t = np.arange(n) * ts
+    omega = 3.0 * np.sin(2 * np.pi * 0.5 * t) + 0.5
+    theta = np.cumsum(omega) * ts
+    cols = np.column_stack([t, np.mod(theta, 2 * np.pi), theta, omega, np.gradient(omega, ts),
+                            0.8 * np.tanh(20 * omega) + 0.01 * omega])
+    np.savetxt(tmp_path / "big.csv", cols, delimiter=",", comments="", fmt="%.10g",
+               header="t,theta_w,theta_uw,omega,alpha,tau_ext")
+    result = str(REPO / "examples" / "auger" / "result.json")
+    for argv in (["simulate", result, "big.csv", "-o", "sim.csv"],
+                 ["describe", result, "--data", "big.csv"],
+                 ["export", result, "--target", "c", "--data", "big.csv", "-o", "gen"]):
+        peak = _peak_rss_kib(argv, tmp_path)
+        assert peak < 2 * 2**20, f"{argv[0]}: {peak / 2**20:.2f} GiB"
