@@ -245,7 +245,7 @@ def test_a_checkpoint_of_another_run_is_refused(log: DataLog, tmp_path: Path) ->
 
     ckpt = tmp_path / "c"
     run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
-    with pytest.raises(ConfigError, match="another run"):
+    with pytest.raises(ConfigError, match=r"found one of another seed \(1; this run: 2\)"):
         run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
 
 

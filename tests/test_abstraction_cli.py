@@ -162,6 +162,118 @@ def test_bad_input_exits_2_with_one_line(
     assert not (tmp_path / "r.json").exists()
 
 
+# -- --resume with a checkpoint it cannot continue ----------------------------------------
+
+
+def _stopped_run(data_csv: Path, cfg: Path, out: Path, *, searches: int = 1) -> None:
+    """A run stopped after its first generation, leaving its checkpoint(s) beside ``out``."""
+    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.sources import load_data
+
+    abstract(load_data(data_csv), target="tau_ext", inputs=["omega", "alpha"],
+             config=load_config(cfg), seed=3, workers=1, checkpoint=checkpoint_path(out),
+             callback=lambda info: True, searches=searches)
+    if searches > 1:  # the stop came before the second search began: it has the first's
+        first = checkpoint_path(out).with_name(f"{out.name}.checkpoint.search0")
+        first.with_name(f"{out.name}.checkpoint.search1").write_bytes(first.read_bytes())
+
+
+def _set(ckpt: Path, **keys: object) -> None:
+    """Change top-level keys of a checkpoint and seal it again (a digest that matches)."""
+    from edm_sym.engines.abstraction.checkpoint import _digest
+
+    doc = json.loads(ckpt.read_text())
+    doc.update(keys)
+    doc["sha256"] = _digest(doc)
+    ckpt.write_text(json.dumps(doc, sort_keys=True) + "\n")
+
+
+@pytest.mark.parametrize("change, args, expect", [
+    ({"version": 3}, [], "version: expected checkpoint format version 2 (edm_sym "),
+    ({"version": 1}, [], "found version 1 (a checkpoint of another edm_sym release)"),
+    ({"format": "edm-result"}, [], "format: expected 'edm-abstraction-checkpoint' (version 2), "
+                                   'found format "edm-result"'),
+    ({}, ["--seed", "4"], "found one of another seed (3; this run: 4)"),
+    ({}, ["--inputs", "omega"], 'another input set (["omega", "alpha"]; this run: ["omega"])'),
+    ({}, ["--target", "alpha", "--inputs", "omega"],
+     'another target ("tau_ext"; this run: "alpha")'),
+    ({}, ["--config", "{other}"], "found one of another config (or --searches)"),
+    ({}, ["--data", "{other}"], "found one of another data file"),
+    ({}, ["--searches", "2"], "expected a checkpoint of this run of 2 searches "
+                              "(r.json.checkpoint.search0), found one of a run of one search"),
+], ids=["newer", "older", "format", "seed", "inputs", "target", "config", "data", "searches"])
+def test_a_checkpoint_resume_cannot_continue_is_refused_and_left_as_it_was(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, change: dict, args: list,
+    expect: str
+) -> None:
+    cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
+    out = tmp_path / "r.json"
+    _stopped_run(data_csv, cfg, out)
+    ckpt = checkpoint_path(out)
+    if change:
+        _set(ckpt, **change)
+    before = ckpt.read_bytes()
+    argv = {"--data": str(data_csv), "--target": "tau_ext", "--inputs": "omega,alpha",
+            "--config": str(cfg), "--seed": "3"}
+    for k in range(0, len(args), 2):
+        argv[args[k]] = args[k + 1]
+    if argv["--config"] == "{other}":
+        (tmp_path / "o").mkdir()
+        argv["--config"] = str(_config(tmp_path / "o", QUICK.replace("= 16", "= 18")))
+    if argv["--data"] == "{other}":
+        log, _ = friction_log(1.0, seed=5)
+        argv["--data"] = str(write_csv(tmp_path / "other.csv", log.columns))
+    data = argv.pop("--data")
+    rc = main(["abstract", data, *[a for kv in argv.items() for a in kv], "-o", str(out),
+               "--workers", "1", "--quiet", "--resume"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"edm: {ckpt}") and expect in err, err
+    assert "the file is left as it was" in err
+    assert ckpt.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("r.json")) == \
+        ["r.json.checkpoint"]  # no result, no checkpoint of the refused run
+
+
+def test_checkpoints_of_several_searches_are_refused_for_one(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
+    out = tmp_path / "r.json"
+    _stopped_run(data_csv, cfg, out, searches=2)
+    files = sorted(tmp_path.glob("r.json.checkpoint.search*"))
+    assert len(files) == 2
+    before = [f.read_bytes() for f in files]
+    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
+               "--config", str(cfg), "--seed", "3", "-o", str(out), "--workers", "1",
+               "--quiet", "--resume"])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
+    assert "expected a checkpoint of this run of one search (r.json.checkpoint), found one of " \
+           "a run of several searches" in err
+    assert [f.read_bytes() for f in files] == before
+    assert not out.exists() and not checkpoint_path(out).exists()
+
+
+def test_a_second_search_of_another_version_is_refused_before_the_first_runs(
+    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
+    out = tmp_path / "r.json"
+    _stopped_run(data_csv, cfg, out, searches=2)
+    first, second = sorted(tmp_path.glob("r.json.checkpoint.search*"))
+    _set(second, version=7)
+    before = first.read_bytes(), second.read_bytes()
+    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
+               "--config", str(cfg), "--seed", "3", "-o", str(out), "--workers", "2",
+               "--searches", "2", "--quiet", "--resume"])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"{second}: version: " in err and "found version 7" in err, err
+    assert (first.read_bytes(), second.read_bytes()) == before
+    assert not out.exists()
+
+
 # -- a real process, interrupted and resumed ---------------------------------------
 
 # Long enough that a checkpoint (every CHECKPOINT_SECONDS, and at each step's end) shows a

@@ -2,7 +2,8 @@
 
 Hypothesis draws the commands' files near valid ones (a log, a result, a
 LuGre file, a config, a pipeline file, each either valid, cut short, with a
-slice replaced by random text, or - for JSON - with one value replaced) and
+slice replaced by random text, with a number replaced by an integer of
+hundreds or thousands of digits, or - for JSON - with one value replaced) and
 odd option values (nan, inf, negative, huge, empty, unknown names), and runs
 the commands in-process through ``edm_sym.application.cli.main`` and
 ``export_main``. Whatever comes in:
@@ -19,8 +20,10 @@ The default suite runs a few examples per command (well under a minute);
 
 from __future__ import annotations
 
+import functools
 import json
 import os
+import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -108,12 +111,19 @@ def _paths(doc: object, prefix: tuple = ()) -> list[tuple]:
 
 
 @st.composite
-def variant(draw: st.DrawFn, name: str) -> str:
-    """The file ``name``: valid (half the time), or cut, spliced or (JSON) with a value replaced."""
-    text = VALID[name]
-    kind = draw(st.sampled_from(["valid", "valid", "valid", "cut", "splice", "value"]))
+def variant(draw: st.DrawFn, name: str, text: str | None = None) -> str:
+    """The file ``name`` (``text``, default its valid text): valid (half the time), or cut,
+    spliced, with a long integer or (JSON) with a value replaced."""
+    text = VALID[name] if text is None else text
+    kind = draw(st.sampled_from(["valid", "valid", "valid", "cut", "splice", "value", "long"]))
     if kind == "valid":
         return text
+    if kind == "long":  # a number replaced by an integer no double holds (or Python reads)
+        numbers = list(re.finditer(r"[0-9][0-9.e+-]*", text))
+        if numbers:
+            m = draw(st.sampled_from(numbers))
+            digits = draw(st.sampled_from([310, 4301, 6000]))
+            return text[:m.start()] + "7" * digits + text[m.end():]
     if kind == "cut":
         return text[:draw(st.integers(0, len(text)))]
     if kind == "splice" or not name.endswith(".json"):
@@ -129,6 +139,41 @@ def variant(draw: st.DrawFn, name: str) -> str:
         node = node[key]
     node[path[-1]] = draw(JSON_VALUES)
     return json.dumps(doc)
+
+
+@functools.cache
+def _checkpoint_text() -> str:
+    """The checkpoint of ``edm abstract log.csv --target tau_ext --inputs omega --config
+    tiny.toml`` (seed 0) stopped after its first generation."""
+    from edm_sym.engines.abstraction import abstract, load_config
+
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "log.csv").write_text(VALID["log.csv"])
+        (folder / "tiny.toml").write_text(VALID["tiny.toml"])
+        ckpt = folder / "r.json.checkpoint"
+        abstract(load_data(folder / "log.csv"), target="tau_ext", inputs=["omega"],
+                 config=load_config(folder / "tiny.toml"), seed=0, workers=1, checkpoint=ckpt,
+                 callback=lambda info: True)
+        return ckpt.read_text()
+
+
+@st.composite
+def checkpoint_variant(draw: st.DrawFn) -> str:
+    """A checkpoint: of the drawn run, of another format version or run (sealed), or damaged."""
+    from edm_sym.engines.abstraction.checkpoint import _digest
+
+    doc = json.loads(_checkpoint_text())
+    kind = draw(st.sampled_from(["valid", "version", "run", "damaged"]))
+    if kind == "damaged":
+        return draw(variant("r.json.checkpoint", _checkpoint_text()))
+    if kind == "version":
+        doc["version"] = draw(st.sampled_from([1, 3, "2", None, 2.5]))
+    elif kind == "run":
+        doc["fingerprint"] = "0" * 64
+        doc["identity"]["seed"] = 9
+    doc["sha256"] = _digest(doc)
+    return json.dumps(doc, sort_keys=True)
 
 
 def odd(*valid: str) -> st.SearchStrategy[str]:
@@ -158,8 +203,11 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
 
 
 def _run(capsys: pytest.CaptureFixture, entry: Callable, args: list[str], files: dict[str, str],
-         check: Callable[[Path, str], None]) -> None:
-    """Write ``files`` into a fresh folder, run the command there and check the outcome."""
+         check: Callable[[Path, str], None], consumed: tuple[str, ...] = ()) -> None:
+    """Write ``files`` into a fresh folder, run the command there and check the outcome.
+
+    ``consumed`` names inputs a command that succeeds may replace or remove (a checkpoint).
+    """
     capsys.readouterr()
     with tempfile.TemporaryDirectory() as d:
         folder = Path(d)
@@ -184,7 +232,7 @@ def _run(capsys: pytest.CaptureFixture, entry: Callable, args: list[str], files:
             assert after == before, f"exit 2 but files changed: {sorted(set(after) ^ set(before))}"
         else:
             for name in before:  # no input harmed
-                assert after[name] == before[name], f"{name} changed"
+                assert name in consumed or after[name] == before[name], f"{name} changed"
             assert not [n for n in after if n.endswith(".tmp")], sorted(after)
             check(folder, out)
 
@@ -242,6 +290,11 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
         if data.draw(st.booleans()):
             args += [option, data.draw(values)]
 
+    files = {"log.csv": data.draw(variant("log.csv")), "tiny.toml": data.draw(variant("tiny.toml"))}
+    if data.draw(st.booleans()):  # --resume, with a checkpoint of this run or not quite
+        args.append("--resume")
+        files["r.json.checkpoint"] = data.draw(checkpoint_variant())
+
     def check(folder: Path, out: str) -> None:
         res = load_result(folder / "r.json")
         assert res.compensator.matrix.rows
@@ -251,8 +304,7 @@ def _prop_abstract(capsys, data) -> None:  # noqa: ANN001
         assert (folder / "r.json.checkpoint").exists() != completed
 
     with tiny_budget():
-        _run(capsys, main, args, {"log.csv": data.draw(variant("log.csv")),
-                                  "tiny.toml": data.draw(variant("tiny.toml"))}, check)
+        _run(capsys, main, args, files, check, consumed=("r.json.checkpoint",))
 
 
 test_abstract, test_abstract_many = _examples(20, 200)(_prop_abstract)
@@ -371,3 +423,252 @@ def test_the_valid_files_give_exit_0(capsys) -> None:  # noqa: ANN001
             assert export_main(["result.json", "--target", "python", "-o", "gen"]) == 0
         finally:
             os.chdir(cwd)
+
+
+# -- an integer no double holds, in every file a command reads ------------------------------------
+
+CHECKPOINT = {"format": "edm-abstraction-checkpoint", "version": 2, "current": {"generation": 1}}
+
+
+def _long_number(text: str, key: str, digits: int) -> str:
+    """``text`` with the number after ``key`` (``"key": 1`` or ``key = 1``) replaced."""
+    pattern = rf'((?:"{key}"\s*:|\b{key}\s*=)\s*)-?[0-9][0-9.e+-]*'
+    new, count = re.subn(pattern, lambda m: m.group(1) + "-" + "9" * digits, text, count=1)
+    assert count == 1, key
+    return new
+
+
+ABSTRACT = ["abstract", "log.csv", "--target", "tau_ext", "--inputs", "omega", "--config",
+            "tiny.toml", "-o", "r.json", "--quiet", "--workers", "1"]
+
+
+@pytest.mark.parametrize("digits", [310, 4301, 100_000])
+@pytest.mark.parametrize("entry, args, name, key, shown", [
+    (main, ABSTRACT, "tiny.toml", "population", "ga.population"),
+    (main, ABSTRACT, "tiny.toml", "cache_mb", "cache_mb"),
+    (main, ["pipeline", "pipeline.toml", "--quiet"], "pipeline.toml", "seed", "abstraction.seed"),
+    (main, ["describe", "result.json"], "result.json", "record_length", "record_length"),
+    (export_main, ["result.json", "--target", "python", "-o", "gen"], "result.json",
+     "sample_time", "sample_time"),
+    (main, ["simulate", "lugre.json", "log.csv", "-o", "s.csv"], "lugre.json", "evaluations",
+     "evaluations"),
+    (main, ["abstract", *ABSTRACT[1:], "--resume"], "r.json.checkpoint", "generation",
+     "current.generation"),
+], ids=["config", "config-top", "pipeline", "result", "export", "lugre", "checkpoint"])
+def test_an_integer_no_double_holds_is_refused_naming_the_file_and_key(
+    capsys, entry, args, name, key, shown, digits  # noqa: ANN001
+) -> None:
+    files = dict(VALID) | {"r.json.checkpoint": json.dumps(CHECKPOINT)}
+    files[name] = _long_number(files[name], key, digits)
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = entry(args)
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before
+    assert rc == 2, err
+    assert err.count("\n") == 1 and len(err) < 300, err
+    assert f"{name}: {shown}: expected a finite number, found an integer of " in err
+    assert ("more than 4300 digits" if digits > 4300 and name.endswith(".toml")
+            else f"{digits} digits") in err
+
+
+def test_pipeline_reuse_refuses_a_checkpoint_of_another_version_before_any_work(capsys) -> None:  # noqa: ANN001
+    from edm_sym.engines.abstraction.checkpoint import _digest
+
+    doc = json.loads(_checkpoint_text())
+    doc["version"] = 3
+    doc["sha256"] = _digest(doc)
+    files = dict(VALID) | {"result.json.checkpoint": json.dumps(doc)}
+    del files["result.json"], files["lugre.json"]
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = main(["pipeline", "pipeline.toml", "--quiet", "--reuse"])
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before  # no lugre.json either: refused before the LuGre fit
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "result.json.checkpoint: version: expected checkpoint format version 2" in err
+    assert "found version 3" in err
+
+
+# -- column names: what the first command accepts, every export target prints -------------------
+
+def _with_target(name: str) -> str:
+    doc = json.loads(VALID["result.json"])
+    doc["target"] = name
+    return json.dumps(doc)
+
+
+def _export_all(capsys, name: str) -> tuple[int, str, Path | None]:  # noqa: ANN001
+    """``edm-export result.json --target all`` of a result whose target is ``name``."""
+    capsys.readouterr()
+    d = tempfile.mkdtemp()
+    folder = Path(d)
+    (folder / "result.json").write_text(_with_target(name), encoding="utf-8")
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        rc = export_main(["result.json", "--target", "all", "-o", "gen"])
+    finally:
+        os.chdir(cwd)
+    return rc, capsys.readouterr().err, folder
+
+
+@settings(max_examples=25, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.text(min_size=1, max_size=12) | st.sampled_from(
+    ['tau"', '"tau', "a*/b", "%{}#~^&$_", "τ_ext", "tau ext", "x'''y", '""', "  ", "a/*b"]))
+def test_every_target_prints_every_name_the_rule_accepts(capsys, name: str) -> None:  # noqa: ANN001
+    from edm_sym.core.result import target_name_problem
+
+    rc, err, folder = _export_all(capsys, name)
+    problem = target_name_problem(name)
+    try:
+        if problem is not None:  # refused when read, by the same rule, with the reason
+            assert rc == 2 and err.count("\n") == 1, err
+            assert f"result.json: target: {problem}" in err
+            assert not (folder / "gen").exists()
+            return
+        assert rc == 0, err
+        module = (folder / "gen" / "edm_comp.py").read_text("utf-8")
+        scope: dict = {}
+        exec(compile(module, "edm_comp.py", "exec"), scope)  # noqa: S102
+        assert scope["TARGET"] == name
+        header = (folder / "gen" / "edm_comp.h").read_text("utf-8")
+        comment = next(line for line in header.splitlines() if "a model of" in line)
+        assert "*/" not in comment  # the comment goes on
+        assert (folder / "gen" / "edm_comp_report.tex").is_file()
+    finally:
+        import shutil
+
+        shutil.rmtree(folder)
+
+
+@pytest.mark.parametrize("name, found", [
+    ('tau"""x', "three double quotes in a row"), ("tau\\ext", "a backslash"),
+    ("tau\text", "the unprintable character U+0009"),
+    ("tau\u2028ext", "the unprintable character U+2028"),
+])
+@pytest.mark.parametrize("command", ["abstract", "lugre", "pipeline"])
+def test_a_name_an_export_cannot_print_is_refused_by_the_first_command(
+    capsys, name: str, found: str, command: str  # noqa: ANN001
+) -> None:
+    header, rest = VALID["log.csv"].split("\n", 1)
+    quoted = '"' + name.replace('"', '""') + '"'
+    log = header.replace("tau_ext", quoted) + "\n" + rest
+    args = {"abstract": ["abstract", "log.csv", "--target", name, "--inputs", "omega",
+                         "--config", "tiny.toml", "-o", "r.json", "--quiet", "--workers", "1"],
+            "lugre": ["lugre", "log.csv", "--target", name, "--velocity", "omega", "-o", "l.json"],
+            "pipeline": ["pipeline", "pipeline.toml", "--quiet"]}[command]
+    pipeline = VALID["pipeline.toml"].replace('target = "tau_ext"',
+                                              f"target = {json.dumps(name)}")
+    files = {"log.csv": log, "tiny.toml": VALID["tiny.toml"], "pipeline.toml": pipeline}
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        for file, text in files.items():
+            (folder / file).write_text(text, encoding="utf-8")
+        assert name in load_data(folder / "log.csv").columns
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = main(args)
+        finally:
+            os.chdir(cwd)
+        err = capsys.readouterr().err
+        assert _snapshot(folder) == before
+    assert rc == 2 and err.count("\n") == 1, err
+    assert f"found {found}; rename the column" in err
+
+
+# -- logs too large for the machine ------------------------------------------------------------
+
+@pytest.mark.parametrize("entry, args", [
+    (main, ["simulate", "result.json", "log.csv", "-o", "s.csv"]),
+    (main, ["describe", "result.json", "--data", "log.csv"]),
+    (export_main, ["result.json", "--target", "c", "--data", "log.csv", "-o", "gen"]),
+    (export_main, ["result.json", "--target", "python", "--eval-data", "log.csv", "-o", "gen"]),
+], ids=["simulate", "describe", "export-data", "export-eval-data"])
+@pytest.mark.parametrize("available", [2**10, 2**16], ids=["file", "columns"])
+def test_a_log_too_large_for_the_machine_is_refused_up_front_with_the_figure(
+    capsys, entry, args, available: int  # noqa: ANN001
+) -> None:
+    from unittest import mock
+
+    from edm_sym.core import budget
+
+    size = len(VALID["log.csv"].encode())
+    assert 2**10 < size < 2**16 < budget.log_estimate(file_bytes=size, n_samples=400,
+                                                      n_columns=7).memory
+    capsys.readouterr()
+    with tempfile.TemporaryDirectory() as d, \
+            mock.patch.object(budget, "available_memory", lambda: available):
+        folder = Path(d)
+        for file in ("result.json", "log.csv"):
+            (folder / file).write_text(VALID[file], encoding="utf-8")
+        before = _snapshot(folder)
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            rc = entry(args)
+        finally:
+            os.chdir(cwd)
+        out, err = capsys.readouterr()
+        assert _snapshot(folder) == before and not out  # nothing written
+    assert rc == 2 and err.count("\n") == 1, err
+    shown = budget.format_bytes(available)
+    detail = "a " if available == 2**10 else "400 samples x 7 columns, a "
+    assert "log.csv: needs about " in err and f"of memory ({detail}" in err
+    assert f"more than the {shown} this machine has available; use a shorter log" in err
+
+
+def _peak_rss_kib(argv: list[str], cwd: Path) -> int:
+    """Peak resident memory [KiB] of a command run in its own process (it must exit 0)."""
+    import subprocess
+    import sys
+
+    code = ("import resource, subprocess, sys\n"
+            "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
+            "assert rc == 0, rc\n"
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n")
+    done = subprocess.run([sys.executable, "-c", code, sys.executable, "-m", "edm_sym", *argv],
+                          cwd=cwd, capture_output=True, text=True, check=True)
+    return int(done.stdout.split()[-1])
+
+
+@pytest.mark.slow
+def test_simulate_describe_and_export_of_a_two_million_sample_log_fit_in_2_gib(
+    tmp_path: Path
+) -> None:
+    n, ts = 2_000_000, 1e-3
+    t = np.arange(n) * ts
+    omega = 3.0 * np.sin(2 * np.pi * 0.5 * t) + 0.5
+    theta = np.cumsum(omega) * ts
+    cols = np.column_stack([t, np.mod(theta, 2 * np.pi), theta, omega, np.gradient(omega, ts),
+                            0.8 * np.tanh(20 * omega) + 0.01 * omega])
+    np.savetxt(tmp_path / "big.csv", cols, delimiter=",", comments="", fmt="%.10g",
+               header="t,theta_w,theta_uw,omega,alpha,tau_ext")
+    result = str(REPO / "examples" / "auger" / "result.json")
+    for argv in (["simulate", result, "big.csv", "-o", "sim.csv"],
+                 ["describe", result, "--data", "big.csv"],
+                 ["export", result, "--target", "c", "--data", "big.csv", "-o", "gen"]):
+        peak = _peak_rss_kib(argv, tmp_path)
+        assert peak < 2 * 2**20, f"{argv[0]}: {peak / 2**20:.2f} GiB"

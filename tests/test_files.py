@@ -150,9 +150,10 @@ def test_a_result_with_a_byte_order_mark_is_read(tmp_path: Path, result_doc: dic
     ("{not json", "expected JSON"),
     ("", "expected JSON"),
     ('{"format": "edm-result", "version": 1, "sample_time": NaN}', "expected JSON"),
-    # An integer too large for a double was read, then crashed every loader (exit 1).
+    # An integer too large for a double is refused by its key, not read.
     ('{"format": "edm-result", "version": 1, "fitness": 1' + "0" * 400 + "}",
-     r"the integer 100000000000\.\.\.000000 \(401 digits\) overflows a double"),
+     r"r\.json: fitness: expected a finite number, found an integer of 401 digits \(it "
+     r"overflows a double\)"),
 ])
 def test_unparsable_result_is_refused(text, where, tmp_path) -> None:
     p = tmp_path / "r.json"

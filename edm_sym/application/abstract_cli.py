@@ -59,6 +59,7 @@ def run_cli(args: argparse.Namespace) -> int:
         result so far is written anyway, and the checkpoint kept).
     """
     from edm_sym.core.result import save_result
+    from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
     from edm_sym.engines.abstraction.run import abstract, checkpoint_files
     from edm_sym.engines.abstraction.schedule import default_config, load_config
     from edm_sym.engines.sources import load_data
@@ -90,7 +91,8 @@ def run_cli(args: argparse.Namespace) -> int:
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches
-    if args.resume and not any(f.exists() for f in checkpoint_files(ckpt, max(1, count))):
+    if args.resume and not any(f.exists() for f in checkpoint_files(ckpt, max(1, count))) \
+            and not stray_checkpoints(ckpt, max(1, count)):
         print(f"edm abstract: no checkpoint {ckpt}; starting from the beginning",
               file=sys.stderr)
     from edm_sym.application.progress import ProgressReporter
@@ -219,6 +221,7 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
         A role given twice, or no target or no inputs named either way.
     """
     from edm_sym.core.data import ColumnRoles
+    from edm_sym.core.result import target_name_problem
 
     given = ColumnRoles.parse(getattr(args, "role", None) or (),
                               time_column=getattr(args, "time_column", None))
@@ -227,6 +230,9 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
     if target is None:
         raise ConfigError("--target", "expected the target column (--target COL, --role COL=target "
                                       "or [columns] in the config), found none")
+    problem = target_name_problem(target)
+    if problem:
+        raise ConfigError("--target" if args.target else "target", f"{target!r}: {problem}")
     columns = columns.with_role(target, "target")
     if args.inputs is not None:
         inputs = [name.strip() for name in str(args.inputs).split(",")]

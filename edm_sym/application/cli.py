@@ -338,22 +338,29 @@ def _cmd_export(args: argparse.Namespace) -> int:
     inputs = [args.result, args.data, args.eval_data, args.lugre]
     check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
                   option="-o" if args.out_dir else "output folder")
+    # The summary's log is read (and refused) before any file is written.
+    log = _summary_log(result, args)
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
                      data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
     for path in written:
         print(path)
-    _export_summary(result, args)
+    _export_summary(result, args, log)
     return 0
 
 
-def _export_summary(result, args: argparse.Namespace) -> None:  # noqa: ANN001
-    """The closing summary of an export: the fitness the result records, and its flags."""
-    from edm_sym.application.summary import NOT_MEASURED, fitness_line, print_summary, result_flags
+def _summary_log(result, args: argparse.Namespace):  # noqa: ANN001, ANN202
+    """The log the export's summary judges the result on (``--eval-data``, else ``--data``)."""
     from edm_sym.engines.sources import load_data
 
-    prog = "edm-export" if not hasattr(args, "command") else "edm export"
     spec = args.eval_data or args.data
-    log = load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) if spec else None
+    return load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) if spec else None
+
+
+def _export_summary(result, args: argparse.Namespace, log=None) -> None:  # noqa: ANN001
+    """The closing summary of an export: the fitness the result records, and its flags."""
+    from edm_sym.application.summary import NOT_MEASURED, fitness_line, print_summary, result_flags
+
+    prog = "edm-export" if not hasattr(args, "command") else "edm export"
     notes = [fitness_line(result)] + ([] if log is not None else [NOT_MEASURED])
     print_summary(prog, fitness=notes, flags=result_flags(result, log), describe=args.result)
 
@@ -489,6 +496,8 @@ def _option_or_role(value: str | None, given, role: str, option: str,  # noqa: A
 def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.application.progress import ProgressReporter
     from edm_sym.application.summary import print_summary
+    from edm_sym.core.errors import ConfigError
+    from edm_sym.core.result import target_name_problem
     from edm_sym.core.units import axis_units
     from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.sources import load_data
@@ -496,6 +505,10 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     given = _columns(args)
     target = _option_or_role(args.target, given, "target", "--target", "edm lugre")
     velocity = _option_or_role(args.velocity, given, "velocity", "--velocity", "edm lugre")
+    for option, name in (("--target", target), ("--velocity", velocity)):
+        problem = target_name_problem(name)  # the names LUGRE.json records, as a result's
+        if problem:
+            raise ConfigError(option, f"{name!r}: {problem}")
     if velocity == target:
         raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
                          f"{target!r}, found it")

@@ -45,15 +45,10 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, match_sample_time
-from edm_sym.core.errors import TARGET_AS_INPUT, TOO_DEEP, ConfigError, DataFormatError, OutputError
-from edm_sym.core.fileio import check_outputs, write_atomic
+from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, OutputError
+from edm_sym.core.fileio import check_outputs, read_toml, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 SECTIONS = {
     "data": {"abstraction", "evaluation", "axis"},
@@ -109,16 +104,7 @@ def load_pipeline(path: str | Path) -> Pipeline:
         Naming the file and key, with what was expected and found.
     """
     path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(str(path), "expected UTF-8 TOML text, found binary data") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(str(path), f"expected TOML, found invalid text ({exc})") from None
-    except RecursionError:
-        raise ConfigError(str(path), TOO_DEEP) from None
+    doc = read_toml(path, ConfigError, where=str(path))
     name = path.name
     for section, table in doc.items():
         if section == "columns":
@@ -289,7 +275,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.application.summary import fitness_line, print_summary, result_flags
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, default_config, load_config
-    from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
+    from edm_sym.engines.abstraction.checkpoint import read_checkpoint
+    from edm_sym.engines.abstraction.run import (
+        check_budget,
+        check_data,
+        check_inputs,
+        checkpoint_files,
+    )
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 
@@ -340,6 +332,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     if not keep_result:
         check_budget(config or default_config(), len(abst), len(pipe.inputs),
                      time_limit=pipe.time_limit)
+    if reuse and not keep_result:
+        # A checkpoint --reuse cannot continue is refused before the LuGre identification
+        # (whether it is of this run is known once the abstraction has the training samples).
+        count = (config or default_config()).searches
+        for f in checkpoint_files(ckpt, count):
+            if f is not None and f.exists():
+                read_checkpoint(f)
 
     lugre = None
     if pipe.lugre is not None:

@@ -11,6 +11,8 @@ message (docs/cli.md#sizes-that-cannot-fit):
   schedule needs against :data:`TIME_LIMIT_SECONDS`;
 * the reference simulator (``edm simulate``): its row outputs against the
   available memory;
+* reading a log (every command): the file, its text and its columns against
+  the available memory, before the values are parsed;
 * export: the state a compensator keeps (its delay lines above all) against
   :data:`STATE_LIMIT_BYTES`; above :data:`STATE_WARN_BYTES` a
   :class:`~edm_sym.core.errors.BudgetWarning` gives the figure.
@@ -177,6 +179,27 @@ def simulation_estimate(*, n_samples: int, n_rows: int, n_inputs: int) -> Estima
     """
     memory = 8 * max(1, int(n_samples)) * (2 * n_rows + n_inputs + 4)
     return Estimate(int(memory), 0.0, f"{n_rows} rows x {n_samples} samples")
+
+
+def log_estimate(*, file_bytes: int, n_samples: int, n_columns: int) -> Estimate:
+    """Peak memory of reading a log and working on it (``edm simulate``, ``edm describe``,
+    ``edm-export --data``): the file, its text, and its columns three times over (the
+    columns read, the inputs stacked, the outputs made from them).
+
+    Parameters
+    ----------
+    file_bytes : int
+        Size of the file.
+    n_samples, n_columns : int
+        Rows of data and columns of the log (at most, when estimated from the file).
+    """
+    memory = 2 * int(file_bytes) + 3 * 8 * max(1, int(n_samples)) * max(1, int(n_columns))
+    return Estimate(int(memory), 0.0, f"{n_samples} samples x {n_columns} columns, a "
+                                      f"{format_bytes(file_bytes)} file")
+
+
+#: What to make smaller when a log does not fit.
+LOG_HINT = "use a shorter log (split it in time) or a machine with more memory"
 
 
 def check(estimate: Estimate, where: str, hint: str, *, time_hint: str | None = None,

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from edm_sym.core import budget
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.fileio import write_atomic
 
@@ -425,6 +426,13 @@ def load_data(
     path = Path(path)
     name = path.name
     try:
+        size = path.stat().st_size
+    except OSError:
+        size = 0  # read_bytes below says why
+    # A file whose bytes alone cannot fit is refused before it is read.
+    budget.check(budget.Estimate(size, 0.0, f"a {budget.format_bytes(size)} file"), name,
+                 budget.LOG_HINT)
+    try:
         raw = path.read_bytes()
     except OSError as exc:
         raise DataFormatError(str(path), f"cannot be read ({exc.strerror})") from None
@@ -438,6 +446,12 @@ def load_data(
     elif suffix == ".mat":
         arrays, scalars, skipped = _read_arrays(name, _load_mat(name, raw))
     else:
+        # The sizes first (line ends and the header's cells): a log that cannot fit is refused
+        # before its values are parsed.
+        first = raw.split(b"\n", 1)[0]
+        lines = raw.count(b"\n") + (not raw.endswith(b"\n"))
+        budget.check(budget.log_estimate(file_bytes=len(raw), n_samples=max(1, lines - 1),
+                                         n_columns=first.count(b",") + 1), name, budget.LOG_HINT)
         arrays = _read_csv(name, raw)
     log = with_roles(DataLog(arrays, 1.0, name, hashlib.sha256(raw).hexdigest(), scalars), columns)
     time = log.time_column
@@ -476,20 +490,35 @@ def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
     return replace(log, roles=roles)
 
 
+def _cut(text: str, width: int = 30) -> str:
+    """``text`` cut for a message (a number of thousands of digits stays one short line)."""
+    return text if len(text) <= width else f"{text[:width - 12]}... ({len(text)} characters)"
+
+
 def _read_csv(name: str, raw: bytes) -> dict[str, np.ndarray]:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise DataFormatError(name, "expected UTF-8 text, found binary data") from None
-    reader = csv.reader(io.StringIO(text))
+    reader = csv.reader(_lines(text))
     try:
-        return _parse_csv(name, reader)
+        return _parse_csv(name, reader, rows=text.count("\n") + 1)
     except csv.Error as exc:  # an unterminated quote, a cell beyond the csv module's size limit
         raise DataFormatError(f"{name}: row {reader.line_num}",
                               f"expected CSV cells of numbers, found unreadable text ({exc})") from None
 
 
-def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
+def _lines(text: str) -> Iterator[str]:
+    """The lines of ``text``, each with its line end, one at a time (no copy of the whole)."""
+    start, end = 0, len(text)
+    while start < end:
+        stop = text.find("\n", start)
+        stop = end if stop < 0 else stop + 1
+        yield text[start:stop]
+        start = stop
+
+
+def _parse_csv(name: str, reader, rows: int) -> dict[str, np.ndarray]:  # noqa: ANN001
     header = next(reader, None)
     if not header or not any(h.strip() for h in header):
         raise DataFormatError(f"{name}: row 1", "expected a header row of column names, found none")
@@ -499,7 +528,10 @@ def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
             raise DataFormatError(f"{name}: row 1, column {k + 1}", "expected a column name, found nothing")
         if header.index(h) != k:
             raise DataFormatError(f"{name}: row 1, column {h!r}", "expected unique names, found it twice")
-    values: list[list[float]] = []
+    # One array, a column per row of it, filled as the file is read: no Python float per
+    # value is kept (a list of them takes about four times the array's memory).
+    values = np.empty((len(header), max(1, rows)), dtype=float)
+    count = 0
     for lineno, cells in enumerate(reader, start=2):
         if not cells or all(not c.strip() for c in cells):
             continue
@@ -517,13 +549,17 @@ def _parse_csv(name: str, reader) -> dict[str, np.ndarray]:  # noqa: ANN001
                                       f"expected a number, found {cell.strip()[:30]!r}") from None
             if not math.isfinite(v):
                 raise DataFormatError(f"{name}: row {lineno}, column {col!r}",
-                                      f"expected a finite number, found {cell.strip()}")
+                                      f"expected a finite number, found {_cut(cell.strip())}")
             row.append(v)
-        values.append(row)
-    if not values:
+        if count == values.shape[1]:  # more records than line ends (a lone \r ends one)
+            values = np.concatenate([values, np.empty_like(values)], axis=1)
+        values[:, count] = row
+        count += 1
+    if not count:
         raise DataFormatError(name, "expected data rows below the header, found none")
-    arr = np.array(values, dtype=float)
-    return {h: np.ascontiguousarray(arr[:, k]) for k, h in enumerate(header)}
+    if count < values.shape[1]:
+        values = values[:, :count].copy() if count < values.shape[1] // 2 else values[:, :count]
+    return {h: values[k] for k, h in enumerate(header)}
 
 
 def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:

@@ -12,13 +12,23 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import stat
+import sys
 import tempfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
 from edm_sym.core.errors import TOO_DEEP, EdmError, OutputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+_toml_loads = tomllib.loads
+_TomlError = tomllib.TOMLDecodeError
 
 
 def _current_umask() -> int:
@@ -168,14 +178,196 @@ def _finite_only(token: str) -> float:
     raise ValueError(f"{token} is not allowed (numbers must be finite)")
 
 
-def _int_of_a_double(token: str) -> int:
-    value = int(token)
+#: Python refuses to read an integer of more digits than this from text
+#: (``sys.get_int_max_str_digits``); every such integer overflows a double anyway.
+INT_DIGITS_LIMIT = 4300
+#: Every integer of more digits than this overflows a double (its largest is about 1.8e308).
+_DOUBLE_DIGITS = 309
+
+
+class _LongInteger:
+    """An integer read from a file that no double can hold (it is not converted: too long)."""
+
+    __slots__ = ("digits",)
+
+    def __init__(self, digits: int) -> None:
+        self.digits = digits
+
+
+def _overflows(value: Any) -> bool:
+    if isinstance(value, _LongInteger):
+        return True
+    if not isinstance(value, int) or isinstance(value, bool):
+        return False
     try:
         float(value)
     except OverflowError:
-        shown = token if len(token) <= 24 else f"{token[:12]}...{token[-6:]} ({len(token)} digits)"
-        raise ValueError(f"the integer {shown} overflows a double (numbers must be finite)") from None
+        return True
+    return False
+
+
+def _long_problem(value: Any) -> str:
+    if isinstance(value, _LongInteger):
+        digits = value.digits
+    else:
+        digits = len(str(abs(value))) if abs(value) != _TOML_STAND_IN else None
+    count = f"{digits} digits" if digits is not None else f"more than {INT_DIGITS_LIMIT} digits"
+    return (f"expected a finite number, found an integer of {count} "
+            "(it overflows a double)")
+
+
+def _first_overflow(doc: Any) -> tuple[list[Any], Any] | None:
+    """The path and value of the first integer (in document order) that overflows a double."""
+    stack: list[tuple[list[Any], Any]] = [([], doc)]
+    while stack:
+        path, node = stack.pop()
+        if _overflows(node):
+            return path, node
+        if isinstance(node, dict):
+            stack.extend((path + [k], v) for k, v in reversed(list(node.items())))
+        elif isinstance(node, list):
+            stack.extend((path + [i], v) for i, v in reversed(list(enumerate(node))))
+    return None
+
+
+def refuse_long_integers(doc: Any, where: str, error: Callable[[str, str], EdmError]) -> None:
+    """Refuse an integer no double can hold anywhere in ``doc``, naming its key.
+
+    Parameters
+    ----------
+    doc : object
+        A parsed JSON or TOML document.
+    where : str
+        The file, for messages.
+    error : callable
+        ``error(where, problem)`` makes the error raised.
+
+    Raises
+    ------
+    EdmError
+        ``error("<file>: <key path>", problem)`` for the first such integer.
+    """
+    found = _first_overflow(doc)
+    if found is None:
+        return
+    from edm_sym.core.validation import json_path
+
+    path, value = found
+    key = json_path(path)
+    raise error(f"{where}: {key}" if key else where, _long_problem(value))
+
+
+def _json_int(token: str, seen: list[bool]) -> int | _LongInteger:
+    digits = len(token.lstrip("-"))
+    if digits > _DOUBLE_DIGITS:  # never converted: the conversion is slow, or refused
+        seen.append(True)
+        return _LongInteger(digits)
+    value = int(token)
+    if _overflows(value):
+        seen.append(True)
     return value
+
+
+def parse_json(text: str, where: str, error: Callable[[str, str], EdmError], *,
+               finite: bool = True) -> Any:
+    """Parse JSON text strictly: no duplicate keys, no integer a double cannot hold.
+
+    Parameters
+    ----------
+    text : str
+        The document.
+    where : str
+        The file, for messages.
+    error : callable
+        ``error(where, problem)`` makes the error raised.
+    finite : bool
+        Refuse ``NaN`` and ``Infinity`` too (a file the project writes with
+        ``allow_nan=False``).
+
+    Returns
+    -------
+    object
+        The document.
+
+    Raises
+    ------
+    EdmError
+        Naming the file (with the line and column of a syntax error, or the key
+        of an integer too long).
+    """
+    seen: list[bool] = []
+    hooks: dict[str, Any] = {"parse_constant": _finite_only} if finite else {}
+    try:
+        doc = json.loads(text, parse_int=lambda token: _json_int(token, seen),
+                         object_pairs_hook=_no_duplicates, **hooks)
+    except json.JSONDecodeError as exc:
+        raise error(f"{where}: line {exc.lineno} column {exc.colno}",
+                    f"expected JSON, found invalid JSON ({exc.msg})") from None
+    except ValueError as exc:
+        raise error(where, f"expected JSON, found invalid JSON ({exc})") from None
+    except RecursionError:
+        raise error(where, TOO_DEEP) from None
+    if seen:
+        refuse_long_integers(doc, where, error)
+    return doc
+
+
+#: An integer literal of more digits than Python reads (in a value, not in a name).
+_LONG_LITERAL = re.compile(r"(?<![\w.+-])([+-]?)[0-9][0-9_]{" + str(INT_DIGITS_LIMIT) + r",}(?![\w.])")
+#: What such a literal is read as, to find its key: still too large for a double, and a
+#: number no one writes.
+_TOML_STAND_IN = int("31415926535897932384" * 16)
+
+
+def read_toml(path: str | os.PathLike, error: Callable[[str, str], EdmError], *,
+              where: str | None = None) -> dict[str, Any]:
+    """Read a TOML file (a config, a pipeline file) strictly.
+
+    Every defect becomes ``error(where, problem)``: an unreadable file, text
+    that is not UTF-8 or not TOML, nesting too deep, and an integer no double
+    can hold (also one too long for Python to read), named by its key.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    error : callable
+        ``error(where, problem)`` makes the error raised.
+    where : str, optional
+        The file as messages name it (default: its name).
+
+    Returns
+    -------
+    dict
+        The document.
+    """
+    path = Path(path)
+    where = path.name if where is None else where
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise error(str(path), f"cannot be read ({exc.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(where, "expected UTF-8 TOML text, found binary data") from None
+    try:
+        doc = _toml_loads(text)
+    except _TomlError as exc:
+        raise error(where, f"expected TOML, found invalid text ({exc})") from None
+    except RecursionError:
+        raise error(where, TOO_DEEP) from None
+    except ValueError as exc:
+        # An integer longer than Python reads (tomllib names no key): read it as a
+        # stand-in as large, to name the key it is under.
+        try:
+            doc = _toml_loads(_LONG_LITERAL.sub(lambda m: m.group(1) + str(_TOML_STAND_IN), text))
+        except (ValueError, RecursionError):
+            raise error(where, f"expected TOML, found invalid text ({exc})") from None
+        if _first_overflow(doc) is None:
+            raise error(where, f"expected TOML, found invalid text ({exc})") from None
+    refuse_long_integers(doc, where, error)
+    return doc
 
 
 def json_kind(value: Any) -> str:
@@ -225,14 +417,5 @@ def read_json(path: str | os.PathLike, error: Callable[[str, str], EdmError]) ->
         text = raw.decode("utf-8-sig")  # a byte order mark (Windows editors) is no error
     except UnicodeDecodeError as exc:
         raise error(name, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    try:
-        doc = json.loads(text, parse_constant=_finite_only, parse_int=_int_of_a_double,
-                         object_pairs_hook=_no_duplicates)
-    except json.JSONDecodeError as exc:
-        raise error(f"{name}: line {exc.lineno} column {exc.colno}",
-                    f"expected JSON, found invalid JSON ({exc.msg})") from None
-    except ValueError as exc:
-        raise error(name, f"expected JSON, found invalid JSON ({exc})") from None
-    except RecursionError:
-        raise error(name, TOO_DEEP) from None
+    doc = parse_json(text, name, error)
     return doc, raw

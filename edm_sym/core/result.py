@@ -311,6 +311,32 @@ def input_name_problem(name: str, others: Sequence[str] = ()) -> str | None:
     return None
 
 
+def target_name_problem(name: str) -> str | None:
+    """Why ``name`` cannot be the target column of a result, or None when it can.
+
+    The target's name is printed in every export: a C comment, the Python
+    module's docstring and a Python string, the LaTeX report. Every target
+    prints any name made of printable characters (any script) without a
+    backslash and without three double quotes in a row; a name with one of
+    those (or a newline, a tab, another control character) is refused by the
+    first command that reads it (docs/data.md#column-names).
+
+    Parameters
+    ----------
+    name : str
+    """
+    rule = ("expected a column name of printable characters without a backslash or three "
+            "double quotes in a row (it is printed in the C, Python and LaTeX exports)")
+    bad = next((c for c in name if not c.isprintable() and c != " "), None)
+    if bad is not None:
+        return f"{rule}, found the unprintable character U+{ord(bad):04X}; rename the column"
+    if "\\" in name:
+        return f"{rule}, found a backslash; rename the column"
+    if '"""' in name:
+        return f"{rule}, found three double quotes in a row; rename the column"
+    return None
+
+
 def format_path(parts: Sequence[Any]) -> str:
     """``["matrix", "rows", 3, "code"]`` -> ``"matrix.rows[3].code"``.
 
@@ -386,6 +412,9 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
     err = _schema_error(name, doc)
     if err is not None:
         raise err
+    problem = target_name_problem(doc["target"])
+    if problem:
+        raise ResultFormatError(f"{name}: target", problem)
     inputs = doc["inputs"]
     ranges = {}
     for ename, rdoc in doc["parameter_ranges"].items():

@@ -12,16 +12,19 @@ loaded, not met later as a crash in the middle of the resumed run.
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from edm_sym.core.errors import TOO_DEEP, ConfigError
-from edm_sym.core.fileio import write_atomic
+from edm_sym.core.errors import ConfigError
+from edm_sym.core.fileio import json_kind, parse_json, write_atomic
+from edm_sym.core.version import __version__
 from edm_sym.engines.abstraction.ga import Population
 
 FORMAT = "edm-abstraction-checkpoint"
@@ -68,6 +71,9 @@ class RunState:
     rng_state: dict[str, Any]
     finished: list[FinishedStep] = field(default_factory=list)
     current: StepState | None = None
+    #: What the fingerprint is made of, to say what differs in a checkpoint of another run:
+    #: ``data`` and ``config`` (digests), ``target``, ``inputs``, ``seed``.
+    identity: dict[str, Any] = field(default_factory=dict)
 
 
 def _pop_json(pop: Population) -> dict[str, Any]:
@@ -87,6 +93,7 @@ def dumps(state: RunState) -> str:
         "format": FORMAT,
         "version": VERSION,
         "fingerprint": state.fingerprint,
+        "identity": state.identity,
         "rng_state": state.rng_state,
         "finished": [
             {"step": f.step, "best": _pop_json(f.best), "fitness": f.fitness,
@@ -118,7 +125,88 @@ def save_checkpoint(path: str | Path, state: RunState) -> Path:
     return write_atomic(path, dumps(state))
 
 
-def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
+#: What a checkpoint of another run differs in, by the ``identity`` key.
+_DIFFERENCES = {"data": "another data file (or sample time, or held-out share)",
+                "config": "another config (or --searches)", "target": "another target",
+                "inputs": "another input set", "seed": "another seed"}
+_HINT = "delete it, or drop --resume to start afresh; the file is left as it was"
+
+
+def read_checkpoint(path: str | Path) -> dict[str, Any]:
+    """Read a checkpoint's document, refusing another format, version or a damaged file.
+
+    It does not say whether the checkpoint is of the run at hand
+    (:func:`load_checkpoint` does); it lets a command refuse a checkpoint
+    before any other work, leaving the file as it was.
+
+    Parameters
+    ----------
+    path : path-like
+        The checkpoint file.
+
+    Returns
+    -------
+    dict
+        The document.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, and both versions for a checkpoint of another format version.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "expected a checkpoint (JSON), found binary data") from None
+    # A checkpoint holds the fitness of failed individuals: infinities are written as such.
+    doc = parse_json(text, str(path), ConfigError, finite=False)
+    from edm_sym.core.validation import show_value
+
+    found = doc.get("format") if isinstance(doc, dict) else None
+    if found != FORMAT:
+        what = (f"format {show_value(found)}" if isinstance(doc, dict) and "format" in doc
+                else "a JSON object without one" if isinstance(doc, dict) else json_kind(doc))
+        raise ConfigError(f"{path}: format", f"expected {FORMAT!r} (version {VERSION}), found "
+                                             f"{what}; {_HINT}")
+    if doc.get("version") != VERSION or isinstance(doc.get("version"), bool):
+        raise ConfigError(f"{path}: version",
+                          f"expected checkpoint format version {VERSION} (edm_sym "
+                          f"{__version__}), found version {show_value(doc.get('version'))} "
+                          f"(a checkpoint of another edm_sym release); {_HINT}")
+    if doc.get("sha256") != _digest(doc):
+        raise ConfigError(f"{path}: sha256", "expected the digest of the checkpoint's content, "
+                                             "found another (the file was damaged or edited "
+                                             f"after it was written); {_HINT}")
+    return doc
+
+
+def _difference(doc: dict[str, Any], identity: dict[str, Any]) -> str:
+    """What the run of ``doc`` differs in from the run of ``identity`` (both sides named)."""
+    from edm_sym.core.validation import show_value
+
+    theirs = doc.get("identity")
+    if not isinstance(theirs, dict) or not identity:
+        return "another data file, target, input set, config or seed"
+    out = []
+    # The training samples differ with the columns: the data is compared for the same columns.
+    same_columns = all(theirs.get(k) == identity.get(k) for k in ("target", "inputs"))
+    for key, what in _DIFFERENCES.items():
+        if theirs.get(key) != identity.get(key) and (key != "data" or same_columns):
+            if key in ("data", "config"):
+                out.append(what)
+            else:
+                out.append(f"{what} ({show_value(theirs.get(key))}; this run: "
+                           f"{show_value(identity.get(key))})")
+    return ", ".join(out) or "another run"
+
+
+def load_checkpoint(path: str | Path, fingerprint: str,
+                    identity: dict[str, Any] | None = None) -> RunState:
     """Read a checkpoint written by :func:`save_checkpoint` for the same run.
 
     Parameters
@@ -128,37 +216,22 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
     fingerprint : str
         The run's fingerprint (data, target, inputs, config, seed); a
         checkpoint of another run is refused.
+    identity : dict, optional
+        What the fingerprint is made of (:attr:`RunState.identity`), to name
+        what differs in a checkpoint of another run.
 
     Raises
     ------
     ConfigError
-        When the file is unreadable, not a checkpoint, or of another run.
+        When the file is unreadable, not a checkpoint, of another format
+        version, or of another run (naming what differs).
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text("utf-8"))
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ConfigError(str(path), f"expected a checkpoint (JSON), found invalid text ({exc})"
-                          ) from None
-    except RecursionError:
-        raise ConfigError(str(path), TOO_DEEP) from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise ConfigError(f"{path}: format", f"expected {FORMAT!r} version {VERSION}, found "
-                                             "something else")
-    if doc.get("version") != VERSION:
-        raise ConfigError(f"{path}: version",
-                          f"expected {VERSION}, found {doc.get('version')!r} (a checkpoint of "
-                          "another edm_sym release: delete it or drop --resume)")
-    if doc.get("sha256") != _digest(doc):
-        raise ConfigError(f"{path}: sha256", "expected the digest of the checkpoint's content, "
-                                             "found another (the file was damaged or edited "
-                                             "after it was written; delete it or drop --resume)")
+    doc = read_checkpoint(path)
     if doc.get("fingerprint") != fingerprint:
         raise ConfigError(f"{path}: fingerprint",
                           "expected a checkpoint of this run (same data, target, inputs, config "
-                          "and seed), found one of another run (delete it or drop --resume)")
+                          f"and seed), found one of {_difference(doc, identity or {})}; {_HINT}")
     try:
         finished = [FinishedStep(f["step"], _pop_from(f["best"]), float(f["fitness"]),
                                  [float(h) for h in f["history"]], int(f["generations"]),
@@ -173,7 +246,58 @@ def load_checkpoint(path: str | Path, fingerprint: str) -> RunState:
             fitness=np.array(c["fitness"], dtype=float),
             history=[float(h) for h in c["history"]], evaluations=int(c["evaluations"]),
             restarts=int(c.get("restarts", 0)))
-        return RunState(doc["fingerprint"], doc["rng_state"], finished, current)
+        return RunState(doc["fingerprint"], doc["rng_state"], finished, current,
+                        dict(identity or doc.get("identity") or {}))
     except (KeyError, TypeError, ValueError) as exc:
         raise ConfigError(str(path), f"expected a complete checkpoint, found a damaged one ({exc})"
                           ) from None
+
+
+def stray_checkpoints(checkpoint: Path | None, count: int) -> list[Path]:
+    """Checkpoints beside ``checkpoint`` of a run of another number of searches.
+
+    One search keeps ``checkpoint`` itself; several keep ``<checkpoint>.search<k>``
+    (:func:`edm_sym.engines.abstraction.run.checkpoint_files`).
+    """
+    if checkpoint is None:
+        return []
+    checkpoint = Path(checkpoint)
+    out = [checkpoint] if count > 1 and checkpoint.exists() else []
+    for f in sorted(checkpoint.parent.glob(glob.escape(checkpoint.name) + ".search*")):
+        k = f.name[len(checkpoint.name) + len(".search"):]
+        if k.isdigit() and (count == 1 or int(k) >= count):
+            out.append(f)
+    return out
+
+
+def check_resume(checkpoint: Path | None, files: Sequence[Path | None],
+                 runs: Sequence[tuple[str, dict[str, Any]]]) -> None:
+    """Refuse, before a resumed run starts, a checkpoint it cannot continue.
+
+    Parameters
+    ----------
+    checkpoint : pathlib.Path or None
+        The run's checkpoint name.
+    files : sequence of pathlib.Path or None
+        Each search's checkpoint file.
+    runs : sequence of (str, dict)
+        Each search's fingerprint and identity.
+
+    Raises
+    ------
+    ConfigError
+        Naming the checkpoint: another format version (both named), a damaged
+        file, a checkpoint of another run (what differs named), or checkpoints
+        of a run of another number of searches. Nothing is written.
+    """
+    present = [(f, run) for f, run in zip(files, runs, strict=True) if f is not None and f.exists()]
+    for f, (fingerprint, identity) in present:
+        load_checkpoint(f, fingerprint, identity)
+    stray = stray_checkpoints(checkpoint, len(files))
+    if stray and not present:
+        theirs = "one search" if stray[0] == checkpoint else "several searches"
+        ours = "one search" if len(files) == 1 else f"{len(files)} searches"
+        raise ConfigError(str(stray[0]), f"expected a checkpoint of this run of {ours} "
+                                         f"({Path(files[0]).name}), found one of a run of "
+                                         f"{theirs} (another config's searches, or --searches); "
+                                         f"{_HINT}")

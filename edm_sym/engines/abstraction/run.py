@@ -36,12 +36,13 @@ from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.fitness import magnitude_problem
 from edm_sym.core.matrix import Compensator, ElementMatrix
-from edm_sym.core.result import EdmResult, StepRecord, input_name_problem
+from edm_sym.core.result import EdmResult, StepRecord, input_name_problem, target_name_problem
 from edm_sym.core.units import axis_units
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
     RunState,
     StepState,
+    check_resume,
     load_checkpoint,
     save_checkpoint,
 )
@@ -142,14 +143,20 @@ class _Stop(Exception):
 
 
 def _fingerprint(cfg: AbstractionConfig, target: str, inputs: Sequence[str], seed: int,
-                 x: np.ndarray, y: np.ndarray, ts: float) -> str:
+                 x: np.ndarray, y: np.ndarray, ts: float) -> tuple[str, dict[str, Any]]:
+    """The run's fingerprint, and what it is made of (to name what differs on --resume)."""
+    config = json.dumps(cfg.to_json(), sort_keys=True)
     h = hashlib.sha256()
     h.update(json.dumps({"config": cfg.to_json(), "target": target, "inputs": list(inputs),
                          "seed": seed, "ts": ts, "shape": list(x.shape)},
                         sort_keys=True).encode())
-    h.update(np.ascontiguousarray(x).tobytes())
-    h.update(np.ascontiguousarray(y).tobytes())
-    return h.hexdigest()
+    d = hashlib.sha256(json.dumps({"ts": ts, "shape": list(x.shape)}).encode())
+    for part in (np.ascontiguousarray(x), np.ascontiguousarray(y)):
+        h.update(part.tobytes())
+        d.update(part.tobytes())
+    identity = {"data": d.hexdigest(), "config": hashlib.sha256(config.encode()).hexdigest(),
+                "target": target, "inputs": list(inputs), "seed": seed}
+    return h.hexdigest(), identity
 
 
 def _human_rows(cfg: AbstractionConfig, inputs: Sequence[str], ranges: dict[str, ParamRange]
@@ -225,7 +232,7 @@ class _Runner:
     def _commit(self, current: StepState | None, finished: FinishedStep | None = None) -> None:
         st = self.state
         new = RunState(st.fingerprint, self.rng.bit_generator.state,
-                       st.finished + ([finished] if finished else []), current)
+                       st.finished + ([finished] if finished else []), current, st.identity)
         self.state = new
         self._unsaved = True
         if finished is not None or time.monotonic() - self._saved >= CHECKPOINT_SECONDS:
@@ -584,6 +591,10 @@ def abstract(
     seeds = search_seeds(int(seed), count)
     checkpoint = Path(checkpoint) if checkpoint is not None else None
     files = checkpoint_files(checkpoint, count)
+    if resume:
+        # Every search's checkpoint is checked before any search starts (and writes its own).
+        check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), x, y, ts)
+                                         for s in seeds])
     client, own_client = _dask_client(scheduler)
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                      human=human, hold=hold, executor=executor, client=client, n=n)
@@ -686,13 +697,13 @@ class _SearchJob:
             Only when interrupted before the first population was evaluated.
         """
         cfg, x, y, t, ts = self.cfg, self.x, self.y, self.t, self.ts
-        fingerprint = _fingerprint(cfg, self.target, self.inputs, int(seed), x, y, ts)
+        fingerprint, identity = _fingerprint(cfg, self.target, self.inputs, int(seed), x, y, ts)
         rng = np.random.default_rng(int(seed))
         if resume and checkpoint is not None and checkpoint.exists():
-            state = load_checkpoint(checkpoint, fingerprint)
+            state = load_checkpoint(checkpoint, fingerprint, identity)
             rng.bit_generator.state = state.rng_state
         else:
-            state = RunState(fingerprint, rng.bit_generator.state)
+            state = RunState(fingerprint, rng.bit_generator.state, identity=identity)
         batch = max(s.ga.population * s.n_rows for s in cfg.steps)
         evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
                               cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
@@ -784,13 +795,17 @@ def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Hold
 
 
 def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
-    """The input names as a tuple; refuses none, a repeated one, a bad name or the target.
+    """The input names as a tuple; refuses none, a repeated one, a bad name or the target
+    (and a target name an export cannot print).
 
     Raises
     ------
     ConfigError
         Naming ``inputs`` (and the name).
     """
+    problem = target_name_problem(target) if isinstance(target, str) else None
+    if problem:
+        raise ConfigError(f"target: {target!r}", problem)
     inputs = tuple(inputs)
     if not inputs:
         raise ConfigError("inputs", "expected at least one input column, found none")

@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -21,16 +20,12 @@ from typing import Any
 
 from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import BY_NAME, ParamRange, check_range, default_ranges
-from edm_sym.core.errors import TOO_DEEP, ConfigError, DataFormatError
+from edm_sym.core.errors import ConfigError, DataFormatError
+from edm_sym.core.fileio import read_toml
 from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
 from edm_sym.engines.abstraction.weighting import Weighting, parse_weighting
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 CONTINUE_MODES = ("no", "improving", "always")
 #: The most independent searches one run may make (``searches``).
@@ -610,16 +605,5 @@ def load_config(path: str | Path) -> AbstractionConfig:
         type or a value out of range (the message names the file and key).
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    try:
-        doc = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError(path.name, "expected UTF-8 TOML text, found binary data") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(path.name, f"expected TOML, found invalid text ({exc})") from None
-    except RecursionError:
-        raise ConfigError(path.name, TOO_DEEP) from None
+    doc = read_toml(path, ConfigError)
     return parse_config(doc, path.name)
