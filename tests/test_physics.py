@@ -194,3 +194,26 @@ def test_describe_json_physics_reads_the_data_when_given(tmp_path: Path) -> None
     assert named["spatial"]["amplitude"][0] == pytest.approx(0.06, rel=0.2)
     assert "offset" not in named and "stribeck" not in named
     assert doc["physics"]["observer_bandwidth"] == 150.0
+
+
+def test_an_input_that_only_rises_over_the_log_is_said_to_be_a_clock() -> None:
+    import warnings
+
+    from edm_sym.core.data import DataLog
+    from edm_sym.core.errors import ClockWarning
+    from edm_sym.engines.abstraction.run import check_data, clock_inputs
+
+    t = np.arange(4000) * TS
+    omega = 2.0 + np.sin(3 * t)  # one way: the angle only rises
+    theta = np.cumsum(omega) * TS
+    log = DataLog({"t": t, "theta_uw": theta, "theta_w": np.mod(theta, 2 * np.pi),
+                   "omega": omega, "tau": 0.3 * np.sign(omega) + 0.01 * omega}, TS, "oneway.csv")
+    assert [c[0] for c in clock_inputs(log, ["theta_w", "theta_uw", "omega"])] == ["theta_uw"]
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        check_data(log, "tau", ["theta_uw", "omega"])
+    clocks = [w for w in seen if issubclass(w.category, ClockWarning)]
+    assert len(clocks) == 1 and "'theta_uw' only rises" in str(clocks[0].message)
+    # both ways: no clock
+    back = DataLog({"t": t, "theta_uw": np.sin(t), "omega": np.cos(t), "tau": np.cos(t)}, TS, "x")
+    assert clock_inputs(back, ["theta_uw", "omega"]) == []

@@ -93,5 +93,9 @@ class NumericsWarning(UserWarning):
     """Doubtful numerics: an unstable filter, a parameter at its range limit, ..."""
 
 
+class ClockWarning(UserWarning):
+    """An input that only rises (or only falls) over a log: within that run it is a clock."""
+
+
 class BudgetWarning(UserWarning):
     """A size that fits but is worth a word: a compensator state larger than a microcontroller's RAM."""

@@ -820,6 +820,40 @@ def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
     return inputs
 
 
+def clock_inputs(data: DataLog, inputs: Sequence[str]) -> list[tuple[str, float, float]]:
+    """The inputs that only rise or only fall over the log: ``(name, first, last)``.
+
+    Within such a log the input is a clock, like the time column: the unwrapped
+    angle of a run that turns one way. A model of it explains the run's time
+    (the start from rest, a warm-up), not the axis, unless it repeats over the
+    angle (a ripple of the wrapped angle does). A wrapped angle never counts.
+    """
+    out = []
+    for name in inputs:
+        col = np.asarray(data.column(name, role="input column"), dtype=float)
+        if col.size < 3 or (data.role_of(name) or "") == "position_wrapped":
+            continue
+        d = np.diff(col)
+        if col[-1] != col[0] and (np.all(d >= 0) or np.all(d <= 0)):
+            out.append((name, float(col[0]), float(col[-1])))
+    return out
+
+
+def warn_clocks(data: DataLog, inputs: Sequence[str]) -> None:
+    """Warn (:class:`~edm_sym.core.errors.ClockWarning`) of every input :func:`clock_inputs` finds."""
+    import warnings
+
+    from edm_sym.core.errors import ClockWarning
+
+    for name, first, last in clock_inputs(data, inputs):
+        way = "rises" if last > first else "falls"
+        warnings.warn(f"{data.source}: column {name!r} only {way} over the log ({first:.4g} to "
+                      f"{last:.4g}): within this run it is a clock, and what the search explains "
+                      "through it is the run's time (the start from rest), not the axis, unless it "
+                      "repeats over the angle; edm describe names no physics from it",
+                      ClockWarning, stacklevel=3)
+
+
 def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
     """Refuse a log the search cannot fit: inputs that say nothing about the axis (constant,
     the clock), values that are not finite, a constant target or one whose square overflows.
@@ -831,6 +865,7 @@ def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
     """
     data.require_varying(inputs)
     data.require_finite([*inputs, target])
+    warn_clocks(data, inputs)
     y_all = data.column(target, role="target column")
     if np.all(y_all == y_all[0]):
         raise DataFormatError(f"{data.source}: column {target!r}",
