@@ -132,6 +132,11 @@ def run_cli(args: argparse.Namespace) -> int:
     line = searches_line(result.provenance, par)
     if line:
         print(line)
+    from edm_sym.application.summary import physics_line
+
+    line = physics_line(result, data) if reason != "interrupted" else None
+    if line:
+        print(line)
     _warn_flags(result, output, data)
     # How the run ended is the last line, after the summary's flags.
     if reason == "interrupted":

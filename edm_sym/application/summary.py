@@ -30,7 +30,7 @@ from edm_sym.core.bounds import bound_summary
 from edm_sym.core.fitness import rms
 from edm_sym.core.units import axis_units
 
-__all__ = ["fitness_line", "negligible_rows", "print_summary", "result_flags"]
+__all__ = ["fitness_line", "negligible_rows", "physics_line", "print_summary", "result_flags"]
 
 #: A row below this share of the target's RMS is negligible (as in ``edm describe``).
 NEGLIGIBLE = 0.01
@@ -98,6 +98,56 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
                        f"negligible: {100 * share:.4g} % of the target's RMS on "
                        f"{log.source} (threshold {100 * NEGLIGIBLE:g} %)")
     return out
+
+
+def physics_line(result: Any, log: Any) -> str | None:
+    """The laws the model holds by its behaviour on ``log``'s motion, in one line.
+
+    ``physics (by behaviour, over log.csv): coulomb level 0.948 N m; viscous
+    coefficient 0.00506 N m s/rad``: the same laws as ``edm describe``'s
+    ``physics`` (:mod:`edm_sym.engines.physics`), whose shares are measured on
+    the whole log. None when the log has no motion to probe over.
+    """
+    from edm_sym.core.roles import input_roles
+    from edm_sym.engines.physics import PhysicsOptions, model_physics, ranges_from_data
+    from edm_sym.engines.simulate import simulate_rows
+
+    comp = result.compensator
+    names = comp.matrix.inputs
+    role_map = input_roles(names, getattr(result, "roles", {}) or {})
+    roles = [role_map[n] for n in names]
+    x = log.stack(names)
+    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
+    vel = by_role.get("velocity")
+    if vel is None and "angle" in by_role:
+        vel = np.gradient(by_role["angle"], log.ts)
+    if vel is None:
+        return None
+    acc = by_role.get("acceleration")
+    acc = np.gradient(vel, log.ts) if acc is None else acc
+    angle = by_role.get("angle", by_role.get("angle_wrapped"))
+    ranges = ranges_from_data(vel, acc, angle, str(log.source))
+    if ranges is None:
+        return None
+    g = log.scalars.get("observer_bandwidth")
+    g = float(g) if isinstance(g, int | float) and g > 0 else None
+    with np.errstate(all="ignore"):
+        rows = simulate_rows(comp, comp.matrix.rows, x)
+    if g is not None:
+        rows = rows + np.gradient(rows, log.ts, axis=1) / g
+    data = {"velocity": vel, "acceleration": acc, "angle": angle,
+            "target": log.column(result.target, role="target column"), "rows": rows}
+    try:
+        phys = model_physics(comp, roles, ranges, axis=getattr(result, "axis", "rotary"),
+                             bandwidth=g, data=data, options=PhysicsOptions())
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    laws = "; ".join(f"{t.kind.value} " + ", ".join(f"{k.replace('_', ' ')} {v:.4g}"
+                                                     + (f" {u}" if u != "1" else "")
+                                                     for k, (v, u) in t.parameters.items()
+                                                     if k not in ("phase", "peak", "harmonics"))
+                     for t in phys.terms) or "no law above the threshold"
+    return f"physics (by behaviour, over {log.source}): {laws}"
 
 
 def result_flags(result: Any, log: Any = None) -> list[str]:
