@@ -109,38 +109,26 @@ def physics_line(result: Any, log: Any) -> str | None:
     the whole log. None when the log has no motion to probe over.
     """
     from edm_sym.core.roles import input_roles
-    from edm_sym.engines.physics import PhysicsOptions, model_physics, ranges_from_data
+    from edm_sym.engines.physics import PhysicsOptions, physics_on_log
     from edm_sym.engines.simulate import simulate_rows
 
     comp = result.compensator
     names = comp.matrix.inputs
     role_map = input_roles(names, getattr(result, "roles", {}) or {})
-    roles = [role_map[n] for n in names]
     x = log.stack(names)
-    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
-    vel = by_role.get("velocity")
-    if vel is None and "angle" in by_role:
-        vel = np.gradient(by_role["angle"], log.ts)
-    if vel is None:
-        return None
-    acc = by_role.get("acceleration")
-    acc = np.gradient(vel, log.ts) if acc is None else acc
-    angle = by_role.get("angle", by_role.get("angle_wrapped"))
-    ranges = ranges_from_data(vel, acc, angle, str(log.source))
-    if ranges is None:
-        return None
     g = log.scalars.get("observer_bandwidth")
-    g = float(g) if isinstance(g, int | float) and g > 0 else None
+    g = float(g) if isinstance(g, int | float) and not isinstance(g, bool) and g > 0 else None
     with np.errstate(all="ignore"):
         rows = simulate_rows(comp, comp.matrix.rows, x)
-    if g is not None:
-        rows = rows + np.gradient(rows, log.ts, axis=1) / g
-    data = {"velocity": vel, "acceleration": acc, "angle": angle,
-            "target": log.column(result.target, role="target column"), "rows": rows}
     try:
-        phys = model_physics(comp, roles, ranges, axis=getattr(result, "axis", "rotary"),
-                             bandwidth=g, data=data, options=PhysicsOptions())
+        phys = physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows,
+                              target=log.column(result.target, role="target column"),
+                              ts=log.ts, source=str(log.source),
+                              axis=getattr(result, "axis", "rotary"), bandwidth=g,
+                              options=PhysicsOptions())
     except (ValueError, np.linalg.LinAlgError):
+        return None
+    if phys is None:
         return None
     laws = "; ".join(f"{t.kind.value} " + ", ".join(f"{k.replace('_', ' ')} {v:.4g}"
                                                      + (f" {u}" if u != "1" else "")

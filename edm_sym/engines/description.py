@@ -530,38 +530,27 @@ def _physics(result: EdmResult, role_map: Mapping[str, str | None], recorded: An
              part: slice | np.ndarray, notes: list[str]) -> Any:
     """The model's laws by behaviour (:mod:`edm_sym.engines.physics`), over the data's motion
     when there is data (its shares measured on ``part``), else over the recorded ranges."""
-    from edm_sym.engines.physics import PhysicsOptions, model_physics, ranges_from_data
-    from edm_sym.engines.symbolic.inertia import motion_signals
+    from edm_sym.engines.physics import PhysicsOptions, model_physics, physics_on_log
 
     comp = result.compensator
-    names = comp.matrix.inputs
-    roles = [role_map[n] for n in names]
+    roles = [role_map[n] for n in comp.matrix.inputs]
     opts = PhysicsOptions(threshold=threshold)
-    data = None
-    ranges = recorded
-    if log is not None and inputs is not None and outputs is not None:
-        x = log.stack(names)
-        motion = motion_signals(list(x), roles, log.ts)
-        if motion is not None:
-            vel, acc = motion
-            angle = next((x[i] for i, r in enumerate(roles) if r == "angle"), None)
-            if angle is None:
-                angle = next((x[i] for i, r in enumerate(roles) if r == "angle_wrapped"), None)
-            ranges = ranges_from_data(vel, acc, angle, str(log.source)) or recorded
-            rows = np.asarray(outputs, dtype=float)
-            if g is not None and rows.shape[1] > 2:
-                rows = rows + np.gradient(rows, log.ts, axis=1) / float(g)
-            target = log.column(result.target, role="target column")
-            data = {"velocity": vel[part], "acceleration": acc[part],
-                    "angle": None if angle is None else angle[part],
-                    "target": target[part], "rows": rows[:, part]}
-    if ranges is None:
-        notes.append("the physics is not named by behaviour: no data, and the result records "
-                     "no velocity range to probe over")
-        return None
+    bandwidth = None if g is None else float(g)
     try:
-        return model_physics(comp, roles, ranges, axis=result.axis,
-                             bandwidth=None if g is None else float(g), data=data, options=opts)
+        if log is not None and inputs is not None and outputs is not None:
+            found = physics_on_log(comp, roles, x=log.stack(comp.matrix.inputs), rows=outputs,
+                                   target=log.column(result.target, role="target column"),
+                                   ts=log.ts, source=str(log.source), axis=result.axis,
+                                   bandwidth=bandwidth, part=part, fallback=recorded, options=opts)
+            if found is not None:
+                return found
+        ranges = recorded
+        if ranges is None:
+            notes.append("the physics is not named by behaviour: no data, and the result records "
+                         "no velocity range to probe over")
+            return None
+        return model_physics(comp, roles, ranges, axis=result.axis, bandwidth=bandwidth,
+                             options=opts)
     except (ValueError, np.linalg.LinAlgError) as exc:
         notes.append(f"the physics could not be named by behaviour ({exc})")
         return None

@@ -752,3 +752,79 @@ def model_physics(
         behaviours.append(RowBehaviour(jr + 1, laws, left_share, reason))
     return Physics(tuple(terms), tuple(left), float(explained), tuple(behaviours), ranges,
                    bandwidth, tuple(notes), "target" if data is not None else "probes")
+
+
+def physics_on_log(
+    comp: Compensator,
+    roles: Sequence[str | None],
+    *,
+    x: np.ndarray,
+    rows: np.ndarray,
+    target: np.ndarray,
+    ts: float,
+    source: str,
+    axis: str = "rotary",
+    bandwidth: float | None = None,
+    part: slice | np.ndarray = slice(None),
+    fallback: MotionRange | None = None,
+    options: PhysicsOptions | None = None,
+) -> Physics | None:
+    """:func:`model_physics` over a log's motion, its shares measured on ``part`` of it.
+
+    The velocity is the ``velocity`` input, else the angle differentiated; the
+    acceleration the ``acceleration`` input, else the velocity differentiated;
+    the angle the ``angle`` input, else the wrapped one. Derivatives are taken
+    on the whole log before ``part`` is cut (held-out blocks joined end to end
+    would give a spike at every join). ``edm describe``, the report and the
+    closing summary all call this.
+
+    Parameters
+    ----------
+    comp : Compensator
+    roles : sequence of str or None
+        The role of each of ``comp``'s inputs.
+    x : numpy.ndarray
+        Shape (n_inputs, N): the inputs on the log, in ``comp``'s order.
+    rows : numpy.ndarray
+        Shape (m, N): each row's output on the log (the observer's lag is taken
+        out here when ``bandwidth`` is given).
+    target : numpy.ndarray
+        Shape (N,).
+    ts : float
+        Sample time [s].
+    source : str
+        The log, for the ranges' ``source``.
+    axis, bandwidth, options
+        As for :func:`model_physics`.
+    part : slice or numpy.ndarray
+        The samples the shares are measured on (the held-out rows).
+    fallback : MotionRange, optional
+        The ranges to probe over when the log has no motion (no velocity or angle input).
+
+    Returns
+    -------
+    Physics or None
+        None when there is no motion to probe over.
+    """
+    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
+    vel = by_role.get("velocity")
+    if vel is None and "angle" in by_role and by_role["angle"].size > 1:
+        vel = np.gradient(by_role["angle"], ts)
+    if vel is None:
+        return None if fallback is None else model_physics(
+            comp, roles, fallback, axis=axis, bandwidth=bandwidth, options=options)
+    acc = by_role.get("acceleration")
+    if acc is None:
+        acc = np.gradient(vel, ts) if vel.size > 1 else np.zeros_like(vel)
+    angle = by_role.get("angle", by_role.get("angle_wrapped"))
+    ranges = ranges_from_data(vel, acc, angle, source) or fallback
+    if ranges is None:
+        return None
+    out = np.asarray(rows, dtype=float)
+    if bandwidth is not None and out.shape[1] > 2:
+        out = out + np.gradient(out, ts, axis=1) / bandwidth
+    data = {"velocity": vel[part], "acceleration": acc[part],
+            "angle": None if angle is None else angle[part],
+            "target": np.asarray(target, dtype=float)[part], "rows": out[:, part]}
+    return model_physics(comp, roles, ranges, axis=axis, bandwidth=bandwidth, data=data,
+                         options=options)

@@ -15,6 +15,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
@@ -233,6 +235,46 @@ def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, 
     return {"figures": [fig] if fig else [], "notes": notes}
 
 
+def _physics(p: EdmLatexPrinter, model: SymbolicModel, result: Any,
+             runs: Sequence[LogRun]) -> dict[str, Any]:
+    """The laws of the whole model by behaviour (:mod:`edm_sym.engines.physics`), as
+    ``edm describe`` names them on the report's last log (else over the recorded ranges)."""
+    from edm_sym.engines.physics import model_physics, physics_on_log, ranges_from_result
+
+    comp = model.compensator
+    roles = [model.roles.get(n) for n in comp.matrix.inputs]
+    recorded = ranges_from_result(result, dict(zip(comp.matrix.inputs, roles, strict=True)))
+    phys = None
+    try:
+        run = runs[-1] if runs else None
+        if run is not None and run.inputs is not None:
+            phys = physics_on_log(comp, roles, x=run.inputs, rows=run.rows, target=run.target,
+                                  ts=run.ts, source=run.name, axis=model.axis,
+                                  bandwidth=run.observer_bandwidth, fallback=recorded)
+        elif recorded is not None:
+            phys = model_physics(comp, roles, recorded, axis=model.axis)
+    except (ValueError, np.linalg.LinAlgError):
+        phys = None
+    if phys is None:
+        return {"laws": [], "notes": [p.text("the physics could not be named by behaviour: no "
+                                             "data log and no recorded ranges")], "source": ""}
+    laws = []
+    for t in phys.terms:
+        params = ", ".join(f"{p.text(k.replace('_', ' '))} {p.math(p.number(v))}"
+                           + ("" if u == "1" else f"~{p.unit(u)}")
+                           for k, (v, u) in t.parameters.items() if k != "harmonics")
+        rows = ", ".join(rf"{j + 1}: {p.math(p.number(round(100 * sh, 1)))}\,\%"
+                         for j, sh in enumerate(t.rows) if abs(sh) >= 0.1)
+        laws.append({"kind": p.text(KIND_TITLES.get(t.kind.value, t.kind.value)), "params": params,
+                     "share": p.math(p.number(round(100 * t.share, 3))) + r"\,\%", "rows": rows})
+    notes = [p.text(f"not named: {k.value}: {why}") for k, why in phys.left_out]
+    notes.append(p.text(f"the laws explain {100 * phys.explained:.4g} % of what the model does "
+                        f"on the probes"))
+    notes += [p.text(f"row {b.index} unclassified: {b.reason}") for b in phys.rows if b.reason]
+    notes += [p.text(n) for n in phys.notes]
+    return {"laws": laws, "notes": notes, "source": p.text(phys.ranges.source)}
+
+
 def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
     return [{
         "step": str(s.step), "size": p.math(f"{s.matrix.n_elements} \\times {s.matrix.n_rows}"),
@@ -392,6 +434,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "facts": [{"label": p.text(k), "value": v} for k, v in facts],
         "equation": equation_lines(p, r"\tau_{\mathrm{cmp}}(t)", total),
         "overview": overview,
+        "physics": _physics(p, model, result, runs),
         "log_labels": [p.text(r.label) for r in runs],
         "no_data": [] if runs else ["no data log was given (edm-export --data LOG)"],
         "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
