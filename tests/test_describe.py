@@ -341,7 +341,10 @@ def test_abstract_closing_summary_flags_parameters_at_bounds(
     assert main(["abstract", str(data), "--target", "tau_ext", "--inputs",
                  "theta_w,theta_uw,omega", "-o", str(out), "--quiet", "--workers", "1"]) == 0
     captured = capsys.readouterr()
-    assert captured.out.splitlines() == [f"wrote {out}", "fitness 0.5"]
+    lines = captured.out.splitlines()
+    assert lines[:2] == [f"wrote {out}", "fitness 0.5"]
+    # then the physics by behaviour over the log's motion, one line
+    assert len(lines) == 3 and lines[2].startswith("physics (by behaviour, over log.csv): ")
     warn = [ln for ln in captured.err.splitlines() if "range bound" in ln]
     assert len(warn) == 1 and "row 3 element 2 (lpf" in warn[0] and "high bound" in warn[0]
     assert f"edm describe {out}" in captured.err
