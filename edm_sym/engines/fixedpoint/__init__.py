@@ -11,7 +11,7 @@
 
 from __future__ import annotations
 
-from edm_sym.engines.fixedpoint.accuracy import Accuracy, check_accuracy
+from edm_sym.engines.fixedpoint.accuracy import Accuracy, Build, build, check_accuracy, input_ints
 from edm_sym.engines.fixedpoint.design import (
     FilterStage,
     FixedDesign,
@@ -20,12 +20,14 @@ from edm_sym.engines.fixedpoint.design import (
     RingStage,
     TableStage,
     design,
+    input_ranges,
 )
 from edm_sym.engines.fixedpoint.excitation import excitation
 from edm_sym.engines.fixedpoint.formats import WORDS, Word
 from edm_sym.engines.fixedpoint.model import run_fixed
 
 __all__ = [
-    "WORDS", "Accuracy", "FilterStage", "FixedDesign", "FixedPointError", "RelayStage",
-    "RingStage", "TableStage", "Word", "check_accuracy", "design", "excitation", "run_fixed",
+    "WORDS", "Accuracy", "Build", "FilterStage", "FixedDesign", "FixedPointError", "RelayStage",
+    "RingStage", "TableStage", "Word", "build", "check_accuracy", "design", "excitation",
+    "input_ints", "input_ranges", "run_fixed",
 ]

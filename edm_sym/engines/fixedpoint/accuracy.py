@@ -124,3 +124,29 @@ def check_accuracy(d: FixedDesign, comp: Any, x: np.ndarray, *, on: str = "the e
             f"{'--real q31' if d.word.name == 'q15' else '--real float'} or narrow the input "
             "ranges (--input-range)")
     return acc
+
+
+@dataclass(frozen=True)
+class Build:
+    """A fixed-point build with its accuracy, ready to print.
+
+    Attributes
+    ----------
+    design : FixedDesign
+    accuracy : Accuracy
+        Measured on the excitation the formats were sized on.
+    """
+
+    design: FixedDesign
+    accuracy: Accuracy
+
+
+def build(comp: Any, word: Any, ranges: Any, *, labels: Any = None) -> Build:
+    """Design ``comp`` in ``word`` over ``ranges`` and check it on the excitation (refusing a miss)."""
+    from edm_sym.engines.fixedpoint.design import design
+    from edm_sym.engines.fixedpoint.excitation import excitation
+    from edm_sym.engines.fixedpoint.formats import EXCITATION_SAMPLES
+
+    d = design(comp, word, ranges, labels=labels)
+    x = excitation(d.inputs, ranges, d.sample_time, EXCITATION_SAMPLES)
+    return Build(d, check_accuracy(d, comp, x))
