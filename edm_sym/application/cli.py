@@ -97,13 +97,17 @@ def _add_version(parser: argparse.ArgumentParser) -> None:
 
 def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("result", metavar="RESULT.json", help="result file to export")
-    p.add_argument("--target", required=True, choices=["c", "python", "latex", "all"],
-                   help="C header and source, a Python module, the LaTeX report, or all of them")
+    p.add_argument("--target", required=True, choices=["c", "python", "latex", "test", "all"],
+                   help="C header and source, a Python module, the LaTeX report, the C "
+                        "verification kit (test), or all of c, python and latex")
     p.add_argument("-o", "--out-dir", metavar="DIR",
                    help="output folder (default: generated/<folder holding RESULT>/)")
     p.add_argument("--prefix", default="edm_comp", help="file and symbol prefix (default edm_comp)")
-    p.add_argument("--real", default="double", choices=["float", "double"],
-                   help="the C real type (default double)")
+    p.add_argument("--real", default="double", choices=["float", "double", "q31", "q15"],
+                   help="the C real type, or an integer-only fixed-point build (default double)")
+    p.add_argument("--input-range", action="append", type=_input_range, metavar="NAME=LO:HI",
+                   help="an input's range for a fixed-point build or the kit, over the one the "
+                        "result records (repeatable)")
     p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
     p.add_argument("--data", metavar="DATA", help="abstraction log, for the report's figures")
     p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
@@ -116,6 +120,18 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
                    help="the units of the outputs: rotary (rad, N m) or linear (m, N) (default: "
                         "the result's axis)")
     p.set_defaults(func=_cmd_export)
+
+
+def _input_range(text: str) -> tuple[str, tuple[float, float]]:
+    name, sep, span = text.partition("=")
+    lo, colon, hi = span.rpartition(":")
+    try:
+        pair = (float(lo), float(hi))
+    except ValueError:
+        pair = None
+    if not (sep and colon and name and pair and pair[0] <= pair[1]):
+        raise argparse.ArgumentTypeError(f"expected NAME=LO:HI with LO <= HI, found {text!r}")
+    return name, pair
 
 
 def _percent(text: str) -> float:
@@ -340,10 +356,14 @@ def _cmd_export(args: argparse.Namespace) -> int:
                   option="-o" if args.out_dir else "output folder")
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
+    notes: list[str] = []
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts)
+                     data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts,
+                     input_range=dict(args.input_range or ()), notes=notes)
     for path in written:
         print(path)
+    for line in notes:
+        print(line)
     _export_summary(result, args, log)
     return 0
 
@@ -368,8 +388,9 @@ def _export_summary(result, args: argparse.Namespace, log=None) -> None:  # noqa
 def _export_names(args: argparse.Namespace) -> list[str]:
     """The files an export writes into its folder (the report's figures aside)."""
     names = {"c": [f"{args.prefix}.h", f"{args.prefix}.c"], "python": [f"{args.prefix}.py"],
-             "latex": [f"{args.prefix}_report.tex"] + ([f"{args.prefix}_report.pdf"] if args.pdf else [])}
-    targets = list(names) if args.target == "all" else [args.target]
+             "latex": [f"{args.prefix}_report.tex"] + ([f"{args.prefix}_report.pdf"] if args.pdf else []),
+             "test": [f"{args.prefix}_test.c"]}
+    targets = ["c", "python", "latex"] if args.target == "all" else [args.target]
     return [n for t in targets for n in names[t]]
 
 

@@ -17,14 +17,15 @@ from edm_sym.core.budget import check_state
 from edm_sym.core.data import is_plant_spec
 from edm_sym.core.errors import ExternalToolError, ToolMissingError
 from edm_sym.outputs.render import REPORT, render, target_names, write_files
-from edm_sym.outputs.render.context import source_of, validate_prefix, validate_real
+from edm_sym.outputs.render.context import FIXED_REALS, source_of, validate_prefix, validate_real
 
 __all__ = ["export", "report_inputs"]
 
 
 def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_comp",
            real: str = "double", pdf: bool = False, data: Any = None, eval_data: Any = None,
-           lugre: Any = None, ts: float | None = None) -> list[Path]:
+           lugre: Any = None, ts: float | None = None, input_range: Any = None,
+           notes: list[str] | None = None) -> list[Path]:
     """Render ``result`` as C, Python, the LaTeX report or all of them into ``out_dir``.
 
     Parameters
@@ -39,11 +40,15 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         The output folder; created when missing.
     prefix : str
         A C identifier; default ``"edm_comp"``.
-    real : {"float", "double"}
-        The C real type; default ``"double"``.
+    real : {"float", "double", "q31", "q15"}
+        The C real type, or an integer-only fixed-point build; default ``"double"``.
     pdf, data, eval_data, lugre, ts
         Options of the LaTeX report (see :func:`edm_sym.outputs.report.write_report`);
         unused by the C and Python targets.
+    input_range : mapping of str to (float, float), optional
+        Input ranges over those the result records (fixed-point builds and the kit).
+    notes : list of str, optional
+        Receives the lines a fixed-point build states about its deviation.
 
     Returns
     -------
@@ -79,7 +84,16 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     # judged on its data as `edm describe` does.
     model = build_model(result.compensator, sha256=source.sha256, target=result.target,
                         axis=source.axis)
-    files = render(result, target, prefix=prefix, real=real, model=model)
+    options: dict[str, Any] = {"input_range": input_range}
+    if real in FIXED_REALS and ({"c", "test"} & set(names)):
+        from edm_sym.core.units import axis_units
+        from edm_sym.outputs.render.fixed_context import accuracy_lines, fixed_build
+
+        options["build"] = fixed_build(model, source, real, input_range)
+        if notes is not None:
+            notes += [f"{real}: {line}" for line in accuracy_lines(
+                options["build"], axis_units(source.axis).force)]
+    files = render(result, target, prefix=prefix, real=real, model=model, options=options)
     if REPORT not in names:
         return write_files(out_dir, files)
     from edm_sym.outputs.report import write_report

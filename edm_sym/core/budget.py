@@ -46,7 +46,7 @@ STATE_LIMIT_BYTES = 256 * 2**20
 STATE_WARN_BYTES = 2**20
 
 #: Bytes of one real of each C type.
-REAL_BYTES = {"double": 8, "float": 4}
+REAL_BYTES = {"double": 8, "float": 4, "q31": 8, "q15": 6}  # fixed: a word and a 32-bit feedback word
 
 
 def format_bytes(n: float) -> str:
@@ -241,7 +241,7 @@ def state_bytes(sizes: Iterable[int], real: str) -> int:
     ----------
     sizes : iterable of int
         Each stage's state size in reals (a delay line's length, a filter's order).
-    real : {"float", "double"}
+    real : {"float", "double", "q31", "q15"}
     """
     return sum(REAL_BYTES[real] * int(k) + (8 if k > 1 else 0) for k in sizes)
 

@@ -22,7 +22,7 @@ __all__ = ["ALL", "TARGETS", "OutputError", "render", "target_names", "write_fil
 #: The target written by :mod:`edm_sym.outputs.report` rather than by a code template.
 REPORT = "latex"
 #: The values ``target`` accepts.
-TARGET_NAMES = ("c", "python", "latex", "all")
+TARGET_NAMES = ("c", "python", "latex", "test", "all")
 
 
 def target_names(target: str) -> list[str]:
@@ -33,17 +33,22 @@ def target_names(target: str) -> list[str]:
 
 
 def render(result: Any, target: str, *, prefix: str = "edm_comp",
-           real: str = "double", model: Any = None) -> dict[str, str]:
+           real: str = "double", model: Any = None,
+           options: dict[str, Any] | None = None) -> dict[str, str]:
     """Render the code of ``result`` for ``target`` in memory.
 
     Parameters
     ----------
     result : EdmResult
-    target : {"c", "python", "latex", "all"}
+    target : {"c", "python", "latex", "test", "all"}
     prefix : str
         A C identifier naming the files and every exported symbol.
-    real : {"float", "double"}
-        The C real type.
+    real : {"float", "double", "q31", "q15"}
+        The C real type, or a fixed-point build.
+    options : dict, optional
+        The fixed-point options: ``build`` (a checked
+        :class:`~edm_sym.engines.fixedpoint.Build`, made here when missing) and
+        ``input_range`` (input name -> (lo, hi), over the recorded ranges).
     model : SymbolicModel, optional
         The result's model when the caller has made it (every target reads
         the same one); else its stages are built here.
@@ -75,5 +80,6 @@ def render(result: Any, target: str, *, prefix: str = "edm_comp",
     files: dict[str, str] = {}
     for name in names:
         if name in TARGETS:  # the report (latex) is written by edm_sym.outputs.report
-            files.update(render_target(name, model, source, prefix=prefix, real=real))
+            files.update(render_target(name, model, source, prefix=prefix, real=real,
+                                       options=options))
     return files

@@ -188,10 +188,14 @@ def validate_prefix(prefix: str) -> str:
     return prefix
 
 
+#: The ``--real`` values of the fixed-point builds (edm_sym.outputs.render.fixed_context).
+FIXED_REALS = ("q31", "q15")
+
+
 def validate_real(real: str) -> str:
-    """Return ``real`` when it is ``"float"`` or ``"double"``, else raise ValueError."""
-    if real not in REALS:
-        raise ValueError(f"--real: expected one of {', '.join(REALS)}, found {real!r}")
+    """Return ``real`` when it is ``"float"``, ``"double"``, ``"q31"`` or ``"q15"``, else raise ValueError."""
+    if real not in REALS + FIXED_REALS:
+        raise ValueError(f"--real: expected one of {', '.join(REALS + FIXED_REALS)}, found {real!r}")
     return real
 
 

@@ -15,8 +15,9 @@ from typing import Any
 
 from edm_sym.core.errors import OutputError
 from edm_sym.core.fileio import write_atomic
-from edm_sym.outputs.render.context import c_context, python_context
+from edm_sym.outputs.render.context import FIXED_REALS, c_context, python_context
 from edm_sym.outputs.render.environment import environment
+from edm_sym.outputs.render.fixed_context import fixed_c_context, kit_context
 
 
 @dataclass(frozen=True)
@@ -51,17 +52,32 @@ TARGETS: Mapping[str, Target] = {
     "c": Target(c_context, (Output("c_header.h.j2", "{prefix}.h"),
                             Output("c_source.c.j2", "{prefix}.c"))),
     "python": Target(_python, (Output("python_module.py.j2", "{prefix}.py"),)),
+    "test": Target(kit_context, (Output("c_test.c.j2", "{prefix}_test.c"),)),
 }
+
+#: The targets whose fixed-point builds (``--real q31``/``q15``) use other templates.
+FIXED_TARGETS: Mapping[str, Target] = {
+    "c": Target(fixed_c_context, (Output("c_fixed_header.h.j2", "{prefix}.h"),
+                                  Output("c_fixed_source.c.j2", "{prefix}.c"))),
+}
+
+#: The targets whose context takes the fixed-point options (``build``, ``input_range``).
+_OPTIONS = ("test",)
 
 #: What ``--target all`` writes, in this order (targets not in TARGETS yet are skipped).
 ALL = ("c", "python", "latex")
 
 
 def render_target(name: str, model: Any, source: Any, *, prefix: str,
-                  real: str) -> dict[str, str]:
-    """Render every file of target ``name``: file name -> text."""
-    target = TARGETS[name]
-    ctx = target.context(model, source, prefix=prefix, real=real)
+                  real: str, options: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """Render every file of target ``name``: file name -> text.
+
+    ``options`` (``build``, ``input_range``) go to the fixed-point and kit contexts.
+    """
+    fixed = real in FIXED_REALS and name in FIXED_TARGETS
+    target = FIXED_TARGETS[name] if fixed else TARGETS[name]
+    extra = dict(options or {}) if fixed or name in _OPTIONS else {}
+    ctx = target.context(model, source, prefix=prefix, real=real, **extra)
     env = environment()
     return {out.filename.format(prefix=prefix): env.get_template(out.template).render(ctx)
             for out in target.outputs}

@@ -1,0 +1,152 @@
+"""The deviation of a fixed-point build from the double simulator: bound, measurement, refusal.
+
+Two figures describe a build:
+
+* the **a priori bound** (:attr:`FixedDesign.error`): each stage's rounding,
+  coefficient and table errors propagated through the stages after it (a
+  table by its steepest slope, a filter by the l1 norm of its impulse
+  response), for inputs inside their formats' ranges. A relay after any
+  rounding, a jump or an integrator leaves no finite bound: only measurement
+  speaks for such a row;
+* the **measured deviation**: the bit-exact model
+  (:mod:`~edm_sym.engines.fixedpoint.model`) against the reference simulator
+  on the excitation (or on a log).
+
+The export promises the word's goal (:attr:`Word.goal` of the RMS of the
+compensation) and refuses the model, naming the stage whose own error is
+largest, when the measurement exceeds it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from edm_sym.engines.fixedpoint.design import FixedDesign, FixedPointError
+from edm_sym.engines.fixedpoint.formats import to_int, to_real
+from edm_sym.engines.fixedpoint.model import run_fixed, run_stage
+from edm_sym.engines.simulate import simulate_rows
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """How far a fixed-point build is from the double simulator (output units).
+
+    Attributes
+    ----------
+    rms : float
+        The RMS of the double compensation on the signals measured.
+    goal : float
+        The promised largest deviation (``word.goal * rms``).
+    measured : float
+        The largest deviation measured there.
+    bound : float
+        The a priori bound (inf when only measurement is possible).
+    samples : int
+        How many samples were measured.
+    """
+
+    rms: float
+    goal: float
+    measured: float
+    bound: float
+    samples: int
+
+    @property
+    def bounded(self) -> bool:
+        """True when the a priori bound is finite."""
+        return math.isfinite(self.bound)
+
+    def lines(self, word: str, unit: str, on: str) -> list[str]:
+        """The deviation as the header and the command line state it."""
+        bound = (f"a priori bound {self.bound:.3g} {unit} over the input ranges" if self.bounded
+                 else "no a priori bound (a relay, a jump or an integrator): measured only")
+        return [f"promised: at most {self.goal:.3g} {unit} from the double simulator "
+                f"({_goal_text(self.goal, self.rms)} of the RMS {self.rms:.4g} {unit})",
+                f"measured: {self.measured:.3g} {unit} ({self.measured / self.rms:.2e} of the RMS) "
+                f"on {self.samples} samples of {on}, by the bit-exact model of the {word} C",
+                bound]
+
+
+def _goal_text(goal: float, rms: float) -> str:
+    return f"{goal / rms:.0e}" if rms > 0 else "0"
+
+
+def input_ints(d: FixedDesign, x: np.ndarray) -> np.ndarray:
+    """Real inputs (n_inputs, N) as the build's integers, each in its format."""
+    return np.vstack([to_int(x[i], d.input_fracs[i], d.word) for i in range(len(d.inputs))])
+
+
+def stage_errors(d: FixedDesign, comp: Any, x: np.ndarray) -> list[tuple[float, str]]:
+    """Each stage's own error (its output against the double stage on the same quantised input).
+
+    Returns (error relative to the stage's output bound, where) pairs, largest first.
+    """
+    out = []
+    lo, hi = d.word.min_int, d.word.max_int
+    for row, crow in zip(d.rows, comp.matrix.rows, strict=True):
+        v = x[row.input_index].copy()
+        for st, gene in zip(row.stages, crow.genes, strict=True):
+            real = gene.element.realise(comp.value(gene), comp.sample_time)
+            qin = to_int(v, st.fin, d.word)
+            exact = real.run(to_real(qin, st.fin))
+            got = to_real(run_stage(st, qin, lo, hi), st.fout)
+            scale = max(float(np.max(np.abs(exact))), 2.0 ** -st.fout)
+            out.append((float(np.max(np.abs(got - exact))) / scale, st.where))
+            v = real.run(v.copy())
+    return sorted(out, key=lambda e: -e[0])
+
+
+def check_accuracy(d: FixedDesign, comp: Any, x: np.ndarray, *, on: str = "the excitation",
+                   refuse: bool = True) -> Accuracy:
+    """Measure ``d`` against the double simulator on real inputs ``x`` (n_inputs, N).
+
+    Raises
+    ------
+    FixedPointError
+        With ``refuse``, when the measured deviation exceeds the word's goal:
+        one line naming the stage with the largest own error.
+    """
+    ref = simulate_rows(comp, comp.matrix.rows, x).sum(axis=0)
+    _, total = run_fixed(d, input_ints(d, x))
+    dev = float(np.max(np.abs(to_real(total, d.out_frac) - ref)))
+    rms = float(np.sqrt(np.mean(ref ** 2)))
+    acc = Accuracy(rms, d.word.goal * rms, dev, d.error, x.shape[-1])
+    if refuse and dev > acc.goal:
+        err, where = stage_errors(d, comp, x)[0]
+        raise FixedPointError(
+            f"{where}: the {d.word.name} build misses the double simulator by {dev:.3g} on "
+            f"{on}, more than {_goal_text(acc.goal, rms)} of the RMS ({acc.goal:.3g}); this "
+            f"stage alone errs by {err:.1e} of its output's range; use "
+            f"{'--real q31' if d.word.name == 'q15' else '--real float'} or narrow the input "
+            "ranges (--input-range)")
+    return acc
+
+
+@dataclass(frozen=True)
+class Build:
+    """A fixed-point build with its accuracy, ready to print.
+
+    Attributes
+    ----------
+    design : FixedDesign
+    accuracy : Accuracy
+        Measured on the excitation the formats were sized on.
+    """
+
+    design: FixedDesign
+    accuracy: Accuracy
+
+
+def build(comp: Any, word: Any, ranges: Any, *, labels: Any = None) -> Build:
+    """Design ``comp`` in ``word`` over ``ranges`` and check it on the excitation (refusing a miss)."""
+    from edm_sym.engines.fixedpoint.design import design
+    from edm_sym.engines.fixedpoint.excitation import excitation
+    from edm_sym.engines.fixedpoint.formats import EXCITATION_SAMPLES
+
+    d = design(comp, word, ranges, labels=labels)
+    x = excitation(d.inputs, ranges, d.sample_time, EXCITATION_SAMPLES)
+    return Build(d, check_accuracy(d, comp, x))
