@@ -82,12 +82,14 @@ def run_cli(args: argparse.Namespace) -> int:
         except ConfigError as exc:
             raise ConfigError("--validation-share", exc.problem) from None
     config = _parsimony_options(config, args)
-    data = load_data(args.data, ts=args.ts, columns=columns)
+    names = getattr(args, "columns", None) or config.column_names
+    data = load_data(args.data, ts=args.ts, columns=columns, names=names)
     data.column(target, role="target column")
     data.stack(inputs)
     validate = None
     if validate_path is not None:
-        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns)
+        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
+                             names=names)
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches

@@ -72,6 +72,9 @@ def _add_column_args(p: argparse.ArgumentParser, *, roles: bool = True, axis: bo
     """``--time-column``, ``--role`` and ``--axis`` of a command that reads a log (docs/data.md)."""
     p.add_argument("--time-column", metavar="COL",
                    help="the log's time column [s] (default: t, or the one the model records)")
+    p.add_argument("--columns", metavar="NAME[,NAME...]",
+                   help="the names of the columns of a matrix selected as FILE.mat:VAR (or .h5, "
+                        ".npz), in its column order (docs/data.md#files-loggers-write)")
     if roles:
         p.add_argument("--role", action="append", default=[], metavar="COL=ROLE",
                        help=f"what a column is: {ROLES_HELP} (repeatable; docs/data.md"
@@ -393,7 +396,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     axis = model.axis or args.axis or "rotary"
     # The time column and roles the model records, under those given now.
     data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time,
-                     columns=given.over(model.column_roles()))
+                     columns=given.over(model.column_roles()), names=args.columns)
     data = _match_ts(model_path.name, model.sample_time, data, args.resample)
     run = model.run(data)
     cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
@@ -470,7 +473,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
                   "force_gain": "--force-gain"}.get(field, field)
         raise UsageError(f"edm observe: {option}: {problem}") from None
     check_outputs([args.output], [args.data])
-    view = observer_view(load_data(args.data, ts=args.ts, columns=given), opts)
+    view = observer_view(load_data(args.data, ts=args.ts, columns=given, names=args.columns), opts)
     write_csv(args.output, view.columns)
     u = axis_units(args.axis or "rotary")
     print(f"wrote {args.output}")
@@ -513,7 +516,8 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
         raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
                          f"{target!r}, found it")
     check_outputs([args.output], [args.data])
-    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
+    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given,
+                     names=args.columns)
     data.require_varying([velocity])  # named by file and column, before the fit
     with ProgressReporter("edm lugre", quiet=args.quiet) as reporter, \
             data.naming(target=target, velocity=velocity):

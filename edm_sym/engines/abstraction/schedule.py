@@ -22,6 +22,7 @@ from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import BY_NAME, ParamRange, check_range, default_ranges
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.fileio import read_toml
+from edm_sym.core.formats import parse_names
 from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
@@ -245,6 +246,12 @@ class AbstractionConfig:
         key, default 1), each from its own seed, run side by side on the
         workers; the search's model is chosen among the step bests of all of
         them (docs/abstraction.md#independent-searches).
+    column_names : tuple of str or None
+        The names of the columns of a matrix selected as ``FILE.mat:VAR``
+        (``column_names``; ``--columns`` goes over it).
+    data : tuple of str
+        The logs (``data = ["a.csv", "b.csv"]``, paths relative to the config
+        file): abstracted together when the command line names none.
     """
 
     steps: tuple[StepConfig, ...] = ()
@@ -257,6 +264,8 @@ class AbstractionConfig:
     columns: ColumnRoles | None = None
     axis: str | None = None
     searches: int = 1
+    column_names: tuple[str, ...] | None = None
+    data: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if (isinstance(self.searches, bool) or not isinstance(self.searches, int)
@@ -425,7 +434,7 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
-             "parsimony", "columns", "axis", "searches")
+             "parsimony", "columns", "axis", "searches", "column_names", "data")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -502,8 +511,20 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
             columns = ColumnRoles.from_table(f"{f}columns", doc["columns"])
         except DataFormatError as exc:
             raise ConfigError(exc.where, exc.problem) from None
+    names = None
+    if "column_names" in doc:
+        try:
+            names = parse_names(doc["column_names"], f"{f}column_names")
+        except DataFormatError as exc:
+            raise ConfigError(exc.where, exc.problem) from None
+    logs = doc.get("data", [])
+    if isinstance(logs, str):
+        logs = [logs]
+    if not isinstance(logs, list) or not all(isinstance(d, str) and d.strip() for d in logs):
+        raise ConfigError(f"{f}data", f"expected a list of log files, found {_found(logs)}")
     return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
-                             parsimony, columns, doc.get("axis"), doc.get("searches", 1))
+                             parsimony, columns, doc.get("axis"), doc.get("searches", 1),
+                             names, tuple(logs))
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:
