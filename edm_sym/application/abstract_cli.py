@@ -46,7 +46,7 @@ def run_cli(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
+        ``data`` (one log or a list), ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
         ``workers``, ``scheduler``, ``validation_share``, ``validate``, ``select``,
         ``prune_tolerance``, ``no_prune``, ``time_column``, ``role`` (a list
@@ -83,9 +83,16 @@ def run_cli(args: argparse.Namespace) -> int:
             raise ConfigError("--validation-share", exc.problem) from None
     config = _parsimony_options(config, args)
     names = getattr(args, "columns", None) or config.column_names
-    data = load_data(args.data, ts=args.ts, columns=columns, names=names)
-    data.column(target, role="target column")
-    data.stack(inputs)
+    specs = _specs(args, config)
+    logs = [load_data(spec, ts=args.ts, columns=columns, names=names) for spec in specs]
+    for log in logs:
+        log.column(target, role="target column")
+        log.stack(inputs)
+    if len(logs) > 1:
+        from edm_sym.core.data import join_logs
+
+        join_logs(logs, [target, *inputs])  # one sample time and roles, before any work
+    data = logs[0] if len(logs) == 1 else logs
     validate = None
     if validate_path is not None:
         validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
@@ -142,6 +149,21 @@ def run_cli(args: argparse.Namespace) -> int:
     elif reason == "time_limit":
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     return 130 if reason == "interrupted" else 0
+
+
+def _specs(args: argparse.Namespace, config) -> list[str]:  # noqa: ANN001
+    """The logs of ``edm abstract``: DATA on the command line, else the config's ``data`` list
+    (paths relative to the config file)."""
+    given = args.data if isinstance(args.data, list) else [args.data] if args.data else []
+    if given:
+        return [str(d) for d in given]
+    if config.data:
+        from edm_sym.core.data import is_plant_spec
+
+        base = Path(args.config).parent
+        return [d if is_plant_spec(d) else str(base / d) for d in config.data]
+    raise ConfigError("DATA", "expected one or more logs (edm abstract DATA [DATA ...], or data = "
+                              "[...] in the config), found none")
 
 
 def start_line(par: dict) -> str | None:

@@ -794,6 +794,52 @@ def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = 
                    dict(data.roles))
 
 
+def join_logs(logs: Sequence[DataLog], names: Sequence[str]) -> DataLog:
+    """Several logs of one axis laid end to end, for a fit over all of them.
+
+    Only the columns ``names`` (the target and the inputs) and the time
+    column are kept. The joined log is a container: whoever simulates it
+    must start every log from rest (``starts`` of
+    :func:`edm_sym.engines.simulate.simulate_row`); its ``times`` are each
+    log's own time stamps.
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file: a column missing, a sample time unlike the first
+        log's (beyond :data:`TIME_RTOL`), a column given another role, or a
+        time column where the first log has none (or the other way round).
+    """
+    first = logs[0]
+    time = first.time_column
+    for log in logs:
+        for name in names:
+            log.column(name, role="target column" if name == names[0] else "input column")
+        if abs(log.ts - first.ts) > TIME_RTOL * first.ts:
+            raise DataFormatError(f"{log.source}: sample time",
+                                  f"expected {first.ts:g} s as in {first.source} (the logs of one "
+                                  f"abstraction share it; --decimate or resample), found {log.ts:g} s")
+        if (log.time_column is None) != (time is None):
+            raise DataFormatError(f"{log.source}: column {time or log.time_column!r}",
+                                  f"expected {'a' if time else 'no'} time column as in "
+                                  f"{first.source}, found {'none' if time else 'one'}")
+        for name in names:
+            if log.role_of(name) != first.role_of(name):
+                raise DataFormatError(f"{log.source}: column {name!r}",
+                                      f"expected the role {first.role_of(name)!r} as in "
+                                      f"{first.source}, found {log.role_of(name)!r}")
+    keep = ([time] if time is not None else []) + [n for n in names if n != time]
+    cols = {}
+    for name in keep:
+        cols[name] = np.concatenate([
+            np.asarray(log.columns[log.time_column if name == time else name], dtype=float)
+            for log in logs])
+    digest = hashlib.sha256(" ".join(str(log.sha256) for log in logs).encode()).hexdigest()
+    roles = {c: r for c, r in first.roles.items() if c in cols}
+    return DataLog(cols, float(first.ts), " + ".join(log.source for log in logs), digest,
+                   dict(first.scalars), roles)
+
+
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:
     """Write columns as CSV atomically, with round-trip float precision.
 
