@@ -85,6 +85,11 @@ def run_cli(args: argparse.Namespace) -> int:
     names = getattr(args, "columns", None) or config.column_names
     specs = _specs(args, config)
     logs = [load_data(spec, ts=args.ts, columns=columns, names=names) for spec in specs]
+    from edm_sym.core.data import decimate
+
+    factor = getattr(args, "decimate", None)
+    if factor is not None:
+        logs = [decimate(log, factor) for log in logs]
     for log in logs:
         log.column(target, role="target column")
         log.stack(inputs)
@@ -97,6 +102,8 @@ def run_cli(args: argparse.Namespace) -> int:
     if validate_path is not None:
         validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
                              names=names)
+        if factor is not None:
+            validate = decimate(validate, factor)
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches

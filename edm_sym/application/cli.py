@@ -256,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative worsening a simplification may cost (default 0.01)")
     p.add_argument("--no-prune", action="store_true",
                    help="export the search's model as it is (no pruning, no front)")
+    p.add_argument("--decimate", type=int, metavar="K",
+                   help="keep every K-th sample of each log after an anti-alias filter; the model "
+                        "then runs at K times the log's sample time (docs/data.md#decimation)")
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 

@@ -237,6 +237,9 @@ class DataLog:
     note : str
         What the file holds beside the columns and how to select it, added to
         the message of a missing column (a matrix or struct of a .mat file).
+    decimation : int
+        The factor the file's samples were decimated by (:func:`decimate`;
+        1: as read), recorded in the provenance.
     """
 
     columns: Mapping[str, np.ndarray]
@@ -246,6 +249,7 @@ class DataLog:
     scalars: Mapping[str, float] = field(default_factory=dict)
     roles: Mapping[str, str] = field(default_factory=dict)
     note: str = field(default="", compare=False)
+    decimation: int = 1
 
     def __post_init__(self) -> None:
         # A log made in memory gets the checks a file gets as it is read: at least one
@@ -308,10 +312,13 @@ class DataLog:
         Each column is recorded with its role and its smallest and largest
         value, which the exports give as an input's expected range.
         """
-        return {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
-                "sample_time": float(self.ts),
-                "columns": [{"name": c, "role": self.role_of(c), "min": float(np.min(v)),
-                             "max": float(np.max(v))} for c, v in self.columns.items()]}
+        out = {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
+               "sample_time": float(self.ts),
+               "columns": [{"name": c, "role": self.role_of(c), "min": float(np.min(v)),
+                            "max": float(np.max(v))} for c, v in self.columns.items()]}
+        if self.decimation > 1:
+            out["decimate"] = {"factor": self.decimation, "filter": DECIMATE_FILTER}
+        return out
 
     def require_varying(self, names: Iterable[str]) -> None:
         """Refuse an input among ``names`` that says nothing about the axis.
@@ -838,6 +845,66 @@ def join_logs(logs: Sequence[DataLog], names: Sequence[str]) -> DataLog:
     roles = {c: r for c, r in first.roles.items() if c in cols}
     return DataLog(cols, float(first.ts), " + ".join(log.source for log in logs), digest,
                    dict(first.scalars), roles)
+
+
+#: The anti-alias filter of :func:`decimate`, as recorded in the provenance.
+DECIMATE_FILTER = ("FIR, Hamming window, 20 K + 1 taps, corner at the new Nyquist frequency, "
+                   "zero phase, ends extended as lines (scipy.signal.resample_poly)")
+
+
+def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog:
+    """Every ``factor``-th sample of ``log``, each column low-pass filtered first.
+
+    The anti-alias filter is the FIR of :func:`scipy.signal.decimate`
+    (Hamming window, ``20 factor + 1`` taps, corner at the new Nyquist
+    frequency), centred (no phase lag) and with a DC gain of exactly 1 (the
+    IIR default of ``decimate`` scales a constant by 0.989), applied by
+    :func:`scipy.signal.resample_poly` with the ends extended as lines. The
+    time column is taken as it is at the kept samples; a wrapped angle (role
+    ``position_wrapped``) is unwrapped, filtered and wrapped again, so its
+    jumps are not smeared.
+
+    Raises
+    ------
+    DataFormatError
+        A factor below 1, or a log too short to filter (naming the file).
+    """
+    if isinstance(factor, bool) or not isinstance(factor, numbers.Integral) or factor < 1:
+        raise DataFormatError(where, f"expected an integer >= 1, found {factor!r}")
+    if factor == 1:
+        return log
+    from scipy import signal
+
+    need = 2 * factor  # two samples kept
+    if len(log) < need:
+        raise DataFormatError(f"{log.source}: {where}", f"expected at least {need} samples to "
+                              f"keep two after decimating by {factor}, found {len(log)}")
+    taps = signal.firwin(20 * factor + 1, 1.0 / factor, window="hamming")
+
+    def filtered(x: np.ndarray) -> np.ndarray:
+        return signal.resample_poly(x, 1, factor, window=taps, padtype="line")
+
+    time = log.time_column
+    cols = {}
+    for name, col in log.columns.items():
+        x = np.asarray(col, dtype=float)
+        if name == time:
+            cols[name] = np.ascontiguousarray(x[::factor])
+        elif log.role_of(name) == "position_wrapped":
+            low = -math.pi if np.min(x) < 0 else 0.0
+            y = filtered(np.unwrap(x))
+            w = np.mod(y - low, 2 * math.pi)
+            w[w >= 2 * math.pi] = 0.0  # mod of a tiny negative number rounds up to 2 pi
+            cols[name] = np.ascontiguousarray(w + low)
+        else:
+            cols[name] = np.ascontiguousarray(filtered(x))
+    digest = hashlib.sha256(f"{log.sha256}@decimate:{factor}".encode()).hexdigest()
+    ts = float(log.ts) * factor
+    if time is not None:
+        t = cols[time]
+        ts = float(t[-1] - t[0]) / (len(t) - 1) if len(t) > 1 else ts
+    return DataLog(cols, ts, f"{log.source} (decimated {factor})", digest, dict(log.scalars),
+                   dict(log.roles), decimation=log.decimation * factor)
 
 
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:
