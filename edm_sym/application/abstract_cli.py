@@ -98,6 +98,15 @@ def run_cli(args: argparse.Namespace) -> int:
 
         join_logs(logs, [target, *inputs])  # one sample time and roles, before any work
     data = logs[0] if len(logs) == 1 else logs
+    previous = None
+    if getattr(args, "initial", None):
+        from edm_sym.core.result import load_result
+        from edm_sym.engines.abstraction.schedule import inherit
+
+        previous = load_result(args.initial)
+        ts = float(logs[0].ts)
+        config = inherit(config, previous, inputs=inputs, axis=axis, ts=ts,
+                         t_sum=max(len(log) for log in logs) * ts)
     validate = None
     if validate_path is not None:
         validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
@@ -131,6 +140,9 @@ def run_cli(args: argparse.Namespace) -> int:
         raise
     finally:
         signal.signal(signal.SIGTERM, old)
+    if previous is not None:  # what the model inherited
+        result = replace(result, provenance={**result.provenance, "initial": {
+            "file": Path(args.initial).name, "sha256": previous.sha256}})
     save_result(result, output)
     reason = result.provenance.get("stop_reason")
     print(f"wrote {output}")

@@ -256,6 +256,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative worsening a simplification may cost (default 0.01)")
     p.add_argument("--no-prune", action="store_true",
                    help="export the search's model as it is (no pruning, no front)")
+    p.add_argument("--initial", metavar="PREVIOUS.json",
+                   help="start the hierarchy from a previous result's rows (same axis, inputs and "
+                        "sample time; docs/abstraction.md#a-model-that-carries-over)")
     p.add_argument("--decimate", type=int, metavar="K",
                    help="keep every K-th sample of each log after an anti-alias filter; the model "
                         "then runs at K times the log's sample time (docs/data.md#decimation)")
@@ -630,7 +633,7 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
     out = Path(args.output)
     # The checkpoint beside the output is written and, at the end, deleted: never an input.
     check_outputs([out, out.with_name(out.name + ".checkpoint")],
-                  [*args.data, args.config] if args.config else list(args.data))
+                  [*args.data, *(p for p in (args.config, args.initial) if p)])
     return run_cli(args)
 
 

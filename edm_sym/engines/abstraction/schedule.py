@@ -13,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -628,3 +628,70 @@ def load_config(path: str | Path) -> AbstractionConfig:
     path = Path(path)
     doc = read_toml(path, ConfigError)
     return parse_config(doc, path.name)
+
+
+def inherit(cfg: AbstractionConfig, previous: Any, *, inputs: Sequence[str], axis: str, ts: float,
+            t_sum: float, where: str = "--initial") -> AbstractionConfig:
+    """The schedule continued from a previous result's rows (the paper's inheritance).
+
+    The previous model's rows seed the first step large enough to hold them
+    (the steps before it are left out: the hierarchy continues where the
+    previous abstraction ended); its parameter values keep their meaning
+    (``a``, decoded), clipped into this run's ranges.
+
+    Parameters
+    ----------
+    cfg : AbstractionConfig
+    previous : EdmResult
+        The previous result (its ``sha256`` is what the new one records).
+    inputs, axis, ts
+        This run's inputs, axis and sample time, which must be the previous one's.
+    t_sum : float
+        This run's record length [s] (its ranges clip the values).
+    where : str
+        For messages (the option or key that named the file).
+
+    Raises
+    ------
+    ConfigError
+        Another axis, other inputs or another sample time (beyond 0.1 %), or a
+        schedule with no step as large as the previous matrix.
+    """
+    name = f"{where} {Path(previous.source).name if previous.source else 'result'}"
+    prev_axis = previous.axis or "rotary"
+    if prev_axis != axis:
+        raise ConfigError(name, f"expected a result of the {axis} axis, found one of the "
+                                f"{prev_axis} axis (its units differ)")
+    prev_inputs = tuple(previous.compensator.matrix.inputs)
+    if prev_inputs != tuple(inputs):
+        raise ConfigError(name, f"expected the inputs {', '.join(inputs)}, found "
+                                f"{', '.join(prev_inputs)} (its rows read them by position)")
+    prev_ts = float(previous.compensator.sample_time)
+    if abs(prev_ts - ts) > 1e-3 * ts:
+        raise ConfigError(name, f"expected the sample time {ts:g} s of the logs, found {prev_ts:g} s "
+                                "(its filters and delays are discretised at it)")
+    comp = previous.compensator
+    rows = []
+    for row in comp.matrix.rows:
+        elements = [(g.element.name, comp.value(g)) for g in row.genes]
+        while len(elements) > 1 and elements[-1][0] == "through":
+            elements.pop()
+        rows.append(InitialRow(prev_inputs[row.input], tuple(elements)))
+    m, n = len(rows), max(len(r.elements) for r in rows)
+    first = next((k for k, s in enumerate(cfg.steps) if s.n_rows >= m and s.n_elements >= n), None)
+    if first is None:
+        largest = cfg.steps[-1]
+        raise ConfigError(name, f"expected a step of the schedule with at least {m} rows of {n} "
+                                f"elements to continue from, found at most {largest.n_rows}x"
+                                f"{largest.n_elements}; add a larger [[step]]")
+    ranges = cfg.resolve_ranges(ts, t_sum)
+    clipped = []
+    for r in rows:
+        els = []
+        for el, a in r.elements:
+            if a is not None:
+                rng = ranges[el]
+                a = min(max(a, rng.low), rng.high)
+            els.append((el, a))
+        clipped.append(InitialRow(r.input, tuple(els)))
+    return replace(cfg, steps=cfg.steps[first:], initial=tuple(clipped))
