@@ -46,7 +46,7 @@ def run_cli(args: argparse.Namespace) -> int:
     Parameters
     ----------
     args : argparse.Namespace
-        ``data``, ``target``, ``inputs`` (comma-separated), ``config``,
+        ``data`` (one log or a list), ``target``, ``inputs`` (comma-separated), ``config``,
         ``seed``, ``time_limit``, ``output``, ``ts``, ``resume``, ``quiet``,
         ``workers``, ``scheduler``, ``validation_share``, ``validate``, ``select``,
         ``prune_tolerance``, ``no_prune``, ``time_column``, ``role`` (a list
@@ -82,12 +82,37 @@ def run_cli(args: argparse.Namespace) -> int:
         except ConfigError as exc:
             raise ConfigError("--validation-share", exc.problem) from None
     config = _parsimony_options(config, args)
-    data = load_data(args.data, ts=args.ts, columns=columns)
-    data.column(target, role="target column")
-    data.stack(inputs)
+    names = getattr(args, "columns", None) or config.column_names
+    specs = _specs(args, config)
+    logs = [load_data(spec, ts=args.ts, columns=columns, names=names) for spec in specs]
+    from edm_sym.core.data import decimate
+
+    factor = getattr(args, "decimate", None)
+    if factor is not None:
+        logs = [decimate(log, factor) for log in logs]
+    for log in logs:
+        log.column(target, role="target column")
+        log.stack(inputs)
+    if len(logs) > 1:
+        from edm_sym.core.data import join_logs
+
+        join_logs(logs, [target, *inputs])  # one sample time and roles, before any work
+    data = logs[0] if len(logs) == 1 else logs
+    previous = None
+    if getattr(args, "initial", None):
+        from edm_sym.core.result import load_result
+        from edm_sym.engines.abstraction.schedule import inherit
+
+        previous = load_result(args.initial)
+        ts = float(logs[0].ts)
+        config = inherit(config, previous, inputs=inputs, axis=axis, ts=ts,
+                         t_sum=max(len(log) for log in logs) * ts)
     validate = None
     if validate_path is not None:
-        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns)
+        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
+                             names=names)
+        if factor is not None:
+            validate = decimate(validate, factor)
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches
@@ -115,6 +140,9 @@ def run_cli(args: argparse.Namespace) -> int:
         raise
     finally:
         signal.signal(signal.SIGTERM, old)
+    if previous is not None:  # what the model inherited
+        result = replace(result, provenance={**result.provenance, "initial": {
+            "file": Path(args.initial).name, "sha256": previous.sha256}})
     save_result(result, output)
     reason = result.provenance.get("stop_reason")
     print(f"wrote {output}")
@@ -145,6 +173,21 @@ def run_cli(args: argparse.Namespace) -> int:
     elif reason == "time_limit":
         print("edm abstract: time limit reached; wrote the best so far", file=sys.stderr)
     return 130 if reason == "interrupted" else 0
+
+
+def _specs(args: argparse.Namespace, config) -> list[str]:  # noqa: ANN001
+    """The logs of ``edm abstract``: DATA on the command line, else the config's ``data`` list
+    (paths relative to the config file)."""
+    given = args.data if isinstance(args.data, list) else [args.data] if args.data else []
+    if given:
+        return [str(d) for d in given]
+    if config.data:
+        from edm_sym.core.data import is_plant_spec
+
+        base = Path(args.config).parent
+        return [d if is_plant_spec(d) else str(base / d) for d in config.data]
+    raise ConfigError("DATA", "expected one or more logs (edm abstract DATA [DATA ...], or data = "
+                              "[...] in the config), found none")
 
 
 def start_line(par: dict) -> str | None:

@@ -72,6 +72,9 @@ def _add_column_args(p: argparse.ArgumentParser, *, roles: bool = True, axis: bo
     """``--time-column``, ``--role`` and ``--axis`` of a command that reads a log (docs/data.md)."""
     p.add_argument("--time-column", metavar="COL",
                    help="the log's time column [s] (default: t, or the one the model records)")
+    p.add_argument("--columns", metavar="NAME[,NAME...]",
+                   help="the names of the columns of a matrix selected as FILE.mat:VAR (or .h5, "
+                        ".npz), in its column order (docs/data.md#files-loggers-write)")
     if roles:
         p.add_argument("--role", action="append", default=[], metavar="COL=ROLE",
                        help=f"what a column is: {ROLES_HELP} (repeatable; docs/data.md"
@@ -109,8 +112,11 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
                    help="an input's range for a fixed-point build or the kit, over the one the "
                         "result records (repeatable)")
     p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
-    p.add_argument("--data", metavar="DATA", help="abstraction log, for the report's figures")
-    p.add_argument("--eval-data", metavar="DATA", help="evaluation log, for the report")
+    p.add_argument("--data", metavar="DATA", nargs="+",
+                   help="abstraction log(s), for the report's figures (the first) and the summary "
+                        "(per log and over all)")
+    p.add_argument("--eval-data", metavar="DATA", nargs="+",
+                   help="evaluation log(s), for the report (the first) and the summary")
     p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
     p.add_argument("--ts", type=_positive_float, help="sample time of logs without a 't' column")
     p.add_argument("--front-member", type=int, metavar="K",
@@ -146,8 +152,9 @@ def _percent(text: str) -> float:
 
 def _add_describe_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("result", metavar="RESULT.json", help="result file to describe")
-    p.add_argument("--data", metavar="DATA", help="log to measure the contributions on "
-                   "(default: the evaluation, else the abstraction log the result records)")
+    p.add_argument("--data", metavar="DATA", nargs="+",
+                   help="log to measure the contributions on (default: the evaluation, else the "
+                        "abstraction log the result records); several: described one by one")
     p.add_argument("--json", action="store_true", help="print the stable JSON of docs/describe.md")
     p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
                    help="a row below this share of the target's RMS is negligible (default 1)")
@@ -168,16 +175,41 @@ def _cmd_describe(args: argparse.Namespace) -> int:
     from edm_sym.engines.description import describe
     from edm_sym.engines.symbolic.significance import SignificanceOptions
 
-    try:
-        desc = describe(args.result, data=args.data, ts=args.ts,
-                        options=SignificanceOptions(threshold=args.threshold / 100),
-                        axis=args.axis, columns=_columns(args), resample=args.resample,
-                        observer_bandwidth=args.observer_bandwidth)
-    except DataFormatError as exc:
-        if exc.where != "observer_bandwidth":
-            raise
-        raise DataFormatError("--observer-bandwidth", exc.problem) from None
-    print(json.dumps(desc.to_json(), indent=2, allow_nan=False) if args.json else desc.table())
+    specs = list(args.data) if args.data else [None]
+    if args.columns is not None:
+        # A matrix of a .mat file named by --columns: read here, with the roles the result records.
+        from edm_sym.core.result import load_result
+        from edm_sym.engines.sources import load_data
+
+        result = load_result(args.result)
+        roles = _columns(args).over(result.column_roles())
+        specs = [load_data(spec, ts=args.ts, require=[*result.inputs, result.target],
+                           default_ts=result.sample_time, columns=roles, names=args.columns)
+                 for spec in specs if spec is not None]
+    descs = []
+    for spec in specs:  # several logs: each described on its own, from rest
+        try:
+            descs.append(describe(args.result, data=spec, ts=args.ts,
+                                  options=SignificanceOptions(threshold=args.threshold / 100),
+                                  axis=args.axis, columns=_columns(args), resample=args.resample,
+                                  observer_bandwidth=args.observer_bandwidth))
+        except DataFormatError as exc:
+            if exc.where != "observer_bandwidth":
+                raise
+            raise DataFormatError("--observer-bandwidth", exc.problem) from None
+    if len(descs) == 1:
+        print(json.dumps(descs[0].to_json(), indent=2, allow_nan=False) if args.json
+              else descs[0].table())
+        return 0
+    names = [getattr(spec, "source", None) or str(spec) for spec in specs]
+    if args.json:
+        print(json.dumps({"logs": [{"data": name, **d.to_json()} for name, d in zip(names, descs,
+                                                                                   strict=True)]},
+                         indent=2, allow_nan=False))
+        return 0
+    for k, (name, d) in enumerate(zip(names, descs, strict=True)):
+        print(("\n" if k else "") + f"== {name} ({k + 1} of {len(descs)}) ==")
+        print(d.table())
     return 0
 
 
@@ -198,7 +230,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
 
     p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
-    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("data", metavar="DATA", nargs="*",
+                   help=DATA_HELP + "; several logs are fitted together, each from rest (default: "
+                        "the config's data list)")
     p.add_argument("--target", metavar="COL",
                    help="the column the compensator reproduces (the observer's torque estimate; "
                         "or --role COL=target)")
@@ -238,6 +272,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative worsening a simplification may cost (default 0.01)")
     p.add_argument("--no-prune", action="store_true",
                    help="export the search's model as it is (no pruning, no front)")
+    p.add_argument("--initial", metavar="PREVIOUS.json",
+                   help="start the hierarchy from a previous result's rows (same axis, inputs and "
+                        "sample time; docs/abstraction.md#a-model-that-carries-over)")
+    p.add_argument("--decimate", type=int, metavar="K",
+                   help="keep every K-th sample of each log after an anti-alias filter; the model "
+                        "then runs at K times the log's sample time (docs/data.md#decimation)")
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
@@ -246,9 +286,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
-    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p.add_argument("data", metavar="DATA", nargs="+",
+                   help=DATA_HELP + "; several logs are each simulated from rest")
     p.add_argument("-o", "--output", metavar="OUT.csv",
-                   help="output CSV (default: <DATA stem>_sim.csv in the current folder)")
+                   help="output CSV (default: <DATA stem>_sim.csv in the current folder; with "
+                        "several logs a folder for them)")
     p.add_argument("--ts", type=_positive_float,
                    help="sample time [s] of a log without a 't' column (default: the model's)")
     p.add_argument("--resample", action="store_true",
@@ -351,15 +393,17 @@ def _cmd_export(args: argparse.Namespace) -> int:
         result = front_member(result, args.front_member)
     from edm_sym.application.exporting import export
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
-    inputs = [args.result, args.data, args.eval_data, args.lugre]
+    inputs = [args.result, *(args.data or []), *(args.eval_data or []), args.lugre]
     check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
                   option="-o" if args.out_dir else "output folder")
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
     notes: list[str] = []
+    # The report draws the first log of each kind; the summary judges all of them.
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=args.data, eval_data=args.eval_data, lugre=args.lugre, ts=args.ts,
-                     input_range=dict(args.input_range or ()), notes=notes)
+                     data=args.data[0] if args.data else None,
+                     eval_data=args.eval_data[0] if args.eval_data else None, lugre=args.lugre,
+                     ts=args.ts, input_range=dict(args.input_range or ()), notes=notes)
     for path in written:
         print(path)
     for line in notes:
@@ -369,11 +413,15 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _summary_log(result, args: argparse.Namespace):  # noqa: ANN001, ANN202
-    """The log the export's summary judges the result on (``--eval-data``, else ``--data``)."""
+    """The log(s) the export's summary judges the result on (``--eval-data``, else ``--data``):
+    one DataLog, a list of several, or None."""
     from edm_sym.engines.sources import load_data
 
-    spec = args.eval_data or args.data
-    return load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) if spec else None
+    specs = args.eval_data or args.data
+    if not specs:
+        return None
+    logs = [load_data(spec, ts=args.ts, require=[*result.inputs, result.target]) for spec in specs]
+    return logs[0] if len(logs) == 1 else logs
 
 
 def _export_summary(result, args: argparse.Namespace, log=None) -> None:  # noqa: ANN001
@@ -382,7 +430,23 @@ def _export_summary(result, args: argparse.Namespace, log=None) -> None:  # noqa
 
     prog = "edm-export" if not hasattr(args, "command") else "edm export"
     notes = [fitness_line(result)] + ([] if log is not None else [NOT_MEASURED])
+    if isinstance(log, list):
+        notes += _rmse_lines(result, log)
     print_summary(prog, fitness=notes, flags=result_flags(result, log), describe=args.result)
+
+
+def _rmse_lines(result, logs: list) -> list[str]:  # noqa: ANN001
+    """The model's plain RMSE on each log (each simulated from rest) and over all of them."""
+    import numpy as np
+
+    from edm_sym.core.fitness import rms
+    from edm_sym.core.units import axis_units
+    from edm_sym.engines.simulate import simulate
+
+    unit = axis_units(getattr(result, "axis", None) or "rotary").force
+    errors = [log.column(result.target) - simulate(result, log).total for log in logs]
+    lines = [f"rmse {rms(e):.6g} {unit} on {log.source}" for log, e in zip(logs, errors, strict=True)]
+    return [*lines, f"rmse {rms(np.concatenate(errors)):.6g} {unit} over all {len(logs)} logs"]
 
 
 def _export_names(args: argparse.Namespace) -> list[str]:
@@ -402,8 +466,19 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from edm_sym.engines.sources import load_data
 
     model_path = Path(args.model)
-    out = Path(args.output) if args.output is not None else Path(f"{Path(args.data).stem}_sim.csv")
-    check_outputs([out], [args.model, args.data])
+    specs = list(args.data)
+    if len(specs) == 1:
+        outs = [Path(args.output) if args.output is not None else _sim_name(specs[0])]
+    else:
+        folder = Path(args.output) if args.output is not None else Path(".")
+        if not folder.is_dir():
+            raise UsageError(f"edm simulate: -o: expected a folder for the {len(specs)} logs' "
+                             f"outputs, found {folder}")
+        outs = [folder / _sim_name(spec) for spec in specs]
+        if len(set(outs)) < len(outs):
+            raise UsageError("edm simulate: DATA: expected logs of distinct names (each writes "
+                             "<stem>_sim.csv), found two of one name")
+    check_outputs(outs, [args.model, *specs])
     given = _columns(args)
     # The model is validated completely before the data is read.
     model = load_model(model_path)
@@ -412,22 +487,40 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise UsageError(f"edm simulate: --axis: expected {model.axis} as in {model_path.name}, "
                          f"found {args.axis}")
     axis = model.axis or args.axis or "rotary"
-    # The time column and roles the model records, under those given now.
-    data = load_data(args.data, ts=args.ts, require=model.inputs, default_ts=model.sample_time,
-                     columns=given.over(model.column_roles()))
-    data = _match_ts(model_path.name, model.sample_time, data, args.resample)
-    run = model.run(data)
-    cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
-    rmse = None
-    if target in data.columns:
-        cols["residual"] = data.columns[target] - cols["tau_cmp"]
-        rmse = rms(cols["residual"])
-    write_csv(out, cols)
-    print(f"wrote {out}")
+    # The time column and roles the model records, under those given now; every log is
+    # read (and refused) before any file is written.
+    logs = [_match_ts(model_path.name, model.sample_time,
+                      load_data(spec, ts=args.ts, require=model.inputs, default_ts=model.sample_time,
+                                columns=given.over(model.column_roles()), names=args.columns),
+                      args.resample) for spec in specs]
     unit = axis_units(axis).force
-    print(f"rmse {rmse:.10g} {unit}" if rmse is not None
-          else f"rmse nan (no column {target!r} in DATA)")
+    residuals = []
+    for data, out in zip(logs, outs, strict=True):
+        run = model.run(data)  # each log from rest
+        cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
+        rmse = None
+        if target in data.columns:
+            cols["residual"] = data.columns[target] - cols["tau_cmp"]
+            rmse = rms(cols["residual"])
+            residuals.append(cols["residual"])
+        write_csv(out, cols)
+        print(f"wrote {out}")
+        where = f" ({data.source})" if len(logs) > 1 else ""
+        print(f"rmse {rmse:.10g} {unit}{where}" if rmse is not None
+              else f"rmse nan (no column {target!r} in {data.source if len(logs) > 1 else 'DATA'})")
+    if len(logs) > 1 and residuals:
+        import numpy as np
+
+        print(f"rmse {rms(np.concatenate(residuals)):.10g} {unit} (over all {len(residuals)} logs "
+              f"with the target, by their samples)")
     return 0
+
+
+def _sim_name(spec: str) -> Path:
+    """``<DATA stem>_sim.csv`` (a selection ``FILE.mat:VAR`` named by its file)."""
+    from edm_sym.core.formats import split_spec
+
+    return Path(f"{split_spec(spec)[0].stem}_sim.csv")
 
 
 def _match_ts(name: str, ts: float, data, resample: bool):  # noqa: ANN001, ANN202
@@ -491,7 +584,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
                   "force_gain": "--force-gain"}.get(field, field)
         raise UsageError(f"edm observe: {option}: {problem}") from None
     check_outputs([args.output], [args.data])
-    view = observer_view(load_data(args.data, ts=args.ts, columns=given), opts)
+    view = observer_view(load_data(args.data, ts=args.ts, columns=given, names=args.columns), opts)
     write_csv(args.output, view.columns)
     u = axis_units(args.axis or "rotary")
     print(f"wrote {args.output}")
@@ -534,7 +627,8 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
         raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
                          f"{target!r}, found it")
     check_outputs([args.output], [args.data])
-    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given)
+    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given,
+                     names=args.columns)
     data.require_varying([velocity])  # named by file and column, before the fit
     with ProgressReporter("edm lugre", quiet=args.quiet) as reporter, \
             data.naming(target=target, velocity=velocity):
@@ -558,8 +652,8 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
     from edm_sym.application.abstract_cli import run_cli
     out = Path(args.output)
     # The checkpoint beside the output is written and, at the end, deleted: never an input.
-    check_outputs([out, out.with_name(out.name + ".checkpoint")], [args.data, args.config] if args.config
-                  else [args.data])
+    check_outputs([out, out.with_name(out.name + ".checkpoint")],
+                  [*args.data, *(p for p in (args.config, args.initial) if p)])
     return run_cli(args)
 
 

@@ -149,7 +149,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
 
     # --- fitting and prediction ---
 
-    def fit(self, X: Any, y: Any, *, feature_names: Sequence[str] | None = None) -> EDMRegressor:
+    def fit(self, X: Any, y: Any, *, feature_names: Sequence[str] | None = None,
+            groups: Any = None) -> EDMRegressor:
         """Find the compensator of ``y`` from the features of ``X``.
 
         Parameters
@@ -162,6 +163,12 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         feature_names : sequence of str, optional
             Names of the features when ``X`` has none (a plain array); with a
             DataFrame they must equal its column names.
+        groups : array-like of shape (n_samples,), optional
+            Which log each sample belongs to: several logs (runs) in one
+            ``X``, each a contiguous run of one label. Each is simulated from
+            rest on its own and eq. 8 is taken over all of them
+            (docs/abstraction.md#several-logs). ``X`` and ``y`` may also be
+            lists of the logs' frames and targets.
 
         Returns
         -------
@@ -190,8 +197,21 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                 for k, v in self.roles.items())):
             raise ConfigError("EDMRegressor.roles", f"expected a mapping of feature names to "
                               f"roles (str or None), found {self.roles!r}")
+        if _is_list_of_frames(X):
+            if not isinstance(y, list | tuple) or len(y) != len(X):
+                raise ValueError(f"EDMRegressor.fit: y: expected a list of {len(X)} targets (one per "
+                                 f"frame of X), found {type(y).__name__}")
+            groups = np.concatenate([np.full(len(f), k) for k, f in enumerate(X)])
+            if hasattr(X[0], "columns"):  # DataFrames: their names stay
+                import pandas as pd
+
+                X = pd.concat(list(X), ignore_index=True)
+            else:
+                X = np.concatenate([np.asarray(f, dtype=float) for f in X])
+            y = np.concatenate([np.asarray(v, dtype=float).reshape(-1) for v in y])
         names = _names_of(X, feature_names)
         X, y = check_X_y(X, y, dtype=np.float64, ensure_min_samples=2, y_numeric=True)
+        spans = _group_spans(groups, len(y))
         names = names if names is not None else [f"x{j}" for j in range(X.shape[1])]
         if len(names) != X.shape[1]:
             raise ValueError(f"EDMRegressor.fit: feature_names: expected {X.shape[1]} names (one per "
@@ -206,6 +226,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         columns = {name: np.array(X[:, j], dtype=np.float64) for j, name in enumerate(names)}
         columns[self.target_name] = np.array(y, dtype=np.float64)
         data = DataLog(columns, ts, source=FIT_SOURCE)
+        if len(spans) > 1:
+            data = [data.window(a, b) for a, b in spans]
         from edm_sym.application.progress import ProgressReporter
 
         with ProgressReporter("EDMRegressor.fit", quiet=not self.progress) as reporter:
@@ -218,7 +240,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         self.feature_names_in_ = np.asarray(names, dtype=object)
         return self
 
-    def predict(self, X: Any) -> np.ndarray:
+    def predict(self, X: Any, groups: Any = None) -> np.ndarray:
         """The compensation torque over ``X``, a time series, from the reference simulator.
 
         The compensator starts at rest at the first row and advances one sample
@@ -230,6 +252,9 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         X : pandas.DataFrame or array-like of shape (n_samples, n_features)
             The features of :meth:`fit`, in the same order (a DataFrame's
             column names must equal ``feature_names_in_``).
+        groups : array-like of shape (n_samples,), optional
+            Which log each sample belongs to (as for :meth:`fit`): each log
+            is simulated from rest on its own.
 
         Returns
         -------
@@ -238,7 +263,12 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             unit (N m or N).
         """
         check_is_fitted(self, "result_")
-        return simulate(self.result_, self._columns(check_array(X, dtype=np.float64), X)).total
+        arr = check_array(X, dtype=np.float64)
+        spans = _group_spans(groups, len(arr))
+        if len(spans) > 1:
+            return np.concatenate([simulate(self.result_, self._columns(arr[a:b], arr[a:b])).total
+                                   for a, b in spans])
+        return simulate(self.result_, self._columns(arr, X)).total
 
     # --- the fitted model in other forms ---
 
@@ -447,3 +477,35 @@ def _names_of(X: Any, given: Sequence[str] | None) -> list[str] | None:
         return given
     return None if names is None else [str(n) for n in names]
 
+
+
+def _is_list_of_frames(X: Any) -> bool:
+    """A list of 2-D frames or arrays (several logs), not a list of rows."""
+    return (isinstance(X, list | tuple) and len(X) > 0
+            and all(len(getattr(f, "shape", ())) == 2 for f in X))
+
+
+def _group_spans(groups: Any, n: int) -> list[tuple[int, int]]:
+    """The ``(start, stop)`` of each log that ``groups`` labels (one span without groups).
+
+    Raises
+    ------
+    ValueError
+        Labels of another length, or a label in two places (a log is one run of samples).
+    """
+    if groups is None:
+        return [(0, n)]
+    g = np.asarray(groups)
+    if g.shape != (n,):
+        raise ValueError(f"EDMRegressor: groups: expected one label per sample ({n}), found shape "
+                         f"{g.shape}")
+    cuts = [0, *(np.flatnonzero(g[1:] != g[:-1]) + 1).tolist(), n]
+    spans = list(zip(cuts[:-1], cuts[1:], strict=True))
+    labels = [g[a] for a, _ in spans]
+    seen = set()
+    for (a, _), label in zip(spans, labels, strict=True):
+        if label in seen:
+            raise ValueError(f"EDMRegressor: groups: expected each log as one run of samples, found "
+                             f"the label {label!r} again at sample {a}")
+        seen.add(label)
+    return [(int(a), int(b)) for a, b in spans]

@@ -73,8 +73,8 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
     Parameters
     ----------
     result : EdmResult
-    log : DataLog
-        Holds the result's inputs and target.
+    log : DataLog or list of DataLog
+        Holds the result's inputs and target (several logs: over all, each from rest).
 
     Returns
     -------
@@ -84,19 +84,22 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
     from edm_sym.engines.simulate import simulate_rows
 
     comp = result.compensator
-    target = log.column(result.target, role="target column")
+    logs = list(log) if isinstance(log, list | tuple) else [log]  # several: each from rest
+    target = np.concatenate([d.column(result.target, role="target column") for d in logs])
     ref = rms(target)
     if not ref > 0:
         return []
     with np.errstate(all="ignore"):
-        outputs = simulate_rows(comp, comp.matrix.rows, log.stack(comp.matrix.inputs))
+        outputs = np.concatenate([simulate_rows(comp, comp.matrix.rows, d.stack(comp.matrix.inputs))
+                                  for d in logs], axis=1)
+    source = " + ".join(d.source for d in logs)
     out = []
     for j, y in enumerate(outputs):
         share = rms(y) / ref
         if share < NEGLIGIBLE:
             out.append(f"row {j + 1} ({comp.matrix.inputs[comp.matrix.rows[j].input]}) is "
                        f"negligible: {100 * share:.4g} % of the target's RMS on "
-                       f"{log.source} (threshold {100 * NEGLIGIBLE:g} %)")
+                       f"{source} (threshold {100 * NEGLIGIBLE:g} %)")
     return out
 
 

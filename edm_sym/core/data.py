@@ -14,7 +14,7 @@ import hashlib
 import io
 import math
 import numbers
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -23,6 +23,17 @@ import numpy as np
 from edm_sym.core import budget
 from edm_sym.core.errors import DataFormatError
 from edm_sym.core.fileio import write_atomic
+from edm_sym.core.formats import (
+    SELECTABLE,
+    contents,
+    describe,
+    is_matrix,
+    parse_names,
+    read_tree,
+    select,
+    selection_hint,
+    split_spec,
+)
 
 #: Clock drift accepted between two sample times of one drive (relative): a log's
 #: time column and ``--ts``, or a model's sample time and a second log's
@@ -223,6 +234,12 @@ class DataLog:
     roles : mapping of str to str
         The roles the columns were given (:class:`ColumnRoles`), the time
         column's among them; empty when none were.
+    note : str
+        What the file holds beside the columns and how to select it, added to
+        the message of a missing column (a matrix or struct of a .mat file).
+    decimation : int
+        The factor the file's samples were decimated by (:func:`decimate`;
+        1: as read), recorded in the provenance.
     """
 
     columns: Mapping[str, np.ndarray]
@@ -231,6 +248,8 @@ class DataLog:
     sha256: str | None = None
     scalars: Mapping[str, float] = field(default_factory=dict)
     roles: Mapping[str, str] = field(default_factory=dict)
+    note: str = field(default="", compare=False)
+    decimation: int = 1
 
     def __post_init__(self) -> None:
         # A log made in memory gets the checks a file gets as it is read: at least one
@@ -293,10 +312,13 @@ class DataLog:
         Each column is recorded with its role and its smallest and largest
         value, which the exports give as an input's expected range.
         """
-        return {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
-                "sample_time": float(self.ts),
-                "columns": [{"name": c, "role": self.role_of(c), "min": float(np.min(v)),
-                             "max": float(np.max(v))} for c, v in self.columns.items()]}
+        out = {"use": use, "file": self.source, "sha256": self.sha256, "rows": len(self),
+               "sample_time": float(self.ts),
+               "columns": [{"name": c, "role": self.role_of(c), "min": float(np.min(v)),
+                            "max": float(np.max(v))} for c, v in self.columns.items()]}
+        if self.decimation > 1:
+            out["decimate"] = {"factor": self.decimation, "filter": DECIMATE_FILTER}
+        return out
 
     def require_varying(self, names: Iterable[str]) -> None:
         """Refuse an input among ``names`` that says nothing about the axis.
@@ -368,7 +390,7 @@ class DataLog:
             have = ", ".join(self.columns)
             raise DataFormatError(
                 f"{self.source}: column {name!r}",
-                f"expected a {role} named {name!r}, found only: {have}",
+                f"expected a {role} named {name!r}, found only: {have}{self.note}",
             ) from None
 
     def window(self, start: int, stop: int | None = None) -> DataLog:
@@ -388,13 +410,17 @@ class DataLog:
 def load_data(
     path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
     default_ts: float | None = None, columns: ColumnRoles | None = None,
+    names: str | Sequence[str] | None = None,
 ) -> DataLog:
-    """Read a log from CSV, .npz or .mat.
+    """Read a log from CSV, .npz, .mat, HDF5 (.h5, .hdf5) or Parquet.
 
     Parameters
     ----------
     path : path-like or str
-        The file; the suffix picks the reader (``.npz``, ``.mat``, else CSV).
+        The file; the suffix picks the reader (``.npz``, ``.mat``, ``.h5``,
+        ``.hdf5``, ``.parquet``, else CSV). ``FILE:SEL[,SEL...]`` selects in a
+        file of named arrays: a struct or group, a field (``run.omega``) or a
+        matrix (docs/data.md#files-loggers-write).
         A ``plant:`` spec is not a file: :func:`edm_sym.engines.sources.load_data`
         simulates it (this layer never imports the plant).
     ts : float, optional
@@ -410,6 +436,9 @@ def load_data(
         table, or those a model recorded): the ``time`` column replaces ``t``,
         and every column named must be present (but for ``columns.loose`` ones,
         whose roles are dropped when absent).
+    names : str or sequence of str, optional
+        The names of the columns of a selected matrix (``"t,ref,theta"``:
+        ``--columns``), in its column order.
 
     Returns
     -------
@@ -423,8 +452,9 @@ def load_data(
     if is_plant_spec(path):
         raise DataFormatError(str(path), "expected a file; a plant: spec is simulated by "
                               "edm_sym.engines.sources.load_data (or edm_sym.load_data)")
-    path = Path(path)
-    name = path.name
+    path, selection = split_spec(path)
+    names = parse_names(names)
+    name = path.name if selection is None else f"{path.name}:{selection}"
     try:
         size = path.stat().st_size
     except OSError:
@@ -441,11 +471,25 @@ def load_data(
     suffix = path.suffix.lower()
     scalars: dict[str, float] = {}
     skipped: dict[str, str] = {}  # arrays of a .npz/.mat that are no column, and what they are
-    if suffix == ".npz":
-        arrays, scalars, skipped = _read_arrays(name, _load_npz(name, raw))
-    elif suffix == ".mat":
-        arrays, scalars, skipped = _read_arrays(name, _load_mat(name, raw))
+    note = ""
+    if selection is not None and suffix not in SELECTABLE:
+        raise DataFormatError(name, f"expected a selection FILE:NAME in a file of named arrays "
+                              f"({', '.join(SELECTABLE)}), found a {suffix or 'suffix-less'} file")
+    if suffix in SELECTABLE:
+        tree = read_tree(path.name, raw, suffix)
+        if selection is not None:
+            arrays, scalars, skipped = _read_arrays(name, select(name, path.name, tree, selection,
+                                                                 names))
+        else:
+            if names is not None:
+                raise DataFormatError("--columns", f"expected a matrix selected to name the columns "
+                                      f"of ({path.name}:NAME), found {path.name} whole")
+            arrays, scalars, skipped = _read_arrays(name, tree, hint=selection_hint(path.name, tree))
+            note = _hidden(name, tree, arrays)
     else:
+        if names is not None:
+            raise DataFormatError("--columns", f"expected a file of named arrays "
+                                  f"({', '.join(SELECTABLE)}) to select a matrix in, found {name}")
         # The sizes first (line ends and the header's cells): a log that cannot fit is refused
         # before its values are parsed.
         first = raw.split(b"\n", 1)[0]
@@ -453,12 +497,13 @@ def load_data(
         budget.check(budget.log_estimate(file_bytes=len(raw), n_samples=max(1, lines - 1),
                                          n_columns=first.count(b",") + 1), name, budget.LOG_HINT)
         arrays = _read_csv(name, raw)
-    log = with_roles(DataLog(arrays, 1.0, name, hashlib.sha256(raw).hexdigest(), scalars), columns)
+    log = with_roles(DataLog(arrays, 1.0, name, hashlib.sha256(raw).hexdigest(), scalars,
+                             note=note), columns)
     time = log.time_column
     if ts is None and time is None:
         ts = default_ts
     # Rows in messages: file lines for CSV (header is line 1), sample numbers otherwise.
-    log_ts = _sample_time(name, arrays, time, ts, row_offset=1 if suffix in (".npz", ".mat") else 2)
+    log_ts = _sample_time(name, arrays, time, ts, row_offset=1 if suffix in SELECTABLE else 2)
     log = replace(log, ts=log_ts)
     for col in require:
         if col in skipped and col not in log.columns:
@@ -466,6 +511,25 @@ def load_data(
                                   f"expected a 1-D array of real numbers, found {skipped[col]}")
         log.column(col)
     return log
+
+
+def _hidden(name: str, tree: Mapping[str, object], columns: Mapping[str, np.ndarray]) -> str:
+    """What a file read whole leaves aside that looks like the samples: a note for messages.
+
+    Raises
+    ------
+    DataFormatError
+        When a matrix holds more samples than the file's columns: its columns are the log,
+        not the arrays beside it.
+    """
+    n = max((len(c) for c in columns.values()), default=0)
+    hint = selection_hint(Path(name).name, dict(tree))
+    if not hint:
+        return ""
+    if any(is_matrix(v) and max(np.shape(v)) > n for v in tree.values()):
+        raise DataFormatError(name, f"expected the log's samples in 1-D arrays, found them in a "
+                              f"matrix; the file holds {contents(dict(tree))}{hint}")
+    return f"; {name} also holds {contents({k: v for k, v in tree.items() if k not in columns})}{hint}"
 
 
 def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
@@ -486,7 +550,8 @@ def with_roles(log: DataLog, columns: ColumnRoles | None) -> DataLog:
         elif col not in columns.loose:
             have = ", ".join(log.columns)
             raise DataFormatError(f"{log.source}: column {col!r}",
-                                  f"expected a {role} column named {col!r}, found only: {have}")
+                                  f"expected a {role} column named {col!r}, found only: "
+                                  f"{have}{log.note}")
     return replace(log, roles=roles)
 
 
@@ -562,68 +627,17 @@ def _parse_csv(name: str, reader, rows: int) -> dict[str, np.ndarray]:  # noqa: 
     return {h: values[k] for k, h in enumerate(header)}
 
 
-def _load_npz(name: str, raw: bytes) -> dict[str, np.ndarray]:
-    try:
-        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
-            return {k: np.asarray(z[k]) for k in z.files}
-    except Exception as exc:  # numpy raises several types for a bad archive
-        raise DataFormatError(name, f"expected an .npz archive, found unreadable data ({exc})") from None
-
-
-#: The signature of an HDF5 file; MATLAB v7.3 files carry it after a 512-byte header.
-_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
-#: MATLAB classes of numeric arrays (others, such as char, cell or struct, are skipped).
-_MATLAB_NUMERIC = {"double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32",
-                   "int64", "uint64", "logical"}
-
-
-def _is_mat73(raw: bytes) -> bool:
-    return raw[512:520] == _HDF5_SIGNATURE or raw[:8] == _HDF5_SIGNATURE
-
-
-def _load_mat73(name: str, raw: bytes) -> dict[str, np.ndarray]:
-    """Top-level numeric arrays of a MATLAB v7.3 (HDF5) file, in MATLAB's orientation."""
-    try:
-        import h5py
-    except ImportError:
-        raise DataFormatError(name, "expected a MATLAB file scipy can read, found a v7.3 (HDF5) file; "
-                              "install the extra 'edm_sym[mat73]' (h5py) to read it") from None
-    out: dict[str, np.ndarray] = {}
-    try:
-        with h5py.File(io.BytesIO(raw), "r") as f:
-            for key in f:
-                obj = f[key]
-                cls = obj.attrs.get("MATLAB_class", b"double") if isinstance(obj, h5py.Dataset) else b""
-                cls = cls.decode() if isinstance(cls, bytes) else str(cls)
-                if key.startswith("#") or cls not in _MATLAB_NUMERIC:
-                    continue
-                # MATLAB writes column-major: an N x 1 column is stored as 1 x N.
-                out[key] = np.asarray(obj[()]).T
-    except (OSError, ValueError) as exc:
-        raise DataFormatError(name, f"expected a MATLAB v7.3 (HDF5) file, found unreadable data ({exc})") \
-            from None
-    return out
-
-
-def _load_mat(name: str, raw: bytes) -> dict[str, np.ndarray]:
-    from scipy import io as sio
-
-    if _is_mat73(raw):
-        return _load_mat73(name, raw)
-    try:
-        doc = sio.loadmat(io.BytesIO(raw))
-    except Exception as exc:  # scipy raises several types for a bad file
-        raise DataFormatError(name, f"expected a MATLAB .mat file, found unreadable data ({exc})") from None
-    return {k: v for k, v in doc.items() if not k.startswith("__") and isinstance(v, np.ndarray)}
-
-
 def _read_arrays(
-    name: str, arrays: Mapping[str, np.ndarray]
+    name: str, arrays: Mapping[str, object], *, hint: str = ""
 ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, str]]:
     columns: dict[str, np.ndarray] = {}
     scalars: dict[str, float] = {}
     skipped: dict[str, str] = {}
     for key, arr in arrays.items():
+        if isinstance(arr, Mapping):
+            skipped[key] = describe(arr)
+            continue
+        arr = np.asarray(arr)
         if arr.dtype.kind == "m":  # a timedelta64 (numpy counts it an integer): in seconds
             arr = arr / np.timedelta64(1, "s")
         if np.iscomplexobj(arr):
@@ -638,7 +652,8 @@ def _read_arrays(
         else:
             skipped[key] = f"a {arr.ndim}-D array of shape {arr.shape}"
     if not columns:
-        raise DataFormatError(name, "expected one or more 1-D numeric arrays, found none")
+        found = ", ".join(f"{k} ({describe(v)})" for k, v in arrays.items()) or "none"
+        raise DataFormatError(name, f"expected one or more 1-D numeric arrays, found {found}{hint}")
     n = max(len(c) for c in columns.values())
     for key, col in columns.items():
         if len(col) != n:
@@ -784,6 +799,112 @@ def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = 
     digest = hashlib.sha256(f"{data.sha256}@resample:{up}/{down}".encode()).hexdigest()
     return DataLog(out, ts, f"{data.source} (resampled {up}/{down})", digest, dict(data.scalars),
                    dict(data.roles))
+
+
+def join_logs(logs: Sequence[DataLog], names: Sequence[str]) -> DataLog:
+    """Several logs of one axis laid end to end, for a fit over all of them.
+
+    Only the columns ``names`` (the target and the inputs) and the time
+    column are kept. The joined log is a container: whoever simulates it
+    must start every log from rest (``starts`` of
+    :func:`edm_sym.engines.simulate.simulate_row`); its ``times`` are each
+    log's own time stamps.
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file: a column missing, a sample time unlike the first
+        log's (beyond :data:`TIME_RTOL`), a column given another role, or a
+        time column where the first log has none (or the other way round).
+    """
+    first = logs[0]
+    time = first.time_column
+    for log in logs:
+        for name in names:
+            log.column(name, role="target column" if name == names[0] else "input column")
+        if abs(log.ts - first.ts) > TIME_RTOL * first.ts:
+            raise DataFormatError(f"{log.source}: sample time",
+                                  f"expected {first.ts:g} s as in {first.source} (the logs of one "
+                                  f"abstraction share it; --decimate or resample), found {log.ts:g} s")
+        if (log.time_column is None) != (time is None):
+            raise DataFormatError(f"{log.source}: column {time or log.time_column!r}",
+                                  f"expected {'a' if time else 'no'} time column as in "
+                                  f"{first.source}, found {'none' if time else 'one'}")
+        for name in names:
+            if log.role_of(name) != first.role_of(name):
+                raise DataFormatError(f"{log.source}: column {name!r}",
+                                      f"expected the role {first.role_of(name)!r} as in "
+                                      f"{first.source}, found {log.role_of(name)!r}")
+    keep = ([time] if time is not None else []) + [n for n in names if n != time]
+    cols = {}
+    for name in keep:
+        cols[name] = np.concatenate([
+            np.asarray(log.columns[log.time_column if name == time else name], dtype=float)
+            for log in logs])
+    digest = hashlib.sha256(" ".join(str(log.sha256) for log in logs).encode()).hexdigest()
+    roles = {c: r for c, r in first.roles.items() if c in cols}
+    return DataLog(cols, float(first.ts), " + ".join(log.source for log in logs), digest,
+                   dict(first.scalars), roles)
+
+
+#: The anti-alias filter of :func:`decimate`, as recorded in the provenance.
+DECIMATE_FILTER = ("FIR, Hamming window, 20 K + 1 taps, corner at the new Nyquist frequency, "
+                   "zero phase, ends extended as lines (scipy.signal.resample_poly)")
+
+
+def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog:
+    """Every ``factor``-th sample of ``log``, each column low-pass filtered first.
+
+    The anti-alias filter is the FIR of :func:`scipy.signal.decimate`
+    (Hamming window, ``20 factor + 1`` taps, corner at the new Nyquist
+    frequency), centred (no phase lag) and with a DC gain of exactly 1 (the
+    IIR default of ``decimate`` scales a constant by 0.989), applied by
+    :func:`scipy.signal.resample_poly` with the ends extended as lines. The
+    time column is taken as it is at the kept samples; a wrapped angle (role
+    ``position_wrapped``) is unwrapped, filtered and wrapped again, so its
+    jumps are not smeared.
+
+    Raises
+    ------
+    DataFormatError
+        A factor below 1, or a log too short to filter (naming the file).
+    """
+    if isinstance(factor, bool) or not isinstance(factor, numbers.Integral) or factor < 1:
+        raise DataFormatError(where, f"expected an integer >= 1, found {factor!r}")
+    if factor == 1:
+        return log
+    from scipy import signal
+
+    need = 2 * factor  # two samples kept
+    if len(log) < need:
+        raise DataFormatError(f"{log.source}: {where}", f"expected at least {need} samples to "
+                              f"keep two after decimating by {factor}, found {len(log)}")
+    taps = signal.firwin(20 * factor + 1, 1.0 / factor, window="hamming")
+
+    def filtered(x: np.ndarray) -> np.ndarray:
+        return signal.resample_poly(x, 1, factor, window=taps, padtype="line")
+
+    time = log.time_column
+    cols = {}
+    for name, col in log.columns.items():
+        x = np.asarray(col, dtype=float)
+        if name == time:
+            cols[name] = np.ascontiguousarray(x[::factor])
+        elif log.role_of(name) == "position_wrapped":
+            low = -math.pi if np.min(x) < 0 else 0.0
+            y = filtered(np.unwrap(x))
+            w = np.mod(y - low, 2 * math.pi)
+            w[w >= 2 * math.pi] = 0.0  # mod of a tiny negative number rounds up to 2 pi
+            cols[name] = np.ascontiguousarray(w + low)
+        else:
+            cols[name] = np.ascontiguousarray(filtered(x))
+    digest = hashlib.sha256(f"{log.sha256}@decimate:{factor}".encode()).hexdigest()
+    ts = float(log.ts) * factor
+    if time is not None:
+        t = cols[time]
+        ts = float(t[-1] - t[0]) / (len(t) - 1) if len(t) > 1 else ts
+    return DataLog(cols, ts, f"{log.source} (decimated {factor})", digest, dict(log.scalars),
+                   dict(log.roles), decimation=log.decimation * factor)
 
 
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:

@@ -22,8 +22,8 @@ from edm_sym.core.fitness import fitness
 from edm_sym.core.matrix import Compensator, Row
 
 __all__ = [
-    "Simulation", "checked_inputs", "fitness", "input_array", "plain_loop", "simulate", "simulate_row",
-    "simulate_rows",
+    "Simulation", "checked_inputs", "fitness", "input_array", "plain_loop", "segments", "simulate",
+    "simulate_row", "simulate_rows",
 ]
 
 
@@ -57,8 +57,16 @@ class Simulation:
         return y - self.total
 
 
-def simulate_row(comp: Compensator, row: Row, x: np.ndarray) -> np.ndarray:
-    """Run one row over its input signal ``x`` (shape (N,)), left to right, from rest."""
+def simulate_row(comp: Compensator, row: Row, x: np.ndarray, *,
+                 starts: Sequence[int] = ()) -> np.ndarray:
+    """Run one row over its input signal ``x`` (shape (N,)), left to right, from rest.
+
+    ``starts``: where further logs begin in ``x`` (several logs side by side,
+    :func:`segments`): each is simulated from rest on its own, never joined to
+    the one before.
+    """
+    if starts:
+        return np.concatenate([simulate_row(comp, row, x[a:b]) for a, b in segments(len(x), starts)])
     ts = comp.sample_time
     y = np.asarray(x, dtype=float)
     for gene in row.genes:
@@ -66,7 +74,15 @@ def simulate_row(comp: Compensator, row: Row, x: np.ndarray) -> np.ndarray:
     return y
 
 
-def simulate_rows(comp: Compensator, rows: Sequence[Row], inputs: np.ndarray) -> np.ndarray:
+def segments(n: int, starts: Sequence[int]) -> list[tuple[int, int]]:
+    """The ``(start, stop)`` of each log of ``n`` samples laid end to end, the later ones
+    beginning at ``starts``."""
+    edges = [0, *starts, n]
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def simulate_rows(comp: Compensator, rows: Sequence[Row], inputs: np.ndarray, *,
+                  starts: Sequence[int] = ()) -> np.ndarray:
     """Simulate several rows (from any matrices sharing ``comp``'s ranges and Ts).
 
     Parameters
@@ -77,6 +93,8 @@ def simulate_rows(comp: Compensator, rows: Sequence[Row], inputs: np.ndarray) ->
         Rows to simulate; ``row.input`` indexes the first axis of ``inputs``.
     inputs : numpy.ndarray
         Shape (n_inputs, N).
+    starts : sequence of int
+        Where further logs begin (:func:`simulate_row`).
 
     Returns
     -------
@@ -85,7 +103,7 @@ def simulate_rows(comp: Compensator, rows: Sequence[Row], inputs: np.ndarray) ->
     """
     out = np.empty((len(rows), inputs.shape[-1]))
     for k, row in enumerate(rows):
-        out[k] = simulate_row(comp, row, inputs[row.input])
+        out[k] = simulate_row(comp, row, inputs[row.input], starts=starts)
     return out
 
 

@@ -10,7 +10,7 @@ resolver lives here, one layer above the file readers (docs/architecture.md).
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,7 @@ __all__ = ["load_data", "plant_log"]
 def load_data(
     path: str | Path, *, ts: float | None = None, require: Iterable[str] = (),
     default_ts: float | None = None, columns: ColumnRoles | None = None,
+    names: str | Sequence[str] | None = None,
 ) -> DataLog:
     """Read a log from a file, or simulate the plant log a ``plant:`` spec names.
 
@@ -38,7 +39,8 @@ def load_data(
         for col in require:
             log.column(col)
         return log
-    return _files.load_data(path, ts=ts, require=require, default_ts=default_ts, columns=columns)
+    return _files.load_data(path, ts=ts, require=require, default_ts=default_ts, columns=columns,
+                            names=names)
 
 
 def plant_log(spec: str) -> DataLog:

@@ -137,6 +137,10 @@ class Evaluator:
         tangent pole inside its input's range in the data (see
         :mod:`edm_sym.engines.abstraction.poles`); settable per step
         (:meth:`set_reject_poles`).
+    starts : sequence of int
+        Where further logs begin in the signals: several logs laid end to
+        end, each simulated from rest (with the reference realisations: the
+        row kernel runs one signal).
     """
 
     #: Batches with fewer individuals to evaluate than this run in this process.
@@ -148,7 +152,8 @@ class Evaluator:
     def __init__(self, inputs: np.ndarray, target: np.ndarray, ts: float,
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
                  workers: int | None = None, cache_bytes: int = 256 * 2**20,
-                 max_batch_rows: int = 1024, client: Any = None, reject_poles: bool = False):
+                 max_batch_rows: int = 1024, client: Any = None, reject_poles: bool = False,
+                 starts: Sequence[int] = ()):
         self.inputs = np.ascontiguousarray(inputs, dtype=float)
         self.ranges = dict(ranges)
         self.ts = float(ts)
@@ -162,7 +167,7 @@ class Evaluator:
         n = self.target.shape[0]
         self.n_samples = n
         self.ctx = SimContext(self.inputs, float(ts), dict(ranges), max(1, cache_bytes // 2),
-                              self.target, int(cache_bytes))
+                              self.target, int(cache_bytes), tuple(int(k) for k in starts))
         self._blob = pickle.dumps(self.ctx, protocol=pickle.HIGHEST_PROTOCOL)
         self._token = hashlib.sha256(self._blob).hexdigest() + f"-{os.getpid()}-{id(self):x}"
         self.executor = executor

@@ -224,7 +224,8 @@ def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdou
     n = hold.n_train
     x = np.ascontiguousarray(hold.training.x[:, :n])
     with Evaluator(x, hold.training.y[:n], comp.sample_time, comp.ranges, workers=1,
-                   cache_bytes=64 * 2**20, reject_poles=reject_poles) as ev:
+                   cache_bytes=64 * 2**20, reject_poles=reject_poles,
+                   starts=hold.training.starts) as ev:
         ev.set_weights(mask_weights(np.ones(n), hold.mask))
         for s in steps:
             out.append((s.matrix, s.step, False))

@@ -39,12 +39,14 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from edm_sym.core.elements import REGISTRY, Element, ParamRange, libm
+from edm_sym.core.elements.realisation import StaticMap
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Population
 from edm_sym.engines.abstraction.polish import gain_fit, row_scales, scale_places
 from edm_sym.engines.abstraction.prefixes import ChunkPrefixes, prefix_key
 from edm_sym.engines.abstraction.rows import simulate_into
+from edm_sym.engines.simulate import segments
 
 #: Codes of the elements that use their parameter (others ignore p).
 HAS_PARAM = np.array([c in REGISTRY and REGISTRY[c].param is not None
@@ -96,6 +98,8 @@ class SimContext:
     prefix_bytes: int = 128 * 2**20
     target: np.ndarray | None = None
     row_bytes: int = 128 * 2**20
+    #: Where further logs begin in the signals (several logs: each simulated from rest).
+    starts: tuple[int, ...] = ()
 
     def decoder(self) -> dict[int, tuple[type[Element], ParamRange | None]]:
         """Element class and range by element code."""
@@ -214,6 +218,18 @@ class ChunkResult:
     fit_slots: np.ndarray | None = None
 
 
+@dataclass(frozen=True)
+class Segmented:
+    """A stage with state run over several logs laid end to end, each from rest."""
+
+    stage: Any
+    starts: tuple[int, ...]
+
+    def run(self, x: np.ndarray) -> np.ndarray:
+        """The stage over each log on its own (:func:`edm_sym.engines.simulate.segments`)."""
+        return np.concatenate([self.stage.run(x[a:b]) for a, b in segments(len(x), self.starts)])
+
+
 @dataclass
 class Worker:
     """A process's state for one run: context, decoder, stores, weighting.
@@ -271,6 +287,8 @@ class Worker:
                 hit = make(a)
             else:
                 hit = cls.realise(a, self.ctx.ts)
+                if self.ctx.starts and not isinstance(hit, StaticMap):
+                    hit = Segmented(hit, self.ctx.starts)
             if len(self.stages) > 100_000:
                 self.stages.clear()
             self.stages[key] = hit
@@ -326,7 +344,10 @@ def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = N
             if blob is None:
                 return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows)
+        # The row kernel runs one signal from rest; several logs run the realisations, each
+        # log from rest (Segmented).
+        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows,
+                     use_kernel=kernel.NUMBA and not ctx.starts)
         _WORKERS[token] = hit
         while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)

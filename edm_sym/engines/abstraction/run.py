@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from edm_sym.core.data import DataLog
+from edm_sym.core.data import DataLog, join_logs
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
 from edm_sym.core.fitness import magnitude_problem
@@ -143,14 +143,17 @@ class _Stop(Exception):
 
 
 def _fingerprint(cfg: AbstractionConfig, target: str, inputs: Sequence[str], seed: int,
-                 x: np.ndarray, y: np.ndarray, ts: float) -> tuple[str, dict[str, Any]]:
+                 x: np.ndarray, y: np.ndarray, ts: float, starts: Sequence[int] = ()
+                 ) -> tuple[str, dict[str, Any]]:
     """The run's fingerprint, and what it is made of (to name what differs on --resume)."""
     config = json.dumps(cfg.to_json(), sort_keys=True)
     h = hashlib.sha256()
+    # Where the logs begin counts only with several (one log's fingerprint stays as it was).
+    logs = {"starts": list(starts)} if starts else {}
     h.update(json.dumps({"config": cfg.to_json(), "target": target, "inputs": list(inputs),
-                         "seed": seed, "ts": ts, "shape": list(x.shape)},
+                         "seed": seed, "ts": ts, "shape": list(x.shape), **logs},
                         sort_keys=True).encode())
-    d = hashlib.sha256(json.dumps({"ts": ts, "shape": list(x.shape)}).encode())
+    d = hashlib.sha256(json.dumps({"ts": ts, "shape": list(x.shape), **logs}).encode())
     for part in (np.ascontiguousarray(x), np.ascontiguousarray(y)):
         h.update(part.tobytes())
         d.update(part.tobytes())
@@ -431,7 +434,7 @@ class _Runner:
 
 
 def abstract(
-    data: DataLog,
+    data: DataLog | Sequence[DataLog],
     *,
     target: str,
     inputs: Sequence[str],
@@ -454,8 +457,12 @@ def abstract(
 
     Parameters
     ----------
-    data : DataLog
-        The abstraction log (free motion).
+    data : DataLog or sequence of DataLog
+        The abstraction log (free motion), or several logs of the axis with
+        one sample time and the same column roles: each is simulated from rest
+        on its own, eq. 8 is taken over all their samples (so each log weighs
+        by its length), and the held-out blocks are laid out in every one
+        (docs/abstraction.md#several-logs).
     target : str
         The column to compensate (the RTOB's estimated external torque).
     inputs : sequence of str
@@ -533,9 +540,13 @@ def abstract(
     """
     from edm_sym.core.version import __version__
 
-    if not isinstance(data, DataLog):
-        raise DataFormatError("data", f"expected a DataLog (edm_sym.load_data), found "
-                              f"{type(data).__name__}")
+    logs = list(data) if isinstance(data, list | tuple) else [data]
+    for log in logs:
+        if not isinstance(log, DataLog):
+            raise DataFormatError("data", f"expected a DataLog (edm_sym.load_data) or a list of "
+                                  f"them, found {type(log).__name__}")
+    if not logs:
+        raise DataFormatError("data", "expected a DataLog or a list of them, found an empty list")
     if config is not None and not isinstance(config, AbstractionConfig):
         raise ConfigError("config", f"expected an AbstractionConfig (load_config(path)), found "
                           f"{type(config).__name__}")
@@ -545,6 +556,9 @@ def abstract(
         raise ConfigError("time_limit", f"expected a number of seconds >= 0, found {time_limit!r}")
     cfg = config if config is not None else default_config()
     inputs = check_inputs(target, inputs)
+    # Several logs are laid end to end; every simulation starts each from rest (``starts``).
+    data = logs[0] if len(logs) == 1 else join_logs(logs, [target, *inputs])
+    logs = logs if len(logs) > 1 else []
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int | np.integer)
@@ -565,7 +579,7 @@ def abstract(
         cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
     try:
         hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
-                            validate=validate)
+                            validate=validate, logs=logs)
     except ConfigError as exc:
         # Named where the share came from: the argument, else the config file's key.
         if not exc.where.startswith("validation."):
@@ -577,14 +591,16 @@ def abstract(
     check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
     _require_samples(data, hold.n_train if hold.mask is None
                      else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
-    check_data(data, target, inputs)
+    check_data(data, target, inputs, logs=logs)
+    starts = hold.training.starts
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training
     x = np.ascontiguousarray(part.x[:, :hold.n_train])
     y, t = part.y[:hold.n_train], part.t[:hold.n_train]
     ts = float(data.ts)
-    n = len(data)
+    # T_sum of the ranges: the longest log (no filter state lives longer than one log).
+    n = max(len(d) for d in logs) if logs else len(data)
     ranges = cfg.resolve_ranges(ts, n * ts)
     human = _human_rows(cfg, inputs, ranges)
     count = cfg.searches
@@ -593,11 +609,11 @@ def abstract(
     files = checkpoint_files(checkpoint, count)
     if resume:
         # Every search's checkpoint is checked before any search starts (and writes its own).
-        check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), x, y, ts)
+        check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), x, y, ts, starts)
                                          for s in seeds])
     client, own_client = _dask_client(scheduler)
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
-                     human=human, hold=hold, executor=executor, client=client, n=n)
+                     human=human, hold=hold, executor=executor, client=client, n=n, starts=starts)
     try:
         if count == 1:
             outcomes = [job.run(int(seed), workers, files[0], resume, time_limit, callback)]
@@ -647,9 +663,10 @@ def abstract(
         for f in files:
             if f is not None and f.exists():
                 f.unlink()
-    logs = (data.record("abstraction"),) + ((validate.record("validation"),) if validate else ())
+    records = tuple(d.record("abstraction") for d in (logs or [data]))
+    records += (validate.record("validation"),) if validate else ()
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
-                     parsimony=parsimony, axis=axis, logs=logs)
+                     parsimony=parsimony, axis=axis, logs=records)
 
 
 def checkpoint_files(checkpoint: Path | None, count: int) -> list[Path | None]:
@@ -680,6 +697,8 @@ class _SearchJob:
     client: Any
     #: Samples of the abstraction log (the record length of the ranges).
     n: int = 0
+    #: Where further logs begin in ``x`` (several logs, each simulated from rest).
+    starts: tuple[int, ...] = ()
 
     @property
     def mask(self) -> np.ndarray | None:
@@ -697,7 +716,8 @@ class _SearchJob:
             Only when interrupted before the first population was evaluated.
         """
         cfg, x, y, t, ts = self.cfg, self.x, self.y, self.t, self.ts
-        fingerprint, identity = _fingerprint(cfg, self.target, self.inputs, int(seed), x, y, ts)
+        fingerprint, identity = _fingerprint(cfg, self.target, self.inputs, int(seed), x, y, ts,
+                                             self.starts)
         rng = np.random.default_rng(int(seed))
         if resume and checkpoint is not None and checkpoint.exists():
             state = load_checkpoint(checkpoint, fingerprint, identity)
@@ -707,7 +727,7 @@ class _SearchJob:
         batch = max(s.ga.population * s.n_rows for s in cfg.steps)
         evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
                               cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
-                              client=self.client)
+                              client=self.client, starts=self.starts)
         evaluator.start()
         runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
@@ -735,7 +755,7 @@ class _SearchJob:
             lam = mask_weights(cfg.steps[r.step - 1].weighting.weights(t, y), self.mask)
             steps.append(StepRecord(step=r.step, matrix=matrix,
                                     fitness=_reference_fitness(matrix, ts, self.ranges, x, y, lam,
-                                                               r.fitness, r.step),
+                                                               r.fitness, r.step, self.starts),
                                     history=tuple(r.history), generations=r.generations,
                                     evaluations=r.evaluations, weighting=r.weighting))
         return steps, reason
@@ -854,9 +874,12 @@ def warn_clocks(data: DataLog, inputs: Sequence[str]) -> None:
                       ClockWarning, stacklevel=3)
 
 
-def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
+def check_data(data: DataLog, target: str, inputs: Sequence[str], *,
+               logs: Sequence[DataLog] = ()) -> None:
     """Refuse a log the search cannot fit: inputs that say nothing about the axis (constant,
     the clock), values that are not finite, a constant target or one whose square overflows.
+
+    ``logs``: the logs ``data`` joins, when several (each warned of its own clocks).
 
     Raises
     ------
@@ -864,8 +887,9 @@ def check_data(data: DataLog, target: str, inputs: Sequence[str]) -> None:
         Naming the file and the column.
     """
     data.require_varying(inputs)
-    data.require_finite([*inputs, target])
-    warn_clocks(data, inputs)
+    for log in logs or [data]:
+        log.require_finite([*inputs, target])
+        warn_clocks(log, inputs)
     y_all = data.column(target, role="target column")
     if np.all(y_all == y_all[0]):
         raise DataFormatError(f"{data.source}: column {target!r}",
@@ -1058,7 +1082,7 @@ def _dask_client(scheduler: Any) -> tuple[Any, bool]:
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
                        x: np.ndarray, y: np.ndarray, lam: np.ndarray | float, ga_value: float,
-                       step: int) -> float:
+                       step: int, starts: Sequence[int] = ()) -> float:
     """Eq. 8 of a step's best by the reference simulator, the numeric truth.
 
     The GA ranks with a faster realisation of the same difference equations;
@@ -1067,7 +1091,7 @@ def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, Param
     """
     comp = Compensator(matrix, ts, ranges, len(y) * ts)
     with np.errstate(over="ignore", invalid="ignore"):
-        value = fitness(y - simulate_rows(comp, matrix.rows, x).sum(axis=0), lam)
+        value = fitness(y - simulate_rows(comp, matrix.rows, x, starts=starts).sum(axis=0), lam)
     if not np.isfinite(value):
         value = float("inf")
     if abs(value - ga_value) > 1e-6 * max(abs(value), 1e-300):

@@ -13,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
@@ -22,6 +22,7 @@ from edm_sym.core.data import ColumnRoles
 from edm_sym.core.elements import BY_NAME, ParamRange, check_range, default_ranges
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.fileio import read_toml
+from edm_sym.core.formats import parse_names
 from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
@@ -245,6 +246,12 @@ class AbstractionConfig:
         key, default 1), each from its own seed, run side by side on the
         workers; the search's model is chosen among the step bests of all of
         them (docs/abstraction.md#independent-searches).
+    column_names : tuple of str or None
+        The names of the columns of a matrix selected as ``FILE.mat:VAR``
+        (``column_names``; ``--columns`` goes over it).
+    data : tuple of str
+        The logs (``data = ["a.csv", "b.csv"]``, paths relative to the config
+        file): abstracted together when the command line names none.
     """
 
     steps: tuple[StepConfig, ...] = ()
@@ -257,6 +264,8 @@ class AbstractionConfig:
     columns: ColumnRoles | None = None
     axis: str | None = None
     searches: int = 1
+    column_names: tuple[str, ...] | None = None
+    data: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if (isinstance(self.searches, bool) or not isinstance(self.searches, int)
@@ -425,7 +434,7 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
-             "parsimony", "columns", "axis", "searches")
+             "parsimony", "columns", "axis", "searches", "column_names", "data")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -502,8 +511,20 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
             columns = ColumnRoles.from_table(f"{f}columns", doc["columns"])
         except DataFormatError as exc:
             raise ConfigError(exc.where, exc.problem) from None
+    names = None
+    if "column_names" in doc:
+        try:
+            names = parse_names(doc["column_names"], f"{f}column_names")
+        except DataFormatError as exc:
+            raise ConfigError(exc.where, exc.problem) from None
+    logs = doc.get("data", [])
+    if isinstance(logs, str):
+        logs = [logs]
+    if not isinstance(logs, list) or not all(isinstance(d, str) and d.strip() for d in logs):
+        raise ConfigError(f"{f}data", f"expected a list of log files, found {_found(logs)}")
     return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
-                             parsimony, columns, doc.get("axis"), doc.get("searches", 1))
+                             parsimony, columns, doc.get("axis"), doc.get("searches", 1),
+                             names, tuple(logs))
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:
@@ -607,3 +628,70 @@ def load_config(path: str | Path) -> AbstractionConfig:
     path = Path(path)
     doc = read_toml(path, ConfigError)
     return parse_config(doc, path.name)
+
+
+def inherit(cfg: AbstractionConfig, previous: Any, *, inputs: Sequence[str], axis: str, ts: float,
+            t_sum: float, where: str = "--initial") -> AbstractionConfig:
+    """The schedule continued from a previous result's rows (the paper's inheritance).
+
+    The previous model's rows seed the first step large enough to hold them
+    (the steps before it are left out: the hierarchy continues where the
+    previous abstraction ended); its parameter values keep their meaning
+    (``a``, decoded), clipped into this run's ranges.
+
+    Parameters
+    ----------
+    cfg : AbstractionConfig
+    previous : EdmResult
+        The previous result (its ``sha256`` is what the new one records).
+    inputs, axis, ts
+        This run's inputs, axis and sample time, which must be the previous one's.
+    t_sum : float
+        This run's record length [s] (its ranges clip the values).
+    where : str
+        For messages (the option or key that named the file).
+
+    Raises
+    ------
+    ConfigError
+        Another axis, other inputs or another sample time (beyond 0.1 %), or a
+        schedule with no step as large as the previous matrix.
+    """
+    name = f"{where} {Path(previous.source).name if previous.source else 'result'}"
+    prev_axis = previous.axis or "rotary"
+    if prev_axis != axis:
+        raise ConfigError(name, f"expected a result of the {axis} axis, found one of the "
+                                f"{prev_axis} axis (its units differ)")
+    prev_inputs = tuple(previous.compensator.matrix.inputs)
+    if prev_inputs != tuple(inputs):
+        raise ConfigError(name, f"expected the inputs {', '.join(inputs)}, found "
+                                f"{', '.join(prev_inputs)} (its rows read them by position)")
+    prev_ts = float(previous.compensator.sample_time)
+    if abs(prev_ts - ts) > 1e-3 * ts:
+        raise ConfigError(name, f"expected the sample time {ts:g} s of the logs, found {prev_ts:g} s "
+                                "(its filters and delays are discretised at it)")
+    comp = previous.compensator
+    rows = []
+    for row in comp.matrix.rows:
+        elements = [(g.element.name, comp.value(g)) for g in row.genes]
+        while len(elements) > 1 and elements[-1][0] == "through":
+            elements.pop()
+        rows.append(InitialRow(prev_inputs[row.input], tuple(elements)))
+    m, n = len(rows), max(len(r.elements) for r in rows)
+    first = next((k for k, s in enumerate(cfg.steps) if s.n_rows >= m and s.n_elements >= n), None)
+    if first is None:
+        largest = cfg.steps[-1]
+        raise ConfigError(name, f"expected a step of the schedule with at least {m} rows of {n} "
+                                f"elements to continue from, found at most {largest.n_rows}x"
+                                f"{largest.n_elements}; add a larger [[step]]")
+    ranges = cfg.resolve_ranges(ts, t_sum)
+    clipped = []
+    for r in rows:
+        els = []
+        for el, a in r.elements:
+            if a is not None:
+                rng = ranges[el]
+                a = min(max(a, rng.low), rng.high)
+            els.append((el, a))
+        clipped.append(InitialRow(r.input, tuple(els)))
+    return replace(cfg, steps=cfg.steps[first:], initial=tuple(clipped))

@@ -143,12 +143,16 @@ class Part:
         Its sample times [s] (for the weighting windows).
     sl : slice or numpy.ndarray
         The samples that count (a slice, or their indices in increasing order).
+    starts : tuple of int
+        Where further logs begin in ``x`` (several logs laid end to end, each
+        simulated from rest); empty for one log.
     """
 
     x: np.ndarray
     y: np.ndarray
     t: np.ndarray
     sl: slice | np.ndarray
+    starts: tuple[int, ...] = ()
 
     @property
     def samples(self) -> int:
@@ -194,7 +198,8 @@ def _times(data: DataLog) -> np.ndarray:
 
 
 def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
-                 settings: ValidationSettings, validate: DataLog | None = None) -> Holdout:
+                 settings: ValidationSettings, validate: DataLog | None = None,
+                 logs: Sequence[DataLog] = ()) -> Holdout:
     """Split the data into what the GA fits and what is held out.
 
     Parameters
@@ -209,6 +214,10 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
         The share held out at the end of ``data`` (unused with ``validate``).
     validate : DataLog, optional
         A second log held out as a whole; the GA then fits all of ``data``.
+    logs : sequence of DataLog
+        The logs ``data`` joins end to end, when several (:func:`join_logs`):
+        each is simulated from rest, and the held-out blocks (or end) are laid
+        out in every one of them.
 
     Returns
     -------
@@ -226,6 +235,7 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
     t = _times(data)
     n = len(y)
     unit = settings.unit
+    starts = log_starts(logs)
     if validate is not None:
         if abs(float(validate.ts) - float(data.ts)) > 1e-6 * float(data.ts):
             raise DataFormatError(f"{validate.source}: sample time",
@@ -235,10 +245,12 @@ def plan_holdout(data: DataLog, *, target: str, inputs: Sequence[str],
         vy = np.asarray(validate.column(target, role="target column"), dtype=float)
         record = {"kind": "file", "file": validate.source, "sha256": validate.sha256,
                   "samples": len(vy)}
-        return Holdout(n, None, Part(x, y, t, slice(0, n)),
+        return Holdout(n, None, Part(x, y, t, slice(0, n), starts),
                        Part(vx, vy, _times(validate), slice(0, len(vy))), record, unit)
     if settings.share == 0.0:
-        return Holdout(n, None, Part(x, y, t, slice(0, n)), None, {"kind": "none"}, unit)
+        return Holdout(n, None, Part(x, y, t, slice(0, n), starts), None, {"kind": "none"}, unit)
+    if starts:
+        return _in_every_log(x, y, t, settings, unit, logs, starts)
     if settings.layout == "blocks":
         return _blocks(x, y, t, settings, unit, data.source)
     n_train = int(round(n * (1.0 - settings.share)))
@@ -277,6 +289,44 @@ def _blocks(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSet
     mask = np.where(held, 0.0, n / int(np.count_nonzero(~held)))
     return Holdout(n, mask, Part(x, y, t, np.flatnonzero(~held)),
                    Part(x, y, t, np.flatnonzero(held)), record, unit)
+
+
+def log_starts(logs: Sequence[DataLog]) -> tuple[int, ...]:
+    """Where each log after the first begins when ``logs`` are laid end to end."""
+    return tuple(int(k) for k in np.cumsum([len(d) for d in logs])[:-1]) if len(logs) > 1 else ()
+
+
+def _in_every_log(x: np.ndarray, y: np.ndarray, t: np.ndarray, settings: ValidationSettings,
+                  unit: str | None, logs: Sequence[DataLog], starts: tuple[int, ...]) -> Holdout:
+    """The held-out layout in each of several logs laid end to end: its blocks (or its end)."""
+    n = len(y)
+    held = np.zeros(n, dtype=bool)
+    spans: list[list[int]] = []
+    at = 0
+    for log in logs:
+        m = len(log)
+        if settings.layout == "blocks":
+            part = _blocks(x[:, at:at + m], y[at:at + m], t[at:at + m], settings, unit, log.source)
+            local = part.record["blocks"]
+        else:
+            keep = int(round(m * (1.0 - settings.share)))
+            if not 1 <= keep < m:
+                raise ConfigError("validation.share",
+                                  f"expected a share that leaves samples on both sides of the "
+                                  f"{m} samples of {log.source}, found {settings.share:g}")
+            local = [[keep, m]]
+        for a, b in local:
+            held[at + a:at + b] = True
+            spans.append([at + a, at + b])
+        at += m
+    record = {"kind": "blocks", "share": settings.share, "count": len(spans), "blocks": spans,
+              "times": [[float(t[a]), float(t[b - 1])] for a, b in spans],
+              "layout": settings.layout,
+              "logs": [{"file": d.source, "rows": [a, a + len(d)]}
+                       for d, a in zip(logs, (0, *starts), strict=True)]}
+    mask = np.where(held, 0.0, n / int(np.count_nonzero(~held)))
+    return Holdout(n, mask, Part(x, y, t, np.flatnonzero(~held), starts),
+                   Part(x, y, t, np.flatnonzero(held), starts), record, unit)
 
 
 def mask_weights(weights: np.ndarray | float, mask: np.ndarray | None) -> np.ndarray | float:
@@ -318,7 +368,7 @@ class Scorer:
         out = self._rows.get(key)
         if out is None:
             with np.errstate(all="ignore"):
-                out = simulate_row(comp, row, p.x[row.input])
+                out = simulate_row(comp, row, p.x[row.input], starts=p.starts)
             self._rows[key] = out
             if len(self._rows) > self._max_rows:
                 self._rows.popitem(last=False)

@@ -1,0 +1,77 @@
+"""Decimation with an anti-alias filter, recorded in the provenance (docs/data.md#decimation)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from edm_sym.application.cli import main
+from edm_sym.core.data import DECIMATE_FILTER, DataLog, decimate, write_csv
+from edm_sym.core.errors import DataFormatError
+
+TS = 1e-4
+
+
+def _log(n: int = 4000) -> DataLog:
+    t = np.arange(n) * TS
+    slow = np.sin(2 * np.pi * 5 * t)
+    fast = 0.5 * np.sin(2 * np.pi * 3900 * t)  # above the new Nyquist frequency (500 Hz at K=10)
+    theta = np.mod(2 * np.pi * 3 * t, 2 * np.pi)
+    return DataLog({"t": t, "omega": slow + fast, "theta_w": theta}, TS, "fast.csv", "0" * 64,
+                   roles={"theta_w": "position_wrapped"})
+
+
+def test_decimation_filters_keeps_the_time_stamps_and_is_recorded() -> None:
+    log = _log()
+    out = decimate(log, 10)
+    assert len(out) == 400 and out.ts == pytest.approx(10 * TS)
+    np.testing.assert_array_equal(out.columns["t"], log.columns["t"][::10])
+    slow = np.sin(2 * np.pi * 5 * out.columns["t"])
+    # The 3.9 kHz tone would alias onto 100 Hz at the kept samples; the filter takes it out.
+    assert np.max(np.abs(out.columns["omega"] - slow)[20:-20]) < 0.02
+    assert np.max(np.abs(log.columns["omega"][::10] - slow)) > 0.2
+    # The wrapped angle keeps its range and its jumps stay jumps.
+    theta = out.columns["theta_w"]
+    assert theta.min() >= 0 and theta.max() < 2 * np.pi
+    want = np.mod(2 * np.pi * 3 * out.columns["t"], 2 * np.pi)
+    err = np.abs(np.angle(np.exp(1j * (theta - want))))
+    assert np.max(err[20:-20]) < 1e-3
+    rec = out.record("abstraction")
+    assert rec["decimate"] == {"factor": 10, "filter": DECIMATE_FILTER}
+    assert "decimate" not in log.record("abstraction")
+    assert decimate(log, 1) is log
+
+
+@pytest.mark.parametrize("factor", [0, -2, 2.5, True])
+def test_a_bad_factor_is_refused(factor) -> None:
+    with pytest.raises(DataFormatError) as info:
+        decimate(_log(), factor)
+    assert info.value.where == "--decimate"
+
+
+def test_a_log_too_short_to_filter_is_refused_naming_the_file() -> None:
+    with pytest.raises(DataFormatError) as info:
+        decimate(_log(20), 11)
+    assert info.value.where == "fast.csv: --decimate"
+
+
+def test_edm_abstract_decimates_and_records_it(tmp_path: Path) -> None:
+    n = 6000
+    t = np.arange(n) * TS
+    omega = np.sin(2 * np.pi * 3 * t)
+    tau = 0.3 * np.tanh(30 * omega) + 0.05 * omega + 0.01 * np.sin(2 * np.pi * 3000 * t)
+    data = write_csv(tmp_path / "fast.csv", {"t": t, "omega": omega, "tau": tau})
+    cfg = tmp_path / "cfg.toml"
+    cfg.write_text("[ga]\npopulation = 12\ngenerations = 2\n\n[[step]]\nn_rows = 2\n"
+                   "n_elements = 2\n")
+    out = tmp_path / "r.json"
+    assert main(["abstract", str(data), "--target", "tau", "--inputs", "omega", "--config",
+                 str(cfg), "--decimate", "10", "--quiet", "--workers", "1", "-o", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["sample_time"] == pytest.approx(10 * TS)
+    (log,) = doc["logs"]
+    assert log["rows"] == 600 and log["decimate"]["factor"] == 10
+    assert log["file"] == "fast.csv (decimated 10)"
