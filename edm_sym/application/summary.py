@@ -118,17 +118,20 @@ def physics_line(result: Any, log: Any) -> str | None:
     comp = result.compensator
     names = comp.matrix.inputs
     role_map = input_roles(names, getattr(result, "roles", {}) or {})
-    x = log.stack(names)
+    logs = list(log) if isinstance(log, list | tuple) else [log]  # several: each from rest
+    xs = [lg.stack(names) for lg in logs]
+    with np.errstate(all="ignore"):
+        rows = np.concatenate([simulate_rows(comp, comp.matrix.rows, x) for x in xs], axis=1)
+    x = np.concatenate(xs, axis=1)
+    target = np.concatenate([lg.column(result.target, role="target column") for lg in logs])
+    log = logs[0]
+    source = ", ".join(str(lg.source) for lg in logs)
     g = log.scalars.get("observer_bandwidth")
     g = float(g) if isinstance(g, int | float) and not isinstance(g, bool) and g > 0 else None
-    with np.errstate(all="ignore"):
-        rows = simulate_rows(comp, comp.matrix.rows, x)
     try:
-        phys = physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows,
-                              target=log.column(result.target, role="target column"),
-                              ts=log.ts, source=str(log.source),
-                              axis=getattr(result, "axis", "rotary"), bandwidth=g,
-                              options=PhysicsOptions())
+        phys = physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows, target=target,
+                              ts=log.ts, source=source, axis=getattr(result, "axis", "rotary"),
+                              bandwidth=g, options=PhysicsOptions())
     except (ValueError, np.linalg.LinAlgError):
         return None
     if phys is None:
@@ -138,7 +141,7 @@ def physics_line(result: Any, log: Any) -> str | None:
                                                      for k, (v, u) in t.parameters.items()
                                                      if k not in ("phase", "peak", "harmonics"))
                      for t in phys.terms) or "no law above the threshold"
-    return f"physics (by behaviour, over {log.source}): {laws}"
+    return f"physics (by behaviour, over {source}): {laws}"
 
 
 def result_flags(result: Any, log: Any = None) -> list[str]:
