@@ -262,3 +262,75 @@ def test_an_interrupt_while_a_class_is_built_is_an_interrupt(capsys) -> None:  #
     parser.set_defaults(func=work)
     assert _dispatch([], parser) == EXIT_INTERRUPTED
     assert capsys.readouterr().err == "edm: interrupted\n"
+
+
+def _busy() -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", "while 1: pass"])
+
+
+# Bigger than QUICK_GA: three steps, pruning from the step bests with their refits (the
+# work an interrupt once waited for), and several worker processes to end.
+LOADED_GA = """
+[ga]
+population = 40
+generations = 40
+continue = "no"
+patience = 0
+local_search = 0
+[[step]]
+n_rows = 2
+n_elements = 3
+[[step]]
+n_rows = 3
+n_elements = 3
+[[step]]
+n_rows = 3
+n_elements = 4
+"""
+
+
+@pytest.mark.parametrize("sig", SIGNALS)
+def test_pipeline_answers_an_interrupt_in_its_abstraction_under_load(tmp_path: Path,
+                                                                      sig: signal.Signals) -> None:
+    # Both cores busy with other work: the answer is still prompt (a liveness bound, not a
+    # benchmark), with result.json whole, the checkpoint kept and nothing else written.
+    (tmp_path / "q.toml").write_text(LOADED_GA)
+    # No LuGre phase: the abstraction is the phase under test.
+    lugre = '[lugre]\nvelocity = "omega"\ntime_limit = 20\n'
+    assert lugre in PIPELINE
+    (tmp_path / "p.toml").write_text(PIPELINE.replace(lugre, ""))
+    ckpt = tmp_path / "result.json.checkpoint"
+
+    def second_step() -> bool:
+        try:
+            state = json.loads(ckpt.read_text())
+            return len(state["finished"]) >= 1 and state["current"] is not None
+        except (OSError, ValueError, KeyError, TypeError):
+            return False
+
+    busy = [_busy(), _busy()]
+    try:
+        proc = _start(["pipeline", "p.toml", "--quiet"], tmp_path)
+        _wait(proc, second_step, "the abstraction's second step", timeout=300)
+        sent = time.monotonic()
+        proc.send_signal(sig)
+        try:
+            _, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        took = time.monotonic() - sent
+    finally:
+        for b in busy:
+            b.kill()
+            b.wait()
+    assert proc.returncode == 130, err
+    assert took < 15, f"exit 130 took {took:.1f} s after the signal"
+    assert "Traceback" not in err, err
+    assert load_result(tmp_path / "result.json").provenance["stop_reason"] == "interrupted"
+    assert ckpt.exists()
+    # Whole files only: the best so far and its checkpoint; no evaluation, no export, no
+    # temporary.
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "p.toml", "q.toml", "result.json", "result.json.checkpoint"]

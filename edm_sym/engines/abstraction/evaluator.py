@@ -104,6 +104,10 @@ from edm_sym.engines.abstraction.stats import EvalStats
 
 __all__ = ["EvalStats", "Evaluator", "row_table"]
 
+#: How long [s] the worker processes together get to end when a run closes; a
+#: straggler (a busy machine, a long chunk) is then killed: it holds no output.
+SHUTDOWN_SECONDS = 3.0
+
 
 class Evaluator:
     """Fitness (eq. 8) of many individuals at once, with cached rows.
@@ -265,12 +269,20 @@ class Evaluator:
         for lane in self.lanes:
             if isinstance(lane, SocketLane):
                 lane.hang_up()
-        for pool in self._pools:
+        pools, self._pools = self._pools, []
+        # Every process is told first, then waited for together: N lanes take one
+        # timeout at most, not N of them; a straggler (a busy machine) is killed.
+        for pool in pools:
             if isinstance(pool, PipeLane):
-                pool.shutdown(wait=wait)
+                pool.stop()
+            else:
+                pool.shutdown(wait=False, cancel_futures=True)
+        deadline = time.monotonic() + SHUTDOWN_SECONDS
+        for pool in pools:
+            if isinstance(pool, PipeLane):
+                pool.shutdown(wait=wait, timeout=max(0.0, deadline - time.monotonic()))
             else:
                 pool.shutdown(wait=wait, cancel_futures=True)
-        self._pools = []
         self.lanes = [LocalLane()]
 
     def __enter__(self) -> Evaluator:

@@ -127,12 +127,17 @@ class PipeLane(ConnectionLane):
         child.close()
         super().__init__(conn)
 
-    def shutdown(self, wait: bool = True) -> None:
-        """End the process: after its tasks (``wait``), or now."""
-        if wait and self._process.is_alive():
+    def stop(self) -> None:
+        """Ask the process to end after its tasks (without waiting for it)."""
+        if self._process.is_alive():
             with contextlib.suppress(OSError):
                 self._conn.send(None)
-            self._process.join(timeout=10)
+
+    def shutdown(self, wait: bool = True, timeout: float = 10.0) -> None:
+        """End the process: after its tasks (``wait``, at most ``timeout`` seconds), or now."""
+        if wait and self._process.is_alive():
+            self.stop()
+            self._process.join(timeout=timeout)
         if self._process.is_alive():
             self._process.kill()
             self._process.join()

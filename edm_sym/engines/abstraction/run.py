@@ -645,11 +645,17 @@ def abstract(
     groups = [o[0] for o in outcomes]
     reasons = [o[1] for o in outcomes]
     made = [o[2] for o in outcomes] if count > 1 else None
-    ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, ts, ranges, n * ts)
-    comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, hold, cfg, select, made)
-    steps = groups[chosen]
     reason = ("interrupted" if "interrupted" in reasons
               else next((r for r in reasons if r != "completed"), "completed"))
+    ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, ts, ranges, n * ts)
+    fin = cfg
+    if reason == "interrupted":
+        # An interrupt is answered at once: the search's own model, scored, with no refit
+        # and no pruning (these take a minute on a long log); --resume finishes the run.
+        fin = replace(cfg, parsimony=replace(cfg.parsimony, prune=False))
+        made = None
+    comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, hold, fin, select, made)
+    steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": int(seed), "package_version": __version__,
                                   "data_sha256": data.sha256, "stop_reason": reason}
@@ -769,8 +775,10 @@ def _one_search(job: _SearchJob, seeds: Sequence[int], files: Sequence[Path | No
     The refits of its step bests are made where it ran, beside the other searches'.
     """
     steps, why = job.run(seeds[k], workers, files[k], resume, limit, report)
-    comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts) if steps else None
-    return steps, why, search_candidates(steps, comp, job.hold, job.cfg) if steps else []
+    if not steps or why == "interrupted":  # an interrupted run exports no refit (see abstract)
+        return steps, why, []
+    comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts)
+    return steps, why, search_candidates(steps, comp, job.hold, job.cfg)
 
 
 def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,
