@@ -217,3 +217,23 @@ def test_an_input_that_only_rises_over_the_log_is_said_to_be_a_clock() -> None:
     # both ways: no clock
     back = DataLog({"t": t, "theta_uw": np.sin(t), "omega": np.cos(t), "tau": np.cos(t)}, TS, "x")
     assert clock_inputs(back, ["theta_uw", "omega"]) == []
+
+
+def test_emps_with_its_data_agrees_with_least_squares_on_the_log(tmp_path: Path) -> None:
+    from conftest import emps_path
+
+    from edm_sym.application.cli import main
+
+    view = tmp_path / "emps_view.csv"
+    assert main(["observe", str(emps_path()), "--position", "qm", "--force", "vir",
+                 "--force-gain", "gtau", "--nominal-inertia", "90", "--axis", "linear",
+                 "-o", str(view)]) == 0
+    log = edm_sym.load_data(view)
+    v, a, y = log.column("qd"), log.column("qdd"), log.column("tau_ext")
+    ls, *_ = np.linalg.lstsq(np.column_stack([np.sign(v), v, a, np.ones_like(v)]), y, rcond=None)
+    doc = edm_sym.describe(ROOT / "examples" / "emps" / "result.json", view).to_json()
+    named = {t["kind"]: t["parameters"] for t in doc["physics"]["terms"]}
+    assert doc["physics"]["reference"] == "target"
+    for kind, param, value in (("coulomb", "level", ls[0]), ("viscous", "coefficient", ls[1]),
+                               ("acceleration", "inertia", ls[2])):
+        assert named[kind][param][0] == pytest.approx(value, rel=0.15), kind
