@@ -445,7 +445,7 @@ def test_the_engine_prints_nothing_and_reports_the_generations_left(
 def test_the_config_example_in_the_docs_is_valid() -> None:
     import re
 
-    from edm_sym.engines.abstraction.schedule import tomllib
+    from edm_sym.core.fileio import tomllib
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "abstraction.md").read_text()
     block = re.search(r"```toml\n(.*?)```", text, re.S).group(1)
