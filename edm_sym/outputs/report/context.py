@@ -256,8 +256,8 @@ def _physics(p: EdmLatexPrinter, model: SymbolicModel, result: Any,
     except (ValueError, np.linalg.LinAlgError):
         phys = None
     if phys is None:
-        return {"laws": [], "notes": [p.text("the physics could not be named by behaviour: no "
-                                             "data log and no recorded ranges")], "source": ""}
+        return {"tables": [], "notes": [p.text("the physics could not be named by behaviour: no "
+                                               "data log and no recorded ranges")], "source": ""}
     laws = []
     for t in phys.terms:
         params = ", ".join(f"{p.text(k.replace('_', ' '))} {p.math(p.number(v))}"
@@ -272,7 +272,9 @@ def _physics(p: EdmLatexPrinter, model: SymbolicModel, result: Any,
                         f"on the probes"))
     notes += [p.text(f"row {b.index} unclassified: {b.reason}") for b in phys.rows if b.reason]
     notes += [p.text(n) for n in phys.notes]
-    return {"laws": laws, "notes": notes, "source": p.text(phys.ranges.source)}
+    # Optional parts are lists of zero or one item (the templates hold no conditions).
+    return {"tables": [{"laws": laws}] if laws else [], "notes": notes,
+            "source": p.text(phys.ranges.source)}
 
 
 def _steps(p: EdmLatexPrinter, result: Any) -> list[dict[str, str]]:
