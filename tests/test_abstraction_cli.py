@@ -64,10 +64,13 @@ def test_abstract_writes_the_result_and_prints_fitness_and_path(
                      f"parsimony: complexity {par['search_complexity']} -> "
                      f"{par['front'][par['selected'] - 1]['complexity']} (front member "
                      f"{par['selected']} of {len(par['front'])}, simplest-within=1)",
-                     start_line(par)]
+                     start_line(par), lines[-1]]
     (chosen,) = (c for c in par["start_candidates"] if c["chosen"])
-    assert lines[-1].startswith(f"search's model: step {chosen['step']} best")
-    assert f"whole-log RMSE {chosen['whole_rmse'][0]:.4g} N m" in lines[-1]
+    assert lines[-2].startswith(f"search's model: step {chosen['step']} best")
+    assert f"whole-log RMSE {chosen['whole_rmse'][0]:.4g} N m" in lines[-2]
+    # last, the physics by behaviour: this log's plant is Coulomb 1 N m + viscous 0.01 N m s/rad
+    assert lines[-1] == ("physics (by behaviour, over log.csv): coulomb level 1 N m; "
+                         "viscous coefficient 0.00999 N m s/rad")
     assert res.inputs == ("omega", "alpha") and res.target == "tau_ext"
     assert res.provenance["seed"] == 3 and len(res.provenance["data_sha256"]) == 64
     assert not checkpoint_path(out).exists()
