@@ -16,12 +16,12 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators, Population
+from edm_sym.engines.abstraction.gain_fit import gain_fit, scale_places
 from edm_sym.engines.abstraction.poles import prefix_has_pole, with_tangent
-from edm_sym.engines.abstraction.polish import gain_fit, scale_places
 from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_keys
 from edm_sym.engines.abstraction.rows import simulate_table
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.abstraction.worker import SimContext, Worker, row_table
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
 N = 3000

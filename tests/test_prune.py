@@ -16,9 +16,9 @@ from edm_sym.core.errors import ConfigError, ResultFormatError
 from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.core.result import front_member, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
+from edm_sym.engines.abstraction.parsimony import ParsimonySettings, parse_parsimony, select
 from edm_sym.engines.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
-from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony, select
-from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
 from edm_sym.engines.abstraction.weighting import Weighting
 from edm_sym.engines.simulate import plain_loop
 
@@ -295,7 +295,7 @@ def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Pa
 ])
 def test_rows_with_a_tangent_pole_inside_their_input_range_are_fragile(
         log: DataLog, rows: list, fragile: list) -> None:
-    from edm_sym.engines.abstraction.validation import fragile_rows
+    from edm_sym.engines.abstraction.holdout import fragile_rows
 
     comp = compensator(rows, len(log))
     assert fragile_rows(comp, log.stack(INPUTS)) == fragile

@@ -60,8 +60,9 @@ def run_cli(args: argparse.Namespace) -> int:
     """
     from edm_sym.core.result import save_result
     from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
-    from edm_sym.engines.abstraction.run import abstract, checkpoint_files
+    from edm_sym.engines.abstraction.run import abstract
     from edm_sym.engines.abstraction.schedule import default_config, load_config
+    from edm_sym.engines.abstraction.searches import checkpoint_files
     from edm_sym.engines.sources import load_data
 
     config = load_config(args.config) if args.config else default_config()
@@ -299,7 +300,7 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
 
 
 def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
-    from edm_sym.engines.abstraction.selection import check_select
+    from edm_sym.engines.abstraction.parsimony import check_select
 
     # The options change their own keys only: the config's criterion, start, refit, tie stay.
     par = config.parsimony

@@ -83,7 +83,8 @@ from edm_sym.engines.abstraction.poles import (
     with_tangent,
 )
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
-from edm_sym.engines.abstraction.rowsim import (
+from edm_sym.engines.abstraction.stats import EvalStats
+from edm_sym.engines.abstraction.worker import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
     Chunk,
@@ -100,7 +101,6 @@ from edm_sym.engines.abstraction.rowsim import (
     worker_for,
     worker_init,
 )
-from edm_sym.engines.abstraction.stats import EvalStats
 
 __all__ = ["EvalStats", "Evaluator", "row_table"]
 
@@ -355,7 +355,7 @@ class Evaluator:
         gy : numpy.ndarray
             ``sum(Lambda * r_i * target)``, shape (m,).
         """
-        from edm_sym.engines.abstraction.rowsim import _gram
+        from edm_sym.engines.abstraction.worker import _gram
 
         return _gram(self._local, [np.asarray(r) for r in rows], list(keys), self.target)
 
@@ -395,15 +395,15 @@ class Evaluator:
             shared stores the batch then runs in this process.
         free : numpy.ndarray, optional
             Shape (P, m) bool: the rows whose scale the gain fit may change
-            (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
+            (:func:`~edm_sym.engines.abstraction.gain_fit.scale_places`).
         scales_out : list, optional
             With ``free``: filled with one entry per individual, its
-            :func:`~edm_sym.engines.abstraction.polish.row_scales` (or None).
+            :func:`~edm_sym.engines.abstraction.gain_fit.row_scales` (or None).
         gain_allowed : bool, optional
             With ``free`` and ``fitted_out``: evaluate each individual's
             gain-fit candidate too, in the worker that fits it (the value says
             whether a ``through`` may become a ``gain``, as for
-            :func:`~edm_sym.engines.abstraction.polish.scale_places`).
+            :func:`~edm_sym.engines.abstraction.gain_fit.scale_places`).
         fitted_out : list, optional
             With ``gain_allowed``: filled with one entry per individual,
             ``(eq. 8, genes)``: its candidate's eq. 8 (NaN: it has none) and

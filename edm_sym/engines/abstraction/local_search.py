@@ -36,7 +36,7 @@ from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Population
-from edm_sym.engines.abstraction.validation import Holdout, mask_weights
+from edm_sym.engines.abstraction.holdout import Holdout, mask_weights
 
 #: Element codes with a continuous parameter.
 PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not None)
