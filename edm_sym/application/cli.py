@@ -672,16 +672,9 @@ def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
         print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
-    import signal
-
-    # SIGTERM (a job scheduler, `kill`) ends a command like Ctrl-C: cleanly, exit 130.
-    old = signal.signal(signal.SIGTERM, _raise_interrupt)
-    try:
-        with warnings.catch_warnings():
-            warnings.showwarning = one_line
-            return _dispatch(argv, parser)
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    with warnings.catch_warnings():
+        warnings.showwarning = one_line
+        return _dispatch(argv, parser)
 
 
 def _files_named(argv: Sequence[str] | None) -> str:
@@ -725,8 +718,7 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"{parser.prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(parser.prog)
     except ExternalToolError as exc:  # LaTeX or a compiler failed: the work failed, not edm_sym
         print(f"{parser.prog}: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_FAILED
@@ -748,8 +740,7 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
 def _failed(prog: str, exc: Exception) -> int:
     """Exit 1 with one line for an error edm_sym did not expect (or 130 for a wrapped Ctrl-C)."""
     if _from_interrupt(exc):
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(prog)
     if os.environ.get("EDM_DEBUG"):
         traceback.print_exc()
     print(f"{prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
@@ -776,13 +767,22 @@ def _raised_by_edm_sym(exc: BaseException) -> bool:
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 
+def _interrupted(prog: str) -> int:
+    """The end of an interrupted command: one line, exit 130."""
+    print(f"{prog}: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
 def _interruptible(prog: str, body: Callable[[], int]) -> int:
     """Run a whole command, start-up included, so that SIGINT and SIGTERM end it with 130.
 
-    The handler is installed before the parser is built and before any heavy
-    import (``edm_sym`` imports nothing heavy itself), and an interrupt that
-    arrives outside :func:`_dispatch` (building the parser, printing a message)
-    still ends in one line, never a traceback.
+    The one place a command's interrupts are set up: SIGTERM (a job scheduler,
+    ``kill``) raises KeyboardInterrupt like Ctrl-C, so it ends a command the
+    same way (``edm abstract`` writes its best result and keeps its
+    checkpoint). The handler is installed before the parser is built and
+    before any heavy import (``edm_sym`` imports nothing heavy itself), and
+    an interrupt that arrives outside :func:`_dispatch` (building the parser,
+    printing a message) still ends in one line, never a traceback.
     """
     import signal
 
@@ -790,8 +790,7 @@ def _interruptible(prog: str, body: Callable[[], int]) -> int:
     try:
         return body()
     except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(prog)
     finally:
         signal.signal(signal.SIGTERM, old)
 
