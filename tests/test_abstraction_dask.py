@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from test_abstraction import SMALL, friction_log, run
+from helpers import SMALL, friction_log, run
 
 from edm_sym.core.result import dumps
 

@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from test_abstraction import TS, friction_log
+from helpers import TS, friction_log
 
 from edm_sym.application.cli import main
 from edm_sym.core.data import DataLog, write_csv
