@@ -424,8 +424,9 @@ def test_the_refit_never_sees_the_held_out_blocks(log: DataLog) -> None:
         return step_candidates(res.steps, res.compensator, hold, max_evaluations=200)
 
     clean = refit(log)
-    assert any(is_refit for _, _, is_refit in clean)
-    assert [(m, k) for m, k, r in clean if not r] == [(s.matrix, s.step) for s in res.steps]
+    assert any(c.refitted for c in clean)
+    assert [(c.matrix, c.step) for c in clean if not c.refitted] == [(s.matrix, s.step)
+                                                                     for s in res.steps]
     assert refit(corrupted_blocks(log)) == clean
 
 

@@ -15,17 +15,17 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-from edm_sym.core.matrix import Compensator, ElementMatrix
+from edm_sym.core.matrix import Compensator
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.holdout import Holdout, Scorer, fragile_rows
-from edm_sym.engines.abstraction.local_search import step_candidates
+from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
 from edm_sym.engines.abstraction.prune import apply_parsimony
 from edm_sym.engines.abstraction.schedule import AbstractionConfig
 
 
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
            cfg: AbstractionConfig, select: str | None = None, *,
-           candidates_in: Sequence[tuple[ElementMatrix, int, bool, int]] | None = None
+           candidates_in: Sequence[Candidate] | None = None
            ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
     """After the search: choose the search's model, prune it, score the exported one.
 
@@ -40,11 +40,11 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     cfg : AbstractionConfig
     select : str, optional
         A selection rule overriding the config's.
-    candidates_in : sequence of (ElementMatrix, int, bool, int), optional
+    candidates_in : sequence of Candidate, optional
         The candidates of the search's model already made (several searches:
         each made its own,
-        :func:`~edm_sym.engines.abstraction.searches.search_candidates`):
-        matrix, step, refitted, search. Each of ``start_candidates`` then names its ``search``.
+        :func:`~edm_sym.engines.abstraction.searches.search_candidates`, and
+        each names its search). Each of ``start_candidates`` then names its ``search``.
 
     Returns
     -------
@@ -66,19 +66,19 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         # on eq. 15's windows often beats the others there (docs/abstraction.md#seed-robustness).
         refit = cfg.parsimony.refit
         cands = (list(candidates_in) if candidates_in is not None
-                 else [(*c, 0) for c in step_candidates(steps, comp, hold, max_evaluations=refit,
-                                                        reject_poles=cfg.steps[-1].ga.reject_poles)])
+                 else step_candidates(steps, comp, hold, max_evaluations=refit,
+                                      reject_poles=cfg.steps[-1].ga.reject_poles))
         sound = [q for q, c in enumerate(cands)
-                 if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
+                 if not fragile_rows(replace(comp, matrix=c.matrix), hold.training.x)]
         pool = sound or list(range(len(cands)))
-        q, candidates = start_candidate([replace(comp, matrix=cands[q][0]) for q in pool],
+        q, candidates = start_candidate([replace(comp, matrix=cands[q].matrix) for q in pool],
                                         scorer, cfg.parsimony.tie)
-        q = pool[q]
-        comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]
+        start = cands[pool[q]]
+        comp, start_step, refitted = replace(comp, matrix=start.matrix), start.step, start.refitted
         for c, r in zip(candidates, pool, strict=True):
-            c.update(step=cands[r][1], refitted=cands[r][2])
+            c.update(step=cands[r].step, refitted=cands[r].refitted)
             if candidates_in is not None:
-                c["search"] = cands[r][3]
+                c["search"] = cands[r].search
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
                                       refit=refit, refitted=refitted)
     if parsimony and candidates:

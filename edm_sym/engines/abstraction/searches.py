@@ -29,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.matrix import Compensator, ElementMatrix
+from edm_sym.core.matrix import Compensator
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.finish import finish
 from edm_sym.engines.abstraction.holdout import Holdout
-from edm_sym.engines.abstraction.local_search import step_candidates
+from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
 from edm_sym.engines.abstraction.schedule import AbstractionConfig
 from edm_sym.engines.abstraction.worker import default_workers, warm_up
 
@@ -125,7 +125,7 @@ def run_searches(job: Any, seeds: Sequence[int], files: Sequence[Path | None], r
 
 def _one_search(job: Any, seeds: Sequence[int], files: Sequence[Path | None], resume: bool,
                 k: int, limit: float | None, report: Callable[[Any], bool | None], *,
-                workers: int | None = 1) -> tuple[list[StepRecord], str, list]:
+                workers: int | None = 1) -> tuple[list[StepRecord], str, list[Candidate]]:
     """Search ``k`` of a run with several, and its candidates for the search's model.
 
     The refits of its step bests are made where it ran, beside the other searches'.
@@ -139,7 +139,7 @@ def _one_search(job: Any, seeds: Sequence[int], files: Sequence[Path | None], re
 
 def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,
                     cfg: AbstractionConfig, select: str | None = None,
-                    cands: Sequence[Sequence[tuple[ElementMatrix, int, bool]]] | None = None
+                    cands: Sequence[Sequence[Candidate]] | None = None
                     ) -> tuple[Compensator, dict[str, Any], dict[str, Any], int]:
     """:func:`~edm_sym.engines.abstraction.finish.finish` over the step bests of one or several
     searches; also which search won.
@@ -160,15 +160,15 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
         out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select)
         return (*out, chosen)
     pooled = [s for k in ran for s in groups[k]]
-    made = [(*c, k) for k in ran for c in (cands[k] if cands is not None
-                                            else search_candidates(groups[k], comp, hold, cfg))]
+    made = [replace(c, search=k) for k in ran
+            for c in (cands[k] if cands is not None else search_candidates(groups[k], comp, hold, cfg))]
     comp, parsimony, final = finish(pooled, comp, hold, cfg, select, candidates_in=made)
     chosen = next(c["search"] for c in parsimony["start_candidates"] if c["chosen"])
     return comp, parsimony, final, chosen
 
 
 def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
-                      cfg: AbstractionConfig) -> list[tuple[ElementMatrix, int, bool]]:
+                      cfg: AbstractionConfig) -> list[Candidate]:
     """One search's candidates for the search's model: its step bests and their refits
     (:func:`~edm_sym.engines.abstraction.local_search.step_candidates`); made where the
     search ran, side by side with the other searches'."""
