@@ -173,7 +173,7 @@ def gain_fit(
         The individuals.
     scales : sequence
         Per individual :func:`row_scales` over its free rows (as
-        :meth:`Evaluator.evaluate` gives them with ``free=``); None: skip it.
+        ``Evaluator.evaluation(..., free=...).scales``); None: skip it.
     places : tuple of numpy.ndarray
         :func:`scale_places` of ``pop.codes``: where each row is scaled.
     ranges : mapping

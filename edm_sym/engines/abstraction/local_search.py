@@ -103,9 +103,9 @@ def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
         state["evals"] += count
         ps = np.repeat(best.ps, count, axis=0)
         ps[:, jj, ii] = points
-        rows: list = []
-        fit = evaluator.evaluate(np.repeat(best.inputs, count, axis=0),
-                                 np.repeat(best.codes, count, axis=0), ps, rows_out=rows)
+        res = evaluator.evaluation(np.repeat(best.inputs, count, axis=0),
+                                   np.repeat(best.codes, count, axis=0), ps, rows=True)
+        fit, rows = res.fitness, res.rows
         for k in range(count):
             if fit[k] < state["best_f"]:
                 state["best_f"], state["best_p"] = float(fit[k]), points[k].copy()

@@ -326,12 +326,11 @@ class _Runner:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
         gain = GAIN in ops.allowed
         places = scale_places(pop.codes, gain)
-        scales: list = []
-        fitted: list = []
         # The lanes make and evaluate the candidates where they fit them: one batch per
         # generation; only the genes of the better ones are written here.
-        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                                      scales_out=scales, gain_allowed=gain, fitted_out=fitted)
+        res = self.evaluator.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                                        gain_allowed=gain)
+        fit, scales, fitted = res.fitness, list(res.scales), res.fitted
         if keep_first:
             scales[0] = None
         made, better = 0, []
