@@ -123,7 +123,7 @@ def c_ns_per_sample(result, log: dict[str, np.ndarray], *, cc: str = "gcc",  # n
 def _ga_rows(result, log: dict[str, np.ndarray]):  # noqa: ANN001, ANN202
     """A function simulating the result's rows as the GA does, with nothing cached."""
     from edm_sym.engines.abstraction.rows import simulate_table
-    from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
+    from edm_sym.engines.abstraction.worker import SimContext, Worker, row_table
     comp = result.compensator
     x = np.ascontiguousarray(input_array(comp.matrix.inputs, log))
     rows = comp.matrix.rows

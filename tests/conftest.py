@@ -1,4 +1,9 @@
-"""Shared fixtures: small hand-written matrices and signals; where the EMPS log is."""
+"""Shared fixtures: small hand-written matrices and signals, the friction log; where the EMPS log is.
+
+Helpers several test modules call (log makers, small configs) are in
+``helpers.py``; a test module imports them from there, never from another
+test module.
+"""
 
 from __future__ import annotations
 
@@ -44,6 +49,24 @@ def coulomb_viscous() -> Compensator:
         ],
     )
     return Compensator(m, TS, {}, 20.0)
+
+
+@pytest.fixture(scope="module")
+def friction_data():  # noqa: ANN201
+    """The 2 s friction log (:func:`helpers.friction_log`) the GA tests fit, one per module."""
+    from helpers import friction_log
+
+    return friction_log(2.0)[0]
+
+
+@pytest.fixture(scope="module")
+def friction_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The 1 s friction log (:func:`helpers.friction_log`) as a CSV file, for ``edm abstract``."""
+    from helpers import friction_log
+
+    from edm_sym.core.data import write_csv
+
+    return write_csv(tmp_path_factory.mktemp("d") / "log.csv", friction_log(1.0)[0].columns)
 
 
 #: The environment variable naming DATA_EMPS.mat, the measured EMPS log (not shipped: its

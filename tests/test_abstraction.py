@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import COULOMB, SMALL, TS, VISCOUS, friction_log, run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -17,31 +18,6 @@ from edm_sym.core.result import dumps, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import GenerationInfo, abstract, parse_config
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
-
-TS = 1e-3
-COULOMB, VISCOUS, NOISE = 1.0, 0.01, 0.05
-
-
-def friction_log(duration: float = 5.0, seed: int = 0, noise: float = NOISE
-                 ) -> tuple[DataLog, float]:
-    """A log made by a known 2-row compensator: Coulomb 1.0 N m + viscous 0.01 N m s/rad.
-
-    The velocity holds steps for the first half and a chirp (as the paper's
-    eq. 9) for the second; the target gets Gaussian noise. Returns the log
-    and the RMS of the noise actually added (the noise floor).
-    """
-    n = int(round(duration / TS))
-    t = np.arange(n) * TS
-    half = duration / 2
-    levels = np.array([5, -5, 15, -15, 30, -30, 50, -50, 2, -2.0])
-    k = np.minimum((t / (half / len(levels))).astype(int), len(levels) - 1)
-    chirp = 20 * np.pi * np.sin(np.pi * (10.0 / (duration - half)) * (t - half) ** 2)
-    omega = np.where(t < half, levels[k], chirp)
-    alpha = np.gradient(omega, TS)
-    e = noise * np.random.default_rng(seed).standard_normal(n)
-    tau = COULOMB * np.sign(omega) + VISCOUS * omega + e
-    cols = {"t": t, "omega": omega, "alpha": alpha, "tau_ext": tau}
-    return DataLog(cols, TS, "friction"), float(np.sqrt(np.mean(e**2)))
 
 
 def steady_state_friction(result, velocity: str = "omega", step: int | None = None
@@ -76,21 +52,6 @@ def steady_state_friction(result, velocity: str = "omega", step: int | None = No
 
 
 STEP_4X2 = {"step": [{"n_rows": 2, "n_elements": 4}]}
-# No restarts (the default, said here): 6 generations a step, the schedule these tests reason about.
-SMALL = {"ga": {"population": 24, "generations": 6, "continue": "no", "restarts": 0},
-         "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 3, "n_elements": 3}]}
-
-
-@pytest.fixture(scope="module")
-def log() -> DataLog:
-    return friction_log(2.0)[0]
-
-
-def run(data: DataLog, doc: dict, **kw) -> object:
-    return abstract(data, target="tau_ext", inputs=["omega", "alpha"],
-                    config=parse_config(doc, "test.toml"), **kw)
-
-
 # -- acceptance: the GA finds Coulomb + viscous friction -------------------------
 
 def test_ga_recovers_coulomb_and_viscous_friction() -> None:
@@ -131,27 +92,27 @@ def test_default_schedule_recovers_friction_on_a_20_s_log(seed: int) -> None:
 
 # -- determinism -----------------------------------------------------------------
 
-def test_same_seed_gives_byte_identical_results_with_any_worker_count(log: DataLog) -> None:
-    one = dumps(run(log, SMALL, seed=5, workers=1))
-    assert dumps(run(log, SMALL, seed=5, workers=1)) == one
-    assert dumps(run(log, SMALL, seed=5, workers=2)) == one
-    assert dumps(run(log, SMALL, seed=6, workers=1)) != one
+def test_same_seed_gives_byte_identical_results_with_any_worker_count(friction_data: DataLog) -> None:
+    one = dumps(run(friction_data, SMALL, seed=5, workers=1))
+    assert dumps(run(friction_data, SMALL, seed=5, workers=1)) == one
+    assert dumps(run(friction_data, SMALL, seed=5, workers=2)) == one
+    assert dumps(run(friction_data, SMALL, seed=6, workers=1)) != one
 
 
-def test_a_thread_pool_executor_gives_the_same_result(log: DataLog) -> None:
+def test_a_thread_pool_executor_gives_the_same_result(friction_data: DataLog) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
-    one = dumps(run(log, SMALL, seed=5, workers=1))
+    one = dumps(run(friction_data, SMALL, seed=5, workers=1))
     with ThreadPoolExecutor(2) as ex:
-        assert dumps(run(log, SMALL, seed=5, executor=ex)) == one
+        assert dumps(run(friction_data, SMALL, seed=5, executor=ex)) == one
         assert not ex._shutdown  # a caller's executor is left running
 
 
 @pytest.mark.parametrize("stop_after", [1, 4, 7, 8, 11])
 def test_resume_after_a_stop_gives_the_uninterrupted_result(
-    log: DataLog, tmp_path: Path, stop_after: int
+    friction_data: DataLog, tmp_path: Path, stop_after: int
 ) -> None:
-    want = dumps(run(log, SMALL, seed=2, workers=1))
+    want = dumps(run(friction_data, SMALL, seed=2, workers=1))
     ckpt = tmp_path / "r.json.checkpoint"
     seen: list[GenerationInfo] = []
 
@@ -159,10 +120,10 @@ def test_resume_after_a_stop_gives_the_uninterrupted_result(
         seen.append(info)
         return len(seen) >= stop_after
 
-    part = run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(friction_data, SMALL, seed=2, workers=1, checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "stopped"
     assert ckpt.exists()
-    again = run(log, SMALL, seed=2, workers=2, checkpoint=ckpt, resume=True)
+    again = run(friction_data, SMALL, seed=2, workers=2, checkpoint=ckpt, resume=True)
     assert dumps(again) == want
     assert not ckpt.exists()  # a completed run removes its checkpoint
 
@@ -170,9 +131,9 @@ def test_resume_after_a_stop_gives_the_uninterrupted_result(
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(stop_after=st.integers(1, 14))
 def test_a_stop_at_a_random_generation_resumes_to_the_same_bytes(
-    log: DataLog, tmp_path_factory: pytest.TempPathFactory, stop_after: int
+    friction_data: DataLog, tmp_path_factory: pytest.TempPathFactory, stop_after: int
 ) -> None:
-    want = _uninterrupted(log)
+    want = _uninterrupted(friction_data)
     ckpt = tmp_path_factory.mktemp("ck") / "c"
     count = [0]
 
@@ -180,21 +141,21 @@ def test_a_stop_at_a_random_generation_resumes_to_the_same_bytes(
         count[0] += 1
         return count[0] >= stop_after
 
-    run(log, SMALL, seed=9, workers=1, checkpoint=ckpt, callback=hook)
-    assert dumps(run(log, SMALL, seed=9, workers=1, checkpoint=ckpt, resume=True)) == want
+    run(friction_data, SMALL, seed=9, workers=1, checkpoint=ckpt, callback=hook)
+    assert dumps(run(friction_data, SMALL, seed=9, workers=1, checkpoint=ckpt, resume=True)) == want
 
 
 _CACHE: dict = {}
 
 
-def _uninterrupted(log: DataLog) -> str:
+def _uninterrupted(friction_data: DataLog) -> str:
     if "r" not in _CACHE:
-        _CACHE["r"] = dumps(run(log, SMALL, seed=9, workers=1))
+        _CACHE["r"] = dumps(run(friction_data, SMALL, seed=9, workers=1))
     return _CACHE["r"]
 
 
-def test_an_interrupt_returns_the_best_so_far_and_resumes(log: DataLog, tmp_path: Path) -> None:
-    want = dumps(run(log, SMALL, seed=4, workers=1))
+def test_an_interrupt_returns_the_best_so_far_and_resumes(friction_data: DataLog, tmp_path: Path) -> None:
+    want = dumps(run(friction_data, SMALL, seed=4, workers=1))
     ckpt = tmp_path / "c"
     count = [0]
 
@@ -203,15 +164,15 @@ def test_an_interrupt_returns_the_best_so_far_and_resumes(log: DataLog, tmp_path
         if count[0] == 5:
             raise KeyboardInterrupt
 
-    part = run(log, SMALL, seed=4, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(friction_data, SMALL, seed=4, workers=1, checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "interrupted"
     assert part.steps[-1].generations == 4
-    again = run(log, SMALL, seed=4, workers=1, checkpoint=ckpt, resume=True)
+    again = run(friction_data, SMALL, seed=4, workers=1, checkpoint=ckpt, resume=True)
     assert dumps(again) == want
 
 
 def test_the_checkpoint_is_written_every_few_seconds_and_whenever_a_run_stops(
-        log: DataLog, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        friction_data: DataLog, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # Writing it after every generation cost 3-6 % of a run; a stop still leaves the
     # state of the last generation, so --resume starts where the run ended.
     import edm_sym.engines.abstraction.run as runmod
@@ -232,7 +193,7 @@ def test_the_checkpoint_is_written_every_few_seconds_and_whenever_a_run_stops(
         seen.append(info)
         return len(seen) >= 9  # in the second step
 
-    run(log, SMALL, seed=3, workers=1, checkpoint=ckpt, callback=hook)
+    run(friction_data, SMALL, seed=3, workers=1, checkpoint=ckpt, callback=hook)
     # The first state, the first step's end, the stop (not the 9 generations between).
     assert written == [0, -1, seen[-1].generation] and seen[-1].generation == 1
     doc = json.loads(ckpt.read_text())
@@ -240,17 +201,17 @@ def test_the_checkpoint_is_written_every_few_seconds_and_whenever_a_run_stops(
     assert len(doc["finished"]) == 1
 
 
-def test_a_checkpoint_of_another_run_is_refused(log: DataLog, tmp_path: Path) -> None:
+def test_a_checkpoint_of_another_run_is_refused(friction_data: DataLog, tmp_path: Path) -> None:
     from edm_sym.core.errors import ConfigError
 
     ckpt = tmp_path / "c"
-    run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
+    run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
     with pytest.raises(ConfigError, match=r"found one of another seed \(1; this run: 2\)"):
-        run(log, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
+        run(friction_data, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
 
 
 @pytest.mark.parametrize("damage", ["rng_state", "codes", "fitness", "step", "ps"])
-def test_a_damaged_checkpoint_is_refused_before_the_run(log: DataLog, tmp_path: Path,
+def test_a_damaged_checkpoint_is_refused_before_the_run(friction_data: DataLog, tmp_path: Path,
                                                         damage: str) -> None:
     # Each edit keeps valid JSON; resumed, they crashed the run (KeyError, IndexError,
     # "Initial guess is outside of provided bounds", exit 1 or a library message).
@@ -258,7 +219,7 @@ def test_a_damaged_checkpoint_is_refused_before_the_run(log: DataLog, tmp_path: 
 
     ckpt = tmp_path / "c"
     seen: list[GenerationInfo] = []
-    run(log, SMALL, seed=1, workers=1, checkpoint=ckpt,
+    run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt,
         callback=lambda info: seen.append(info) or len(seen) >= 3)
     doc = json.loads(ckpt.read_text())
     cur = doc["current"]
@@ -274,14 +235,14 @@ def test_a_damaged_checkpoint_is_refused_before_the_run(log: DataLog, tmp_path: 
         cur["population"]["ps"][0][0][0] = -1.0
     ckpt.write_text(json.dumps(doc, sort_keys=True))
     with pytest.raises(ConfigError, match="damaged or edited") as err:
-        run(log, SMALL, seed=1, workers=1, checkpoint=ckpt, resume=True)
+        run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt, resume=True)
     assert err.value.where == f"{ckpt}: sha256"
 
 
 def test_time_limit_ends_at_a_generation_boundary_with_a_valid_result(
-    log: DataLog, tmp_path: Path
+    friction_data: DataLog, tmp_path: Path
 ) -> None:
-    res = run(log, SMALL, seed=0, workers=1, time_limit=1e-9)
+    res = run(friction_data, SMALL, seed=0, workers=1, time_limit=1e-9)
     assert res.provenance["stop_reason"] == "time_limit"
     assert len(res.steps) == 1 and res.steps[0].generations == 0
     back = load_result(save_result(res, tmp_path / "r.json"))
@@ -290,11 +251,11 @@ def test_time_limit_ends_at_a_generation_boundary_with_a_valid_result(
 
 # -- the algorithm's guarantees ----------------------------------------------------
 
-def test_the_best_never_gets_worse_and_steps_inherit(log: DataLog) -> None:
+def test_the_best_never_gets_worse_and_steps_inherit(friction_data: DataLog) -> None:
     doc = {"ga": {"population": 24, "generations": 15, "continue": "no"},
            "step": [{"n_rows": 1, "n_elements": 3}, {"n_rows": 2, "n_elements": 4},
                     {"n_rows": 3, "n_elements": 4}]}
-    res = run(log, doc, seed=3, workers=1)
+    res = run(friction_data, doc, seed=3, workers=1)
     for s in res.steps:
         assert all(b <= a for a, b in zip(s.history, s.history[1:], strict=False))
         assert s.history[-1] == min(s.history)
@@ -307,7 +268,7 @@ def test_the_best_never_gets_worse_and_steps_inherit(log: DataLog) -> None:
         assert cur.matrix.n_rows == prev.matrix.n_rows + 1
 
 
-def test_a_step_starts_from_the_previous_best_as_it_is(log: DataLog) -> None:
+def test_a_step_starts_from_the_previous_best_as_it_is(friction_data: DataLog) -> None:
     # No restarts: the second population drawn is the second step's.
     doc = {"ga": {"population": 12, "generations": 3, "continue": "no", "restarts": 0},
            "step": [{"n_rows": 1, "n_elements": 3}, {"n_rows": 2, "n_elements": 4}]}
@@ -321,7 +282,7 @@ def test_a_step_starts_from_the_previous_best_as_it_is(log: DataLog) -> None:
 
     Operators.random_population = spy
     try:
-        res = run(log, doc, seed=1, workers=1)
+        res = run(friction_data, doc, seed=1, workers=1)
     finally:
         Operators.random_population = orig
     first = seen[1].matrix(0, ["omega", "alpha"])  # the second step's seed individual
@@ -345,50 +306,50 @@ def fitted(res: object, n: int) -> np.ndarray:
     return keep
 
 
-def test_a_human_model_seeds_the_first_step(log: DataLog) -> None:
+def test_a_human_model_seeds_the_first_step(friction_data: DataLog) -> None:
     doc = {"ga": {"population": 16, "generations": 2, "continue": "no"},
            "initial": {"rows": [{"input": "omega", "elements": [["sign"], ["gain", 1.0]]},
                                 {"input": "omega", "elements": [["gain", 0.01]]}]},
            "step": [{"n_rows": 2, "n_elements": 4}]}
-    res = run(log, doc, seed=0, workers=1)
-    keep = fitted(res, len(log))
-    data_floor = fitness((log.columns["tau_ext"] - np.sign(log.columns["omega"])
-                          - 0.01 * log.columns["omega"])[keep])
+    res = run(friction_data, doc, seed=0, workers=1)
+    keep = fitted(res, len(friction_data))
+    data_floor = fitness((friction_data.columns["tau_ext"] - np.sign(friction_data.columns["omega"])
+                          - 0.01 * friction_data.columns["omega"])[keep])
     assert res.steps[0].history[0] <= data_floor * (1 + 1e-9)
 
 
-def test_a_restricted_element_set_is_respected(log: DataLog) -> None:
+def test_a_restricted_element_set_is_respected(friction_data: DataLog) -> None:
     names = ["through", "gain", "sign", "lpf"]
     doc = {"ga": {"population": 16, "generations": 5, "continue": "no", "elements": names},
            "step": [{"n_rows": 2, "n_elements": 3}]}
-    res = run(log, doc, seed=0, workers=1)
+    res = run(friction_data, doc, seed=0, workers=1)
     allowed = {BY_NAME[n].code for n in names}
     for s in res.steps:
         assert {g.code for r in s.matrix.rows for g in r.genes} <= allowed
 
 
-def test_windows_weighting_ignores_the_masked_part(log: DataLog) -> None:
+def test_windows_weighting_ignores_the_masked_part(friction_data: DataLog) -> None:
     # Only the first 0.5 s count: the target there is explained by the data alone.
     doc = {"ga": {"population": 16, "generations": 3, "continue": "no"},
            "step": [{"n_rows": 2, "n_elements": 3,
                      "weighting": {"windows": [[0.0, 0.5, 1.0]]}}]}
-    res = run(log, doc, seed=0, workers=1)
-    sim = simulate(res, log).total
-    lam = (log.columns["t"] < 0.5).astype(float)
+    res = run(friction_data, doc, seed=0, workers=1)
+    sim = simulate(res, friction_data).total
+    lam = (friction_data.columns["t"] < 0.5).astype(float)
     # The fitness is eq. 8 over the samples the GA fits (20 % are held out in blocks).
-    keep = fitted(res, len(log))
+    keep = fitted(res, len(friction_data))
     assert np.count_nonzero(keep) == 1600
     assert res.fitness == pytest.approx(
-        fitness((log.columns["tau_ext"] - sim)[keep], lam[keep]), rel=1e-9)
+        fitness((friction_data.columns["tau_ext"] - sim)[keep], lam[keep]), rel=1e-9)
     assert res.steps[0].weighting == {"constant": 1.0, "windows": [[0.0, 0.5, 1.0]],
                                       "otherwise": 0.0}
 
 
 # -- the result file --------------------------------------------------------------
 
-def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: Path) -> None:
+def test_the_result_records_steps_provenance_and_ranges(friction_data: DataLog, tmp_path: Path) -> None:
     doc = {**SMALL, "ranges": {"gain": {"low": -3.0, "high": 3.0}}}
-    res = run(log, doc, seed=7, workers=1)
+    res = run(friction_data, doc, seed=7, workers=1)
     path = save_result(res, tmp_path / "r.json")
     back = load_result(path)
     raw = json.loads(path.read_text())
@@ -398,40 +359,40 @@ def test_the_result_records_steps_provenance_and_ranges(log: DataLog, tmp_path: 
     assert [s["n_rows"] for s in raw["steps"]] == [2, 3]
     assert all(s["evaluations"] > 0 and len(s["history"]) == s["generations"] + 1
                for s in raw["steps"])
-    ranges = default_ranges(TS, len(log) * TS)
+    ranges = default_ranges(TS, len(friction_data) * TS)
     ranges["gain"] = ranges["gain"].__class__(-3.0, 3.0, "linear")
     assert dict(back.compensator.ranges) == ranges
-    assert back.compensator.record_length == pytest.approx(len(log) * TS)
+    assert back.compensator.record_length == pytest.approx(len(friction_data) * TS)
     # The recorded fitness is eq. 8 of the reference simulator on the training part.
-    keep = fitted(back, len(log))
-    ref = fitness((log.columns["tau_ext"] - simulate(back, log).total)[keep])
+    keep = fitted(back, len(friction_data))
+    ref = fitness((friction_data.columns["tau_ext"] - simulate(back, friction_data).total)[keep])
     assert back.fitness == pytest.approx(ref, rel=1e-14)
     # The exported matrix is the selected member of the pruned front; without
     # pruning it is the last step's best.
     par = back.parsimony
     assert matrix_to_json(back.matrix) == par["front"][par["selected"] - 1]["matrix"]
-    plain = run(log, {**doc, "parsimony": {"prune": False}}, seed=7, workers=1)
+    plain = run(friction_data, {**doc, "parsimony": {"prune": False}}, seed=7, workers=1)
     assert plain.matrix == res.steps[-1].matrix and not plain.parsimony
 
 
 def test_the_progress_bar_shows_step_generation_best_and_rate(
-    log: DataLog, capsys: pytest.CaptureFixture
+    friction_data: DataLog, capsys: pytest.CaptureFixture
 ) -> None:
     from edm_sym.application.progress import ProgressReporter
 
     with ProgressReporter("test", bar=True) as reporter:
-        run(log, SMALL, seed=0, workers=1, callback=reporter.abstraction)
+        run(friction_data, SMALL, seed=0, workers=1, callback=reporter.abstraction)
     err = capsys.readouterr().err
     assert "step 2/2 (3x3)" in err and "best" in err and "eval/s" in err and "gen 6" in err
 
 
 @pytest.mark.parametrize("restarts", [0, 1])
 def test_the_engine_prints_nothing_and_reports_the_generations_left(
-    log: DataLog, capsys: pytest.CaptureFixture, restarts: int
+    friction_data: DataLog, capsys: pytest.CaptureFixture, restarts: int
 ) -> None:
     seen = []
     doc = {**SMALL, "ga": {**SMALL["ga"], "restarts": restarts}}
-    run(log, doc, seed=0, workers=1, callback=seen.append)
+    run(friction_data, doc, seed=0, workers=1, callback=seen.append)
     assert capsys.readouterr() == ("", "")
     # continue = "no", 6 generations per step, each restart 6 more (its generations count
     # on): the fewest generations left count down to 0 over both steps.

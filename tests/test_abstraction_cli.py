@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
-from test_abstraction import friction_log
+from helpers import friction_log
 
 from edm_sym.application.abstract_cli import checkpoint_path, start_line
 from edm_sym.application.cli import main
@@ -30,12 +30,6 @@ n_elements = 3
 """
 
 
-@pytest.fixture(scope="module")
-def data_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    log, _ = friction_log(1.0)
-    return write_csv(tmp_path_factory.mktemp("d") / "log.csv", log.columns)
-
-
 def _config(tmp_path: Path, text: str = QUICK) -> Path:
     path = tmp_path / "cfg.toml"
     path.write_text(text)
@@ -43,10 +37,10 @@ def _config(tmp_path: Path, text: str = QUICK) -> Path:
 
 
 def test_abstract_writes_the_result_and_prints_fitness_and_path(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     out = tmp_path / "res.json"
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega, alpha",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega, alpha",
                "--config", str(_config(tmp_path)), "--seed", "3", "-o", str(out),
                "--workers", "1", "--quiet"])
     lines = capsys.readouterr().out.splitlines()
@@ -94,11 +88,11 @@ def test_the_search_models_line_says_when_the_held_out_blocks_chose() -> None:
 
 
 def test_prune_tolerance_keeps_the_configs_other_parsimony_keys(
-    data_csv: Path, tmp_path: Path
+    friction_csv: Path, tmp_path: Path
 ) -> None:
     out = tmp_path / "res.json"
     cfg = _config(tmp_path, QUICK + '\n[parsimony]\nstart = "last-step"\n')
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega",
                "--config", str(cfg), "--prune-tolerance", "0.02", "-o", str(out),
                "--workers", "1", "--quiet"])
     assert rc == 0
@@ -109,10 +103,10 @@ def test_prune_tolerance_keeps_the_configs_other_parsimony_keys(
 
 
 def test_time_limit_exits_0_with_the_best_so_far(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     out = tmp_path / "res.json"
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega",
                "--config", str(_config(tmp_path)), "--time-limit", "1e-6", "-o", str(out),
                "--workers", "1"])
     assert rc == 0
@@ -138,7 +132,7 @@ def test_time_limit_exits_0_with_the_best_so_far(
      "--scheduler: expected a dask scheduler at tcp://127.0.0.1:9, found none"),
 ])
 def test_bad_input_exits_2_with_one_line(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str
 ) -> None:
     texts = {"bad": "[ga]\npopulaton = 3\n", "type": "[ga]\npopulation = '64'\n",
              "toml": "[ga\n", "searches": "searches = '2'\n"}
@@ -149,7 +143,7 @@ def test_bad_input_exits_2_with_one_line(
             a = str(tmp_path / "nope.toml") if key == "missing" else str(
                 _config(tmp_path, texts[key]))
         fixed.append(a)
-    argv = ["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+    argv = ["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega",
             "-o", str(tmp_path / "r.json"), "--workers", "1"]
     for k in range(0, len(fixed), 2):
         flag = fixed[k]
@@ -168,12 +162,12 @@ def test_bad_input_exits_2_with_one_line(
 # -- --resume with a checkpoint it cannot continue ----------------------------------------
 
 
-def _stopped_run(data_csv: Path, cfg: Path, out: Path, *, searches: int = 1) -> None:
+def _stopped_run(friction_csv: Path, cfg: Path, out: Path, *, searches: int = 1) -> None:
     """A run stopped after its first generation, leaving its checkpoint(s) beside ``out``."""
     from edm_sym.engines.abstraction import abstract, load_config
     from edm_sym.engines.sources import load_data
 
-    abstract(load_data(data_csv), target="tau_ext", inputs=["omega", "alpha"],
+    abstract(load_data(friction_csv), target="tau_ext", inputs=["omega", "alpha"],
              config=load_config(cfg), seed=3, workers=1, checkpoint=checkpoint_path(out),
              callback=lambda info: True, searches=searches)
     if searches > 1:  # the stop came before the second search began: it has the first's
@@ -206,17 +200,17 @@ def _set(ckpt: Path, **keys: object) -> None:
                               "(r.json.checkpoint.search0), found one of a run of one search"),
 ], ids=["newer", "older", "format", "seed", "inputs", "target", "config", "data", "searches"])
 def test_a_checkpoint_resume_cannot_continue_is_refused_and_left_as_it_was(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, change: dict, args: list,
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, change: dict, args: list,
     expect: str
 ) -> None:
     cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
     out = tmp_path / "r.json"
-    _stopped_run(data_csv, cfg, out)
+    _stopped_run(friction_csv, cfg, out)
     ckpt = checkpoint_path(out)
     if change:
         _set(ckpt, **change)
     before = ckpt.read_bytes()
-    argv = {"--data": str(data_csv), "--target": "tau_ext", "--inputs": "omega,alpha",
+    argv = {"--data": str(friction_csv), "--target": "tau_ext", "--inputs": "omega,alpha",
             "--config": str(cfg), "--seed": "3"}
     for k in range(0, len(args), 2):
         argv[args[k]] = args[k + 1]
@@ -240,15 +234,15 @@ def test_a_checkpoint_resume_cannot_continue_is_refused_and_left_as_it_was(
 
 
 def test_checkpoints_of_several_searches_are_refused_for_one(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
     out = tmp_path / "r.json"
-    _stopped_run(data_csv, cfg, out, searches=2)
+    _stopped_run(friction_csv, cfg, out, searches=2)
     files = sorted(tmp_path.glob("r.json.checkpoint.search*"))
     assert len(files) == 2
     before = [f.read_bytes() for f in files]
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
                "--config", str(cfg), "--seed", "3", "-o", str(out), "--workers", "1",
                "--quiet", "--resume"])
     err = capsys.readouterr().err
@@ -260,15 +254,15 @@ def test_checkpoints_of_several_searches_are_refused_for_one(
 
 
 def test_a_second_search_of_another_version_is_refused_before_the_first_runs(
-    data_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
+    friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     cfg = _config(tmp_path, QUICK.replace("generations = 4", "generations = 50"))
     out = tmp_path / "r.json"
-    _stopped_run(data_csv, cfg, out, searches=2)
+    _stopped_run(friction_csv, cfg, out, searches=2)
     first, second = sorted(tmp_path.glob("r.json.checkpoint.search*"))
     _set(second, version=7)
     before = first.read_bytes(), second.read_bytes()
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
                "--config", str(cfg), "--seed", "3", "-o", str(out), "--workers", "2",
                "--searches", "2", "--quiet", "--resume"])
     err = capsys.readouterr().err

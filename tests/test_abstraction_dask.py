@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from test_abstraction import SMALL, friction_log, run
+from helpers import SMALL, friction_log, run
 
 from edm_sym.core.result import dumps
 
@@ -12,14 +12,14 @@ distributed = pytest.importorskip("distributed")
 
 def _workers_with_the_run(client) -> int:  # noqa: ANN001
     counts = client.run(lambda: len(__import__(
-        "edm_sym.engines.abstraction.rowsim", fromlist=["_WORKERS"])._WORKERS))
+        "edm_sym.engines.abstraction.worker", fromlist=["_WORKERS"])._WORKERS))
     return sum(1 for v in counts.values() if v)
 
 
 def _workers_sharing_the_stores(client) -> int:  # noqa: ANN001
     # A LocalCluster's workers run on this machine: they map the run's stores in /dev/shm.
     shared = client.run(lambda: any(w.rows is not None and w.prefix_rows is not None
-                                    for w in __import__("edm_sym.engines.abstraction.rowsim",
+                                    for w in __import__("edm_sym.engines.abstraction.worker",
                                                         fromlist=["_WORKERS"])._WORKERS.values()))
     return sum(1 for v in shared.values() if v)
 

@@ -16,12 +16,12 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import Evaluator
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Operators, Population
+from edm_sym.engines.abstraction.gain_fit import gain_fit, scale_places
 from edm_sym.engines.abstraction.poles import prefix_has_pole, with_tangent
-from edm_sym.engines.abstraction.polish import gain_fit, scale_places
 from edm_sym.engines.abstraction.prefixes import plan_prefixes, prefix_keys
 from edm_sym.engines.abstraction.rows import simulate_table
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.abstraction.worker import SimContext, Worker, row_table
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
 N = 3000
@@ -206,13 +206,12 @@ def test_parallel_evaluation_gives_the_same_bits(signals, mode: str) -> None:
         assert np.array_equal(a, b)
 
 
-def test_rows_out_gives_every_individuals_rows_and_the_gram_matrix(signals) -> None:
+def test_the_rows_of_every_individual_and_the_gram_matrix(signals) -> None:
     x, y = signals
     pop = _population(4, p=6)
     with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
         ev.evaluate(pop.inputs, pop.codes, pop.ps)
-        rows: list = []
-        ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)  # all from the memo
+        rows = ev.evaluation(pop.inputs, pop.codes, pop.ps, rows=True).rows  # all from the memo
         assert len(rows) == 6 and all(r is not None for r in rows)
         keys, outs = rows[2]
         gram, gy = ev.gram(keys, outs)
@@ -289,8 +288,7 @@ def test_a_sine_reading_an_input_uses_cached_sines_to_rounding(signals, name: st
     pop.codes[0, 0] = [BY_NAME[name].code, BY_NAME["gain"].code]
     pop.ps[0, 0] = [0.37, 0.8]
     with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=1) as ev:
-        rows: list = []
-        ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+        rows = ev.evaluation(pop.inputs, pop.codes, pop.ps, rows=True).rows
         got = rows[0][1][0]
     comp = Compensator(pop.matrix(0, NAMES), TS, {}, N * TS)
     want = simulate_row(comp, comp.matrix.rows[0], x[pop.inputs[0, 0]])
@@ -409,7 +407,7 @@ def test_the_time_lanes_share_is_counted_within_the_evaluation(signals, lanes: s
         assert st.idle_seconds == 0.0  # an executor's tasks are not timed on this clock
 
 
-def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
+def test_the_rows_are_made_on_every_lane_with_the_shared_store(signals) -> None:
     # The local search wants the rows back: with the forked pool they are in the
     # shared store, so the batch still runs on both lanes, with the same bits.
     x, y = signals
@@ -417,8 +415,8 @@ def test_rows_out_runs_on_every_lane_with_the_shared_store(signals) -> None:
     got = {}
     for workers in (1, 2):
         with Evaluator(x, y, TS, default_ranges(TS, N * TS), workers=workers) as ev:
-            rows: list = []
-            fit = ev.evaluate(pop.inputs, pop.codes, pop.ps, rows_out=rows)
+            res = ev.evaluation(pop.inputs, pop.codes, pop.ps, rows=True)
+            fit, rows = res.fitness, res.rows
             got[workers] = (fit, [[np.array(r) for r in outs] for _, outs in rows])
             pids = set(ev.stats.peak_rss)
         assert len(pids) == workers
@@ -481,9 +479,8 @@ def test_the_lanes_evaluate_each_gain_fit_candidate_as_the_main_process_would(
         ref.set_weights(lam)
         for pop in pops:
             places = scale_places(pop.codes, gain_allowed=True)
-            scales: list = []
-            fit = ref.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                               scales_out=scales)
+            res = ref.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0)
+            fit, scales = res.fitness, res.scales
             idx, cand = gain_fit(pop, scales, places, ranges)
             want.append((fit, idx, cand, ref.evaluate(cand.inputs, cand.codes, cand.ps)))
     pool = ThreadPoolExecutor(2) if mode == "thread executor" else None
@@ -493,9 +490,9 @@ def test_the_lanes_evaluate_each_gain_fit_candidate_as_the_main_process_would(
         ev.set_weights(lam)
         for pop, (fit, idx, cand, cfit) in zip(pops, want, strict=True):
             places = scale_places(pop.codes, gain_allowed=True)
-            fitted: list = []
-            got = ev.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                              scales_out=[], gain_allowed=True, fitted_out=fitted)
+            res = ev.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                                gain_allowed=True)
+            got, fitted = res.fitness, res.fitted
             assert np.array_equal(got, fit)
             made = [k for k, f in enumerate(fitted) if not np.isnan(f[0])]
             assert made == idx.tolist()
@@ -526,8 +523,7 @@ def test_a_candidate_that_is_another_individuals_new_row_loses_no_slot(signals) 
     with Evaluator(x, y, TS, ranges, workers=1) as ref:
         for pop in pops:
             places = scale_places(pop.codes, gain_allowed=True)
-            scales: list = []
-            ref.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0, scales_out=scales)
+            scales = ref.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0).scales
             _, cand = gain_fit(pop, scales, places, ranges)
             both = Population.concat([pop, cand])
             batches.append((both, ref.evaluate(both.inputs, both.codes, both.ps)))
@@ -535,8 +531,8 @@ def test_a_candidate_that_is_another_individuals_new_row_loses_no_slot(signals) 
         assert ev.shared
         for both, want in batches:
             places = scale_places(both.codes, gain_allowed=True)
-            got = ev.evaluate(both.inputs, both.codes, both.ps, free=places[0] >= 0,
-                              scales_out=[], gain_allowed=True, fitted_out=[])
+            got = ev.evaluation(both.inputs, both.codes, both.ps, free=places[0] >= 0,
+                                gain_allowed=True).fitness
             assert np.array_equal(got, want)
             for store in (ev.store, ev.prefixes):
                 assert len(store) + len(set(store._free)) == store.slots

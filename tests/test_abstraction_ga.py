@@ -8,7 +8,7 @@ import pytest
 from edm_sym.core.elements import BY_NAME, REGISTRY, default_ranges
 from edm_sym.core.matrix import make_matrix
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, allowed_codes, rank
-from edm_sym.engines.abstraction.polish import gain_fit, row_scales, scale_places, scale_position
+from edm_sym.engines.abstraction.gain_fit import gain_fit, row_scales, scale_places, scale_position
 from edm_sym.engines.abstraction.schedule import GaSettings
 
 P, M, N_EL = 40, 3, 4

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_abstraction import SMALL, TS, friction_log
+from helpers import SMALL, TS, friction_log
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, default_ranges
@@ -17,11 +17,6 @@ from edm_sym.engines.abstraction import run as run_module
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Population
 from edm_sym.engines.abstraction.local_search import free_parameters, tune_parameters
-
-
-@pytest.fixture(scope="module")
-def log() -> DataLog:
-    return friction_log(2.0)[0]
 
 
 def run(data: DataLog, doc: dict, **kw) -> object:
@@ -126,7 +121,7 @@ def test_a_relay_band_inside_the_noise_at_rest_is_widened_by_the_scan() -> None:
 
 
 def test_a_step_stagnating_calls_the_local_search_unless_it_is_off(
-        log: DataLog, monkeypatch: pytest.MonkeyPatch) -> None:
+        friction_data: DataLog, monkeypatch: pytest.MonkeyPatch) -> None:
     calls: list[float] = []
     orig = run_module.tune_parameters
 
@@ -136,10 +131,10 @@ def test_a_step_stagnating_calls_the_local_search_unless_it_is_off(
 
     monkeypatch.setattr(run_module, "tune_parameters", spy)
     doc = {**SMALL, "ga": {**SMALL["ga"], "local_search": 2}}
-    run(log, doc, seed=1, workers=1)
+    run(friction_data, doc, seed=1, workers=1)
     assert calls
     calls.clear()
-    run(log, {**SMALL, "ga": {**SMALL["ga"], "local_search": 0}}, seed=1, workers=1)
+    run(friction_data, {**SMALL, "ga": {**SMALL["ga"], "local_search": 0}}, seed=1, workers=1)
     assert not calls
 
 
@@ -152,26 +147,26 @@ def _with(doc: dict, **ga) -> dict:
     return {**doc, "ga": {**doc["ga"], **ga}}
 
 
-def test_restarts_continue_a_stagnating_step_and_never_lose_the_best(log: DataLog) -> None:
-    plain = run(log, _with(RESTART, restarts=0), seed=3, workers=1)
-    again = run(log, _with(RESTART, restarts=2), seed=3, workers=1)
+def test_restarts_continue_a_stagnating_step_and_never_lose_the_best(friction_data: DataLog) -> None:
+    plain = run(friction_data, _with(RESTART, restarts=0), seed=3, workers=1)
+    again = run(friction_data, _with(RESTART, restarts=2), seed=3, workers=1)
     for a, b in zip(plain.steps, again.steps, strict=True):
         assert b.generations > a.generations
         assert all(np.diff(b.history) <= 0)  # the elites survive a restart
     assert again.steps[0].fitness <= plain.steps[0].fitness
 
 
-def test_restarts_are_deterministic_with_any_worker_count(log: DataLog) -> None:
+def test_restarts_are_deterministic_with_any_worker_count(friction_data: DataLog) -> None:
     doc = _with(RESTART, restarts=1)
-    one = dumps(run(log, doc, seed=4, workers=1))
-    assert dumps(run(log, doc, seed=4, workers=2)) == one
+    one = dumps(run(friction_data, doc, seed=4, workers=1))
+    assert dumps(run(friction_data, doc, seed=4, workers=2)) == one
 
 
 @pytest.mark.parametrize("stop_after", [5, 9, 14])
 def test_a_run_with_restarts_resumes_to_the_same_bytes(
-        log: DataLog, tmp_path: Path, stop_after: int) -> None:
+        friction_data: DataLog, tmp_path: Path, stop_after: int) -> None:
     doc = _with(RESTART, restarts=1)
-    want = dumps(run(log, doc, seed=2, workers=1))
+    want = dumps(run(friction_data, doc, seed=2, workers=1))
     ckpt = tmp_path / "c"
     count = [0]
 
@@ -179,8 +174,8 @@ def test_a_run_with_restarts_resumes_to_the_same_bytes(
         count[0] += 1
         return count[0] >= stop_after
 
-    run(log, doc, seed=2, workers=1, checkpoint=ckpt, callback=hook)
-    assert dumps(run(log, doc, seed=2, workers=1, checkpoint=ckpt, resume=True)) == want
+    run(friction_data, doc, seed=2, workers=1, checkpoint=ckpt, callback=hook)
+    assert dumps(run(friction_data, doc, seed=2, workers=1, checkpoint=ckpt, resume=True)) == want
 
 
 @pytest.mark.parametrize(("key", "value"), [("restarts", -1), ("local_search", -1),

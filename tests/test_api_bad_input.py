@@ -252,7 +252,7 @@ def test_identify_lugre_refuses_a_negative_seed() -> None:
 
 
 def test_a_selection_within_an_infinite_share_is_refused() -> None:
-    from edm_sym.engines.abstraction.selection import check_select
+    from edm_sym.engines.abstraction.parsimony import check_select
 
     assert check_select("simplest-within=1e300", "select") == "simplest-within=1e300"
     with pytest.raises(ConfigError, match="select: expected simplest-within=PCT with a finite"):

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_abstraction import friction_log
 
 from edm_sym.application.cli import main
 from edm_sym.core import budget
@@ -23,18 +22,11 @@ from edm_sym.core.budget import (
     format_bytes,
     format_seconds,
 )
-from edm_sym.core.data import write_csv
 from edm_sym.core.errors import BudgetError, BudgetWarning
 from edm_sym.engines.abstraction.run import check_budget
 from edm_sym.engines.abstraction.schedule import parse_config
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "auger" / "result.json"
-
-
-@pytest.fixture(scope="module")
-def data_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    log, _ = friction_log(1.0)
-    return write_csv(tmp_path_factory.mktemp("d") / "log.csv", log.columns)
 
 
 def _err(capsys: pytest.CaptureFixture) -> str:
@@ -104,12 +96,12 @@ def test_the_default_schedule_on_the_auger_log_fits() -> None:
     ("[ga]\ngenerations = 10000000\npatience = 0\n", r"needs at least about [\d.]+ (days|years) "
                                                      r"of CPU time"),
 ])
-def test_abstract_refuses_absurd_sizes_before_any_work(data_csv: Path, tmp_path: Path, capsys,
+def test_abstract_refuses_absurd_sizes_before_any_work(friction_csv: Path, tmp_path: Path, capsys,
                                                        toml: str, figure: str) -> None:
     cfg = tmp_path / "big.toml"
     cfg.write_text(toml)
     out = tmp_path / "r.json"
-    rc = main(["abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega",
+    rc = main(["abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega",
                "--config", str(cfg), "-o", str(out), "--quiet"])
     err = _err(capsys)
     assert rc == 2
@@ -117,7 +109,7 @@ def test_abstract_refuses_absurd_sizes_before_any_work(data_csv: Path, tmp_path:
     assert not out.exists() and not (tmp_path / "r.json.checkpoint").exists()
 
 
-def test_a_time_limit_bounds_the_time_estimate(data_csv: Path) -> None:
+def test_a_time_limit_bounds_the_time_estimate(friction_csv: Path) -> None:
     cfg = parse_config({"ga": {"generations": 10**7, "patience": 0}})
     with pytest.raises(BudgetError, match="CPU time"):
         check_budget(cfg, 800, 1, workers=1)

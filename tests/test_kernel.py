@@ -20,8 +20,8 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.abstraction.rows import simulate_table
-from edm_sym.engines.abstraction.rowsim import SimContext, Worker, row_table
 from edm_sym.engines.abstraction.schedule import GaSettings
+from edm_sym.engines.abstraction.worker import SimContext, Worker, row_table
 from edm_sym.engines.kernel import program
 from edm_sym.engines.simulate import simulate_row
 

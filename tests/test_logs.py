@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_abstraction import friction_log
+from helpers import friction_log
 
 import edm_sym
 from edm_sym.application.cli import main

@@ -13,6 +13,7 @@ import jsonschema
 import numpy as np
 import pytest
 from conftest import emps_path
+from helpers import COMPLIANT, SHA, STIFF, TS, synthetic, write_corrupted
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy import signal
@@ -33,31 +34,6 @@ from edm_sym.engines.lugre import (
     steady_state,
     weighted_rmse,
 )
-
-TS = 1e-3
-SHA = "0123456789abcdef" * 4
-
-STIFF = LuGreParams(v_s=1.0, tau_c=1.0, tau_s=1.6, z0=0.0, sigma0=1e6, sigma1=30.0, sigma2=0.01)
-COMPLIANT = LuGreParams(v_s=2.0, tau_c=0.8, tau_s=1.2, z0=0.0, sigma0=2e3, sigma1=5.0, sigma2=0.015)
-
-
-def paper_profile(ts: float = TS, duration: float = 20.0) -> np.ndarray:
-    """Velocity like the paper's abstraction log (Sec. IV-A).
-
-    0-10 s: velocity steps in both directions at growing levels (through a
-    20 ms first-order lag, as a velocity loop would track them); after 10 s
-    the chirp of eq. 9, ``20 pi sin(2 pi 0.5 (t - 10)^2)``.
-    """
-    t = np.arange(int(round(duration / ts))) * ts
-    levels = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 50.0, 62.8]
-    sequence = [s * a for a in levels for s in (1.0, -1.0)]
-    hold = 10.0 / len(sequence)
-    t_step = t[t < 10.0]
-    steps = np.array(sequence)[np.minimum((t_step / hold).astype(int), len(sequence) - 1)]
-    b, a = signal.butter(1, 1.0 / (2.0 * np.pi * 0.02) / (0.5 / ts))
-    t_chirp = t[t >= 10.0]
-    chirp = 20.0 * np.pi * np.sin(2.0 * np.pi * 0.5 * (t_chirp - 10.0) ** 2)
-    return np.concatenate([signal.lfilter(b, a, steps), chirp])
 
 
 def friction(p: LuGreParams, v: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -255,13 +231,6 @@ def test_weighted_rmse_is_eq8():
 
 
 # ------------------------------------------------------------ identification
-
-
-def synthetic(params: LuGreParams, duration: float = 20.0, noise: float = 0.01, seed: int = 1):
-    v = paper_profile(TS, duration)
-    tau = simulate_lugre(params, v, TS)
-    rng = np.random.default_rng(seed)
-    return v, tau, tau + noise * np.max(np.abs(tau)) * rng.standard_normal(len(tau))
 
 
 @pytest.mark.slow
@@ -545,32 +514,11 @@ def test_missing_or_binary_file_is_refused(tmp_path):
         load_lugre(path)
 
 
-JSON_VALUES = st.recursive(
-    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=5),
-    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=4), inner, max_size=3),
-    max_leaves=6,
-)
-
-
 def leaf_paths(doc, prefix=()):
     for key, value in doc.items():
         if isinstance(value, dict):
             yield from leaf_paths(value, (*prefix, key))
         yield (*prefix, key)
-
-
-def write_corrupted(doc: dict, where: tuple, data, tmp_path: Path) -> Path:  # noqa: ANN001
-    """Replace (with a drawn JSON value) or delete ``doc[where]``; write it as lugre.json."""
-    node = doc
-    for key in where[:-1]:
-        node = node[key]
-    if data.draw(st.booleans()):
-        node[where[-1]] = data.draw(JSON_VALUES)
-    else:
-        del node[where[-1]]
-    path = tmp_path / "lugre.json"
-    path.write_text(json.dumps(doc))
-    return path
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -11,9 +11,9 @@ from pathlib import Path
 import jsonschema
 import numpy as np
 import pytest
+from helpers import COMPLIANT, SHA, STIFF, TS, paper_profile, synthetic, write_corrupted
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_lugre import COMPLIANT, SHA, STIFF, TS, paper_profile, synthetic, write_corrupted
 
 import edm_sym.engines.lugre as lugre
 from edm_sym.application.cli import main

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_abstraction import friction_log
 
 from edm_sym.application.progress import ProgressReporter, format_seconds
 from edm_sym.core.data import write_csv
@@ -38,12 +37,6 @@ n_elements = 2
 """
 
 
-@pytest.fixture(scope="module")
-def data_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    log, _ = friction_log(1.0)
-    return write_csv(tmp_path_factory.mktemp("d") / "log.csv", log.columns)
-
-
 def _edm(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     """``edm`` in a child process whose stderr is a pipe, not a terminal."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -51,18 +44,18 @@ def _edm(*args: str, cwd: Path) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=300)
 
 
-def _abstract(data_csv: Path, tmp_path: Path, *extra: str) -> subprocess.CompletedProcess:
+def _abstract(friction_csv: Path, tmp_path: Path, *extra: str) -> subprocess.CompletedProcess:
     cfg = tmp_path / "cfg.toml"
     cfg.write_text(QUICK)
-    return _edm("abstract", str(data_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
+    return _edm("abstract", str(friction_csv), "--target", "tau_ext", "--inputs", "omega,alpha",
                 "--config", str(cfg), "--workers", "1", "-o", str(tmp_path / "res.json"),
                 *extra, cwd=tmp_path)
 
 
 def test_abstract_off_a_terminal_prints_progress_lines_and_a_summary(
-    data_csv: Path, tmp_path: Path
+    friction_csv: Path, tmp_path: Path
 ) -> None:
-    proc = _abstract(data_csv, tmp_path)
+    proc = _abstract(friction_csv, tmp_path)
     assert proc.returncode == 0, proc.stderr
     lines = [ln for ln in proc.stderr.splitlines() if ln.startswith("edm abstract: step ")]
     # The first generation and each new step give a line at once (then one every 5 s).
@@ -78,8 +71,8 @@ def test_abstract_off_a_terminal_prints_progress_lines_and_a_summary(
     assert err[-1] == "edm abstract: flags: none" or "see `edm describe" in err[-1]
 
 
-def test_quiet_prints_no_progress(data_csv: Path, tmp_path: Path) -> None:
-    proc = _abstract(data_csv, tmp_path, "--quiet")
+def test_quiet_prints_no_progress(friction_csv: Path, tmp_path: Path) -> None:
+    proc = _abstract(friction_csv, tmp_path, "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert not [ln for ln in proc.stderr.splitlines() if " gen " in ln or "eval/s" in ln]
     assert proc.stdout.splitlines()[0] == f"wrote {tmp_path / 'res.json'}"

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_abstraction import TS, friction_log
+from helpers import TS, friction_log
 
 from edm_sym.application.cli import export_main, main
 from edm_sym.core.data import DataLog, write_csv
@@ -16,18 +16,13 @@ from edm_sym.core.errors import ConfigError, ResultFormatError
 from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.core.result import front_member, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
+from edm_sym.engines.abstraction.parsimony import ParsimonySettings, parse_parsimony, select
 from edm_sym.engines.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
-from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony, select
-from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
 from edm_sym.engines.abstraction.weighting import Weighting
 from edm_sym.engines.simulate import plain_loop
 
 INPUTS = ("omega", "alpha")
-
-
-@pytest.fixture(scope="module")
-def log() -> DataLog:
-    return friction_log(2.0)[0]  # tau = 1.0 sgn(omega) + 0.01 omega + noise
 
 
 def compensator(rows: list, n_samples: int) -> Compensator:
@@ -49,8 +44,8 @@ PLANTED = [
 ]
 
 
-def scorer(log: DataLog) -> Scorer:
-    hold = plan_holdout(log, target="tau_ext", inputs=INPUTS,
+def scorer(friction_data: DataLog) -> Scorer:
+    hold = plan_holdout(friction_data, target="tau_ext", inputs=INPUTS,
                         settings=ValidationSettings(layout="end"))
     return Scorer(hold, Weighting())
 
@@ -67,10 +62,10 @@ def test_complexity_counts_rows_active_elements_and_state() -> None:
     assert complexity(comp, comp.matrix) == 5 + 10 + 20 + 1 + 2
 
 
-def test_planted_useless_rows_cancelling_rows_and_a_delay_are_pruned(log: DataLog) -> None:
-    sc = scorer(log)
-    comp, record = apply_parsimony(compensator(PLANTED, len(log)), sc, ParsimonySettings())
-    truth = sc.criterion(compensator(TRUTH, len(log)))
+def test_planted_useless_rows_cancelling_rows_and_a_delay_are_pruned(friction_data: DataLog) -> None:
+    sc = scorer(friction_data)
+    comp, record = apply_parsimony(compensator(PLANTED, len(friction_data)), sc, ParsimonySettings())
+    truth = sc.criterion(compensator(TRUTH, len(friction_data)))
     assert names(comp) == [("omega", ("power_gain",)), ("omega", ("sign",))] or names(comp) == [
         ("omega", ("power_gain",)), ("omega", ("sign", "gain"))]
     assert sc.criterion(comp) <= 1.01 * truth
@@ -78,26 +73,26 @@ def test_planted_useless_rows_cancelling_rows_and_a_delay_are_pruned(log: DataLo
     assert record["front"][record["selected"] - 1]["complexity"] <= 5
 
 
-def test_the_front_is_pareto_and_its_numbers_recompute(log: DataLog) -> None:
-    sc = scorer(log)
-    comp0 = compensator(PLANTED, len(log))
+def test_the_front_is_pareto_and_its_numbers_recompute(friction_data: DataLog) -> None:
+    sc = scorer(friction_data)
+    comp0 = compensator(PLANTED, len(friction_data))
     front = prune(comp0, sc)
     cx = [m.complexity for m in front]
     cr = [m.criterion for m in front]
     assert cx == sorted(set(cx)) and all(a > b for a, b in zip(cr, cr[1:], strict=False))
-    y = log.columns["tau_ext"]
+    y = friction_data.columns["tau_ext"]
     for m in front:  # unguarded: the held-out RMSE
         comp = Compensator(m.matrix, TS, comp0.ranges, comp0.record_length)
-        e = y - plain_loop(comp, log).sum(axis=0)
+        e = y - plain_loop(comp, friction_data).sum(axis=0)
         assert m.criterion == pytest.approx(np.sqrt(np.mean(e[1600:] ** 2)), rel=1e-9)
     _, record = apply_parsimony(comp0, sc, ParsimonySettings())
-    e0 = y - plain_loop(comp0, log).sum(axis=0)
+    e0 = y - plain_loop(comp0, friction_data).sum(axis=0)
     v0, t0 = np.sqrt(np.mean(e0[1600:] ** 2)), np.sqrt(np.mean(e0[:1600] ** 2))
     sc.guard(comp0)
     for m, rec in zip(prune(comp0, sc), record["front"], strict=True):
         comp = Compensator(m.matrix, TS, comp0.ranges, comp0.record_length)
         assert rec["matrix"] == matrix_to_json(m.matrix)
-        e = y - plain_loop(comp, log).sum(axis=0)
+        e = y - plain_loop(comp, friction_data).sum(axis=0)
         v, t = np.sqrt(np.mean(e[1600:] ** 2)), np.sqrt(np.mean(e[:1600] ** 2))
         # Guarded by the training part: the worse of the two relative changes.
         assert rec["criterion"][0] == pytest.approx(v0 * max(v / v0, t / t0), rel=1e-9)
@@ -148,10 +143,10 @@ TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
         "step": [{"n_rows": 2, "n_elements": 3}, {"n_rows": 4, "n_elements": 3}]}
 
 
-def test_abstract_exports_the_selected_member_and_is_deterministic(log: DataLog,
+def test_abstract_exports_the_selected_member_and_is_deterministic(friction_data: DataLog,
                                                                    tmp_path: Path) -> None:
     def run(**kw: object) -> object:
-        return abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+        return abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
                         config=parse_config(TINY, "t.toml"), **kw)
 
     res = run()
@@ -243,10 +238,10 @@ def test_cli_bad_parsimony_options_exit_2_with_one_line(
     assert len(err) == 1 and err[0].startswith(message), err
 
 
-def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path: Path) -> None:
+def test_the_report_shows_the_front_as_a_table_and_a_plot(friction_data: DataLog, tmp_path: Path) -> None:
     from edm_sym.outputs.report import write_report
 
-    res = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+    res = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
                    config=parse_config(TINY, "t.toml"))
     par = res.parsimony
     for k in (par["selected"], 1):
@@ -264,19 +259,19 @@ def test_the_report_shows_the_front_as_a_table_and_a_plot(log: DataLog, tmp_path
         assert "held out from the GA".lower() in tex.lower()
 
 
-def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Path) -> None:
+def test_a_checkpoint_resumes_under_another_selection(friction_data: DataLog, tmp_path: Path) -> None:
     # The parsimony settings act after the search, so they are not part of the run's identity.
     from edm_sym.core.result import dumps
 
     ckpt = tmp_path / "r.json.checkpoint"
     cfg = parse_config(TINY, "t.toml")
-    stopped = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1, config=cfg,
+    stopped = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1, config=cfg,
                        checkpoint=ckpt, callback=lambda info: info.step == 2)
     assert stopped.provenance["stop_reason"] == "stopped" and ckpt.exists()
     other = parse_config({**TINY, "parsimony": {"tolerance": 0.5}}, "t.toml")
-    resumed = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+    resumed = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
                        config=other, checkpoint=ckpt, resume=True, select="best")
-    fresh = abstract(log, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
+    fresh = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
                      config=other, select="best")
     assert dumps(resumed) == dumps(fresh)
     assert not ckpt.exists()
@@ -294,11 +289,11 @@ def test_a_checkpoint_resumes_under_another_selection(log: DataLog, tmp_path: Pa
       ("omega", [("tan_phase", 1.5), ("gain", 1.0)])], [1]),
 ])
 def test_rows_with_a_tangent_pole_inside_their_input_range_are_fragile(
-        log: DataLog, rows: list, fragile: list) -> None:
-    from edm_sym.engines.abstraction.validation import fragile_rows
+        friction_data: DataLog, rows: list, fragile: list) -> None:
+    from edm_sym.engines.abstraction.holdout import fragile_rows
 
-    comp = compensator(rows, len(log))
-    assert fragile_rows(comp, log.stack(INPUTS)) == fragile
+    comp = compensator(rows, len(friction_data))
+    assert fragile_rows(comp, friction_data.stack(INPUTS)) == fragile
 
 
 def _arrays(comp: Compensator, n: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -320,11 +315,11 @@ def _arrays(comp: Compensator, n: int = 3) -> tuple[np.ndarray, np.ndarray, np.n
       ("omega", [("tan_phase", 1.5), ("gain", 1.0)])], [1]),
 ])
 def test_the_ga_gives_an_individual_with_a_pole_in_range_an_infinite_fitness(
-        log: DataLog, rows: list, fragile: list) -> None:
+        friction_data: DataLog, rows: list, fragile: list) -> None:
     from edm_sym.engines.abstraction import Evaluator
 
-    comp = compensator(rows, len(log))
-    x, y = log.stack(INPUTS), log.columns["tau_ext"]
+    comp = compensator(rows, len(friction_data))
+    x, y = friction_data.stack(INPUTS), friction_data.columns["tau_ext"]
     arrays = _arrays(comp)
     with Evaluator(x, y, TS, comp.ranges, workers=1) as ev:
         plain = ev.evaluate(*arrays)[0]

@@ -242,7 +242,7 @@ def _relief_case(gene_p: float, element: str, tau_gain: float):  # noqa: ANN202
     from edm_sym.core.data import DataLog
     from edm_sym.core.elements import default_ranges
     from edm_sym.core.matrix import Compensator, make_matrix
-    from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
+    from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
     from edm_sym.engines.abstraction.weighting import Weighting
 
     n, ts = 4000, 1e-3
@@ -283,8 +283,8 @@ def test_relieve_bounds_moves_a_gain_whose_factor_another_gene_can_take() -> Non
     from edm_sym.core.data import DataLog
     from edm_sym.core.elements import default_ranges
     from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
     from edm_sym.engines.abstraction.prune import relieve_bounds
-    from edm_sym.engines.abstraction.validation import Scorer, ValidationSettings, plan_holdout
     from edm_sym.engines.abstraction.weighting import Weighting
     from edm_sym.engines.simulate import simulate_rows
 

@@ -10,14 +10,14 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from test_abstraction import TS, friction_log
+from helpers import TS, friction_log
 
 from edm_sym.application.cli import main
 from edm_sym.core.data import DataLog, write_csv
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.result import dumps, load_result, matrix_to_json, parse_result, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
-from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
+from edm_sym.engines.abstraction.holdout import ValidationSettings, parse_validation
 from edm_sym.engines.simulate import plain_loop
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -344,8 +344,8 @@ def test_step_bests_tied_on_the_whole_log_are_told_apart_by_the_held_out_blocks(
     """Step 2 is 1 % better over the whole log (80 % fitted) and far worse held out."""
     from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
     from edm_sym.core.result import StepRecord
-    from edm_sym.engines.abstraction.run import finish
-    from edm_sym.engines.abstraction.validation import plan_holdout
+    from edm_sym.engines.abstraction.finish import finish
+    from edm_sym.engines.abstraction.holdout import plan_holdout
 
     t = np.arange(1500) * TS
     omega, s = np.sin(2 * np.pi * 0.7 * t), np.cos(2 * np.pi * 3.1 * t)
@@ -412,8 +412,8 @@ def test_step_bests_refitted_on_the_whole_training_part_are_candidates(log: Data
 
 
 def test_the_refit_never_sees_the_held_out_blocks(log: DataLog) -> None:
+    from edm_sym.engines.abstraction.holdout import plan_holdout
     from edm_sym.engines.abstraction.local_search import step_candidates
-    from edm_sym.engines.abstraction.validation import plan_holdout
 
     res = run(log, NO_REFIT)
     settings = ValidationSettings()
@@ -424,8 +424,9 @@ def test_the_refit_never_sees_the_held_out_blocks(log: DataLog) -> None:
         return step_candidates(res.steps, res.compensator, hold, max_evaluations=200)
 
     clean = refit(log)
-    assert any(is_refit for _, _, is_refit in clean)
-    assert [(m, k) for m, k, r in clean if not r] == [(s.matrix, s.step) for s in res.steps]
+    assert any(c.refitted for c in clean)
+    assert [(c.matrix, c.step) for c in clean if not c.refitted] == [(s.matrix, s.step)
+                                                                     for s in res.steps]
     assert refit(corrupted_blocks(log)) == clean
 
 
@@ -475,7 +476,7 @@ def test_the_paper_s_last_step_and_eq8_criterion_on_request(log: DataLog) -> Non
     ({"refit": 2.5}, "parsimony.refit: expected an integer >= 0, found 2.5"),
 ])
 def test_parsimony_criterion_and_start_are_checked(doc: dict, message: str) -> None:
-    from edm_sym.engines.abstraction.selection import parse_parsimony
+    from edm_sym.engines.abstraction.parsimony import parse_parsimony
 
     with pytest.raises(ConfigError, match=message):
         parse_parsimony("c.toml: parsimony", doc)

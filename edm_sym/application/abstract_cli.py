@@ -11,7 +11,6 @@ result an uninterrupted run gives.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -27,10 +26,6 @@ def checkpoint_path(output: str | Path) -> Path:
     """The checkpoint next to an output file: ``<output>.checkpoint``."""
     out = Path(output)
     return out.with_name(out.name + ".checkpoint")
-
-
-def _raise_interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt
 
 
 def _warn_flags(result: EdmResult, output: Path, data) -> None:  # noqa: ANN001
@@ -60,8 +55,9 @@ def run_cli(args: argparse.Namespace) -> int:
     """
     from edm_sym.core.result import save_result
     from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
-    from edm_sym.engines.abstraction.run import abstract, checkpoint_files
+    from edm_sym.engines.abstraction.run import abstract
     from edm_sym.engines.abstraction.schedule import default_config, load_config
+    from edm_sym.engines.abstraction.searches import checkpoint_files
     from edm_sym.engines.sources import load_data
 
     config = load_config(args.config) if args.config else default_config()
@@ -122,7 +118,8 @@ def run_cli(args: argparse.Namespace) -> int:
               file=sys.stderr)
     from edm_sym.application.progress import ProgressReporter
 
-    old = signal.signal(signal.SIGTERM, _raise_interrupt)
+    # Ctrl-C and SIGTERM (both a KeyboardInterrupt: cli._interruptible) end the search;
+    # abstract() returns the best so far and keeps the checkpoint, and it is written below.
     try:
         with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
             result = abstract(data, target=target, inputs=inputs, config=config,
@@ -138,8 +135,6 @@ def run_cli(args: argparse.Namespace) -> int:
         if exc.where in option:
             raise ConfigError(option[exc.where], exc.problem) from None
         raise
-    finally:
-        signal.signal(signal.SIGTERM, old)
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})
@@ -299,7 +294,7 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
 
 
 def _parsimony_options(config, args: argparse.Namespace):  # noqa: ANN001, ANN202
-    from edm_sym.engines.abstraction.selection import check_select
+    from edm_sym.engines.abstraction.parsimony import check_select
 
     # The options change their own keys only: the config's criterion, start, refit, tie stay.
     par = config.parsimony

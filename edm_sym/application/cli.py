@@ -17,6 +17,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
 from edm_sym.core.fileio import check_outputs
@@ -68,6 +69,26 @@ TS_HELP = "sample time [s] of a log without a 't' column"
 ROLES_HELP = "time, target, position, position_wrapped, velocity, acceleration or input"
 
 
+#: The options several subcommands take, defined once: flags, type, choices, metavar and
+#: default. Each subcommand says in its help what the option means there.
+_SHARED_OPTIONS: dict[str, tuple[tuple[str, ...], dict[str, Any]]] = {
+    "--ts": (("--ts",), {"type": _positive_float, "metavar": "SECONDS"}),
+    "--seed": (("--seed",), {"type": _seed, "default": 0, "metavar": "N"}),
+    "--axis": (("--axis",), {"choices": ["rotary", "linear"]}),
+    "-o": (("-o", "--output"), {}),
+}
+
+
+def _add_shared(p: argparse.ArgumentParser, option: str, text: str, **settings: Any) -> None:
+    """Add one of :data:`_SHARED_OPTIONS` to subcommand ``p``, with its help ``text`` there.
+
+    ``settings`` are a subcommand's own argparse settings over the shared ones
+    (``-o``'s metavar and default; ``flags`` replaces the option's flags).
+    """
+    flags, shared = _SHARED_OPTIONS[option]
+    p.add_argument(*settings.pop("flags", flags), **{**shared, **settings}, help=text)
+
+
 def _add_column_args(p: argparse.ArgumentParser, *, roles: bool = True, axis: bool = True) -> None:
     """``--time-column``, ``--role`` and ``--axis`` of a command that reads a log (docs/data.md)."""
     p.add_argument("--time-column", metavar="COL",
@@ -80,9 +101,8 @@ def _add_column_args(p: argparse.ArgumentParser, *, roles: bool = True, axis: bo
                        help=f"what a column is: {ROLES_HELP} (repeatable; docs/data.md"
                             "#columns-and-roles)")
     if axis:
-        p.add_argument("--axis", choices=["rotary", "linear"],
-                       help="the axis, which sets the SI units: rotary (rad, N m) or linear (m, N) "
-                            "(default: the model's, else rotary)")
+        _add_shared(p, "--axis", "the axis, which sets the SI units: rotary (rad, N m) or linear "
+                               "(m, N) (default: the model's, else rotary)")
 
 
 def _columns(args: argparse.Namespace):  # noqa: ANN202
@@ -103,8 +123,8 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--target", required=True, choices=["c", "python", "latex", "test", "all"],
                    help="C header and source, a Python module, the LaTeX report, the C "
                         "verification kit (test), or all of c, python and latex")
-    p.add_argument("-o", "--out-dir", metavar="DIR",
-                   help="output folder (default: generated/<folder holding RESULT>/)")
+    _add_shared(p, "-o", "output folder (default: generated/<folder holding RESULT>/)",
+                flags=("-o", "--out-dir"), metavar="DIR")
     p.add_argument("--prefix", default="edm_comp", help="file and symbol prefix (default edm_comp)")
     p.add_argument("--real", default="double", choices=["float", "double", "q31", "q15"],
                    help="the C real type, or an integer-only fixed-point build (default double)")
@@ -118,13 +138,12 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--eval-data", metavar="DATA", nargs="+",
                    help="evaluation log(s), for the report (the first) and the summary")
     p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
-    p.add_argument("--ts", type=_positive_float, help="sample time of logs without a 't' column")
+    _add_shared(p, "--ts", "sample time of logs without a 't' column")
     p.add_argument("--front-member", type=int, metavar="K",
                    help="export member K (1-based) of the result's parsimony front instead of "
                         "the selected one")
-    p.add_argument("--axis", choices=["rotary", "linear"],
-                   help="the units of the outputs: rotary (rad, N m) or linear (m, N) (default: "
-                        "the result's axis)")
+    _add_shared(p, "--axis", "the units of the outputs: rotary (rad, N m) or linear (m, N) "
+                             "(default: the result's axis)")
     p.set_defaults(func=_cmd_export)
 
 
@@ -158,7 +177,7 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print the stable JSON of docs/describe.md")
     p.add_argument("--threshold", type=_percent, default=1.0, metavar="PCT",
                    help="a row below this share of the target's RMS is negligible (default 1)")
-    p.add_argument("--ts", type=_positive_float, help="sample time of a log without a 't' column")
+    _add_shared(p, "--ts", "sample time of a log without a 't' column")
     p.add_argument("--resample", action="store_true",
                    help="resample a log whose sample time differs from the result's by more than "
                         "0.1 %% onto its grid (default: refuse it)")
@@ -241,14 +260,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: the columns given an input role with --role or [columns])")
     p.add_argument("--config", metavar="FILE.toml",
                    help="the schedule and GA settings (default: the default schedule, docs/abstraction.md)")
-    p.add_argument("--seed", type=_seed, default=0, help="random seed; the same seed gives the same "
-                   "result.json (default 0)")
+    _add_shared(p, "--seed", "random seed; the same seed gives the same result.json (default 0)")
     p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
                    help="end the search at this wall time and write the best so far (default: none, "
                         "the config's generation budget)")
-    p.add_argument("-o", "--output", default="result.json", metavar="RESULT.json",
-                   help="the result file (default result.json; a checkpoint is kept beside it)")
-    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    _add_shared(p, "-o", "the result file (default result.json; a checkpoint is kept beside it)",
+                default="result.json", metavar="RESULT.json")
+    _add_shared(p, "--ts", TS_HELP)
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
@@ -288,11 +306,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
     p.add_argument("data", metavar="DATA", nargs="+",
                    help=DATA_HELP + "; several logs are each simulated from rest")
-    p.add_argument("-o", "--output", metavar="OUT.csv",
-                   help="output CSV (default: <DATA stem>_sim.csv in the current folder; with "
-                        "several logs a folder for them)")
-    p.add_argument("--ts", type=_positive_float,
-                   help="sample time [s] of a log without a 't' column (default: the model's)")
+    _add_shared(p, "-o", "output CSV (default: <DATA stem>_sim.csv in the current folder; with "
+                         "several logs a folder for them)", metavar="OUT.csv")
+    _add_shared(p, "--ts", "sample time [s] of a log without a 't' column (default: the model's)")
     p.add_argument("--resample", action="store_true",
                    help="resample a log whose sample time differs from the model's by more than "
                         "0.1 %% onto the model's grid (default: refuse it)")
@@ -305,9 +321,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "family-N, draw N of the family of plants with known truth")
     p.add_argument("--excitation", required=True, choices=["abstraction", "evaluation"],
                    help="velocity steps then the chirp of eq. 9 (abstraction), or eq. 17 (evaluation)")
-    p.add_argument("-o", "--output", metavar="DATA.csv",
-                   help="output CSV (default: <preset>_<excitation>.csv)")
-    p.add_argument("--seed", type=_seed, default=0, help="noise seed (default 0)")
+    _add_shared(p, "-o", "output CSV (default: <preset>_<excitation>.csv)", metavar="DATA.csv")
+    _add_shared(p, "--seed", "noise seed (default 0)")
     p.set_defaults(func=_cmd_plant)
 
     p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
@@ -316,8 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
     p.add_argument("--reuse", action="store_true",
                    help="keep an existing lugre.json / result.json (evaluate and export only)")
-    p.add_argument("--axis", choices=["rotary", "linear"],
-                   help="the axis, over the file's [data] axis (default: the file's, else rotary)")
+    _add_shared(p, "--axis", "the axis, over the file's [data] axis (default: the file's, else rotary)")
     p.set_defaults(func=_cmd_pipeline)
 
     p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
@@ -332,9 +346,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the nominal mass or inertia the observer subtracts times the acceleration")
     p.add_argument("--cutoff", type=_positive_float, default=100.0, metavar="HZ",
                    help="corner of the zero-phase filter on the position (default 100 Hz)")
-    p.add_argument("-o", "--output", default="observer.csv", metavar="OUT.csv",
-                   help="output CSV (default observer.csv)")
-    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    _add_shared(p, "-o", "output CSV (default observer.csv)", default="observer.csv",
+                metavar="OUT.csv")
+    _add_shared(p, "--ts", TS_HELP)
     _add_column_args(p)
     p.set_defaults(func=_cmd_observe)
 
@@ -343,17 +357,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", metavar="COL",
                    help="the torque column the model fits (or --role COL=target)")
     p.add_argument("--velocity", metavar="COL", help="the velocity column (or --role COL=velocity)")
-    p.add_argument("--seed", type=_seed, default=0, help="random seed of the global stage (default 0)")
+    _add_shared(p, "--seed", "random seed of the global stage (default 0)")
     p.add_argument("--time-limit", type=_positive_float, metavar="SECONDS",
                    help="end the identification at this wall time (default: none)")
     p.add_argument("--method", default="scipy", choices=["scipy", "ga", "both"],
                    help="scipy's global + local search, the project's GA, or both compared "
                         "(default scipy; docs/lugre.md)")
-    p.add_argument("-o", "--output", default="lugre.json", metavar="LUGRE.json",
-                   help="the LuGre file (default lugre.json)")
+    _add_shared(p, "-o", "the LuGre file (default lugre.json)", default="lugre.json",
+                metavar="LUGRE.json")
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
-    p.add_argument("--ts", type=_positive_float, metavar="SECONDS", help=TS_HELP)
+    _add_shared(p, "--ts", TS_HELP)
     _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
 
@@ -672,16 +686,9 @@ def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
         print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
 
-    import signal
-
-    # SIGTERM (a job scheduler, `kill`) ends a command like Ctrl-C: cleanly, exit 130.
-    old = signal.signal(signal.SIGTERM, _raise_interrupt)
-    try:
-        with warnings.catch_warnings():
-            warnings.showwarning = one_line
-            return _dispatch(argv, parser)
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    with warnings.catch_warnings():
+        warnings.showwarning = one_line
+        return _dispatch(argv, parser)
 
 
 def _files_named(argv: Sequence[str] | None) -> str:
@@ -725,8 +732,7 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"{parser.prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(parser.prog)
     except ExternalToolError as exc:  # LaTeX or a compiler failed: the work failed, not edm_sym
         print(f"{parser.prog}: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_FAILED
@@ -748,8 +754,7 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
 def _failed(prog: str, exc: Exception) -> int:
     """Exit 1 with one line for an error edm_sym did not expect (or 130 for a wrapped Ctrl-C)."""
     if _from_interrupt(exc):
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(prog)
     if os.environ.get("EDM_DEBUG"):
         traceback.print_exc()
     print(f"{prog}: failed: {type(exc).__name__}: {' '.join(str(exc).split())} "
@@ -776,13 +781,22 @@ def _raised_by_edm_sym(exc: BaseException) -> bool:
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 
+def _interrupted(prog: str) -> int:
+    """The end of an interrupted command: one line, exit 130."""
+    print(f"{prog}: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
 def _interruptible(prog: str, body: Callable[[], int]) -> int:
     """Run a whole command, start-up included, so that SIGINT and SIGTERM end it with 130.
 
-    The handler is installed before the parser is built and before any heavy
-    import (``edm_sym`` imports nothing heavy itself), and an interrupt that
-    arrives outside :func:`_dispatch` (building the parser, printing a message)
-    still ends in one line, never a traceback.
+    The one place a command's interrupts are set up: SIGTERM (a job scheduler,
+    ``kill``) raises KeyboardInterrupt like Ctrl-C, so it ends a command the
+    same way (``edm abstract`` writes its best result and keeps its
+    checkpoint). The handler is installed before the parser is built and
+    before any heavy import (``edm_sym`` imports nothing heavy itself), and
+    an interrupt that arrives outside :func:`_dispatch` (building the parser,
+    printing a message) still ends in one line, never a traceback.
     """
     import signal
 
@@ -790,8 +804,7 @@ def _interruptible(prog: str, body: Callable[[], int]) -> int:
     try:
         return body()
     except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted(prog)
     finally:
         signal.signal(signal.SIGTERM, old)
 

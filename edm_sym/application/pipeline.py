@@ -276,12 +276,8 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, default_config, load_config
     from edm_sym.engines.abstraction.checkpoint import read_checkpoint
-    from edm_sym.engines.abstraction.run import (
-        check_budget,
-        check_data,
-        check_inputs,
-        checkpoint_files,
-    )
+    from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
+    from edm_sym.engines.abstraction.searches import checkpoint_files
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
     from edm_sym.engines.models import model_of
 

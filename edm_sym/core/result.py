@@ -71,7 +71,7 @@ class EdmResult:
         what the report shows when ``edm-export`` is given no such options.
     validation : mapping
         What was held out from the GA and the exported model's training and
-        validation scores (see :mod:`edm_sym.engines.abstraction.validation`); empty
+        validation scores (see :mod:`edm_sym.engines.abstraction.holdout`); empty
         in results written before held-out validation existed.
     parsimony : mapping
         The pruning pass's complexity-vs-fitness front, the selection rule

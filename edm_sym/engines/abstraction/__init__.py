@@ -13,6 +13,8 @@ speed design.
 from __future__ import annotations
 
 from edm_sym.engines.abstraction.evaluator import Evaluator
+from edm_sym.engines.abstraction.holdout import ValidationSettings
+from edm_sym.engines.abstraction.parsimony import ParsimonySettings
 from edm_sym.engines.abstraction.run import GenerationInfo, abstract
 from edm_sym.engines.abstraction.schedule import (
     AbstractionConfig,
@@ -23,8 +25,6 @@ from edm_sym.engines.abstraction.schedule import (
     load_config,
     parse_config,
 )
-from edm_sym.engines.abstraction.selection import ParsimonySettings
-from edm_sym.engines.abstraction.validation import ValidationSettings
 from edm_sym.engines.abstraction.weighting import Weighting
 
 __all__ = [

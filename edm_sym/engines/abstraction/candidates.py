@@ -1,6 +1,6 @@
 """Where a batch's gain-fit candidates are evaluated: in the lane that fits them.
 
-The gain fit (:mod:`~edm_sym.engines.abstraction.polish`) makes at most one
+The gain fit (:mod:`~edm_sym.engines.abstraction.gain_fit`) makes at most one
 candidate per individual, which differs from it only in the scale of some
 rows. Evaluating the candidates in a second batch would cost each generation a
 second round trip to every lane, with the lanes idle while this process plans
@@ -36,7 +36,7 @@ import numpy as np
 
 from edm_sym.engines.abstraction.balance import candidate_costs
 from edm_sym.engines.abstraction.cache import SlotStore
-from edm_sym.engines.abstraction.polish import scale_places
+from edm_sym.engines.abstraction.gain_fit import scale_places
 from edm_sym.engines.abstraction.prefixes import stored_prefixes
 
 

@@ -257,7 +257,7 @@ def stray_checkpoints(checkpoint: Path | None, count: int) -> list[Path]:
     """Checkpoints beside ``checkpoint`` of a run of another number of searches.
 
     One search keeps ``checkpoint`` itself; several keep ``<checkpoint>.search<k>``
-    (:func:`edm_sym.engines.abstraction.run.checkpoint_files`).
+    (:func:`edm_sym.engines.abstraction.searches.checkpoint_files`).
     """
     if checkpoint is None:
         return []

@@ -47,6 +47,7 @@ import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -83,7 +84,8 @@ from edm_sym.engines.abstraction.poles import (
     with_tangent,
 )
 from edm_sym.engines.abstraction.prefixes import PrefixPlan, plan_prefixes
-from edm_sym.engines.abstraction.rowsim import (
+from edm_sym.engines.abstraction.stats import EvalStats
+from edm_sym.engines.abstraction.worker import (
     NEED_CONTEXT,
     NEED_WEIGHTS,
     Chunk,
@@ -100,13 +102,33 @@ from edm_sym.engines.abstraction.rowsim import (
     worker_for,
     worker_init,
 )
-from edm_sym.engines.abstraction.stats import EvalStats
 
 __all__ = ["EvalStats", "Evaluator", "row_table"]
 
 #: How long [s] the worker processes together get to end when a run closes; a
 #: straggler (a busy machine, a long chunk) is then killed: it holds no output.
 SHUTDOWN_SECONDS = 3.0
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """What :meth:`Evaluator.evaluation` found for a batch of P individuals."""
+
+    #: Shape (P,) eq. 8 values (inf for non-finite outputs, and with ``reject_poles`` for a
+    #: row with a tangent pole in the data's range).
+    fitness: np.ndarray
+    #: With ``rows``: per individual its m row keys and m row outputs (valid until the next
+    #: call).
+    rows: list[tuple[list[bytes], list[np.ndarray]]] | None = None
+    #: With ``free``: per individual its
+    #: :func:`~edm_sym.engines.abstraction.gain_fit.row_scales` (or None).
+    scales: list | None = None
+    #: With ``gain_allowed``: per individual ``(eq. 8, genes)``, its gain-fit candidate's
+    #: eq. 8 (NaN: it has none) and the genes it changes, shape (K, 4) ``[row, element,
+    #: code, p]``. A candidate's rows have a tangent pole where its individual's rows have
+    #: one (the gain fit scales a row after its tangents), so a candidate with a finite
+    #: eq. 8 needs no other check.
+    fitted: list | None = None
 
 
 class Evaluator:
@@ -346,7 +368,7 @@ class Evaluator:
         Parameters
         ----------
         keys, rows : sequence
-            Row keys and outputs (as from ``evaluate(..., rows_out=...)``).
+            Row keys and outputs (as :attr:`Evaluation.rows` gives them).
 
         Returns
         -------
@@ -355,7 +377,7 @@ class Evaluator:
         gy : numpy.ndarray
             ``sum(Lambda * r_i * target)``, shape (m,).
         """
-        from edm_sym.engines.abstraction.rowsim import _gram
+        from edm_sym.engines.abstraction.worker import _gram
 
         return _gram(self._local, [np.asarray(r) for r in rows], list(keys), self.target)
 
@@ -375,11 +397,8 @@ class Evaluator:
         for key, f in zip(self.individual_keys(inputs, codes, ps), fitness.tolist(), strict=True):
             self._memo.setdefault(key, (f, None, False, None))
 
-    def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray,
-                 rows_out: list | None = None, free: np.ndarray | None = None,
-                 scales_out: list | None = None, gain_allowed: bool | None = None,
-                 fitted_out: list | None = None) -> np.ndarray:
-        """Fitness of each individual.
+    def evaluate(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray) -> np.ndarray:
+        """Fitness of each individual: :meth:`evaluation`'s ``fitness``.
 
         Parameters
         ----------
@@ -389,34 +408,41 @@ class Evaluator:
             Shape (P, m, n) element codes.
         ps : numpy.ndarray
             Shape (P, m, n) normalised parameters.
-        rows_out : list, optional
-            When given, the list is filled with one entry per individual: its
-            m row keys and m row outputs (valid until the next call). Without
-            shared stores the batch then runs in this process.
-        free : numpy.ndarray, optional
-            Shape (P, m) bool: the rows whose scale the gain fit may change
-            (:func:`~edm_sym.engines.abstraction.polish.scale_places`).
-        scales_out : list, optional
-            With ``free``: filled with one entry per individual, its
-            :func:`~edm_sym.engines.abstraction.polish.row_scales` (or None).
-        gain_allowed : bool, optional
-            With ``free`` and ``fitted_out``: evaluate each individual's
-            gain-fit candidate too, in the worker that fits it (the value says
-            whether a ``through`` may become a ``gain``, as for
-            :func:`~edm_sym.engines.abstraction.polish.scale_places`).
-        fitted_out : list, optional
-            With ``gain_allowed``: filled with one entry per individual,
-            ``(eq. 8, genes)``: its candidate's eq. 8 (NaN: it has none) and
-            the genes it changes, shape (K, 4) ``[row, element, code, p]``.
-            A candidate's rows have a tangent pole where its individual's
-            rows have one (the gain fit scales a row after its tangents), so
-            a candidate with a finite eq. 8 needs no other check.
 
         Returns
         -------
         numpy.ndarray
             Shape (P,) eq. 8 values (inf for non-finite outputs, and with
             ``reject_poles`` for a row with a tangent pole in the data's range).
+        """
+        return self.evaluation(inputs, codes, ps).fitness
+
+    def evaluation(self, inputs: np.ndarray, codes: np.ndarray, ps: np.ndarray, *,
+                   rows: bool = False, free: np.ndarray | None = None,
+                   gain_allowed: bool | None = None) -> Evaluation:
+        """Fitness of each individual, and what the local searches need of it.
+
+        Parameters
+        ----------
+        inputs, codes, ps : numpy.ndarray
+            The individuals, as for :meth:`evaluate`.
+        rows : bool
+            Also each individual's row keys and row outputs
+            (:attr:`Evaluation.rows`). Without shared stores the batch then
+            runs in this process.
+        free : numpy.ndarray, optional
+            Shape (P, m) bool: the rows whose scale the gain fit may change
+            (:func:`~edm_sym.engines.abstraction.gain_fit.scale_places`); also
+            each individual's scales (:attr:`Evaluation.scales`).
+        gain_allowed : bool, optional
+            With ``free``: evaluate each individual's gain-fit candidate too,
+            in the worker that fits it (:attr:`Evaluation.fitted`; the value
+            says whether a ``through`` may become a ``gain``, as for
+            :func:`~edm_sym.engines.abstraction.gain_fit.scale_places`).
+
+        Returns
+        -------
+        Evaluation
         """
         t0 = time.perf_counter()
         if not self._started:
@@ -426,8 +452,8 @@ class Evaluator:
         keys = line_keys(table)
         self.stats.individuals += p
         self.stats.row_requests += p * m
-        want_scales = scales_out is not None and free is not None
-        gains = gain_allowed if want_scales and fitted_out is not None else None
+        want_scales = free is not None
+        gains = gain_allowed if want_scales else None
         out = np.empty(p)
         scales: list = [None] * p
         fitted: list = [None] * p
@@ -440,8 +466,8 @@ class Evaluator:
                 out[k], scales[k], fitted[k] = hit[0], hit[1], hit[3]
             else:
                 need.append(k)
-        local = rows_out is not None
-        send = list(range(p)) if local else need
+        row_outputs: list | None = [] if rows else None
+        send = list(range(p)) if rows else need
         if send:
             index: dict[bytes, int] = {}
             flat = [k * m + j for k in send for j in range(m)]
@@ -460,7 +486,7 @@ class Evaluator:
                 if self.reject_poles:
                     poles.append(self.pole_rows(utab, ukeys))
 
-            fit, sc, rows, fits = self._dispatch(utab, ukeys, members, score, sub_free, local,
+            fit, sc, outs, fits = self._dispatch(utab, ukeys, members, score, sub_free, rows,
                                                  aside, gains)
             if poles:
                 pole = poles[0][members].any(axis=1)
@@ -477,19 +503,17 @@ class Evaluator:
                     scales[k] = sc[a] if want_scales else None
                     fitted[k] = None if gains is None else fits[a]
                     self._memo[ikeys[k]] = (out[k], scales[k], want_scales, fitted[k])
-            if local:
-                rows_out[:] = [(keys[k * m:(k + 1) * m], [rows[members[a, j]] for j in range(m)])
+            if rows:
+                row_outputs = [(keys[k * m:(k + 1) * m], [outs[members[a, j]] for j in range(m)])
                                for a, k in enumerate(send)]
-        if scales_out is not None:
-            scales_out[:] = scales
-        if fitted_out is not None:
-            fitted_out[:] = fitted
+        if gains is not None:
             # The candidates count as individuals evaluated, their rows as rows asked for.
             made = sum(1 for f in fitted if f is not None and not math.isnan(f[0]))
             self.stats.individuals += made
             self.stats.row_requests += made * m
         self.stats.eval_seconds += time.perf_counter() - t0
-        return out
+        return Evaluation(out, row_outputs, scales if want_scales else None,
+                          fitted if gains is not None else None)
 
     # -- dispatch -------------------------------------------------------------------
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,

@@ -31,7 +31,7 @@ from multiprocessing.connection import Client, Listener
 from typing import Any
 
 from edm_sym.engines.abstraction.cache import SlotStore
-from edm_sym.engines.abstraction.rowsim import attach, forget
+from edm_sym.engines.abstraction.worker import attach, forget
 
 
 class LocalLane:

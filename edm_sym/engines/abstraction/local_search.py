@@ -27,6 +27,7 @@ and refits around the best one
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -36,7 +37,7 @@ from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Population
-from edm_sym.engines.abstraction.validation import Holdout, mask_weights
+from edm_sym.engines.abstraction.holdout import Holdout, mask_weights
 
 #: Element codes with a continuous parameter.
 PARAMETRIC = frozenset(code for code, el in REGISTRY.items() if el.param is not None)
@@ -102,9 +103,9 @@ def tune_parameters(evaluator: Evaluator, best: Population, fitness: float, *,
         state["evals"] += count
         ps = np.repeat(best.ps, count, axis=0)
         ps[:, jj, ii] = points
-        rows: list = []
-        fit = evaluator.evaluate(np.repeat(best.inputs, count, axis=0),
-                                 np.repeat(best.codes, count, axis=0), ps, rows_out=rows)
+        res = evaluator.evaluation(np.repeat(best.inputs, count, axis=0),
+                                   np.repeat(best.codes, count, axis=0), ps, rows=True)
+        fit, rows = res.fitness, res.rows
         for k in range(count):
             if fit[k] < state["best_f"]:
                 state["best_f"], state["best_p"] = float(fit[k]), points[k].copy()
@@ -189,9 +190,22 @@ def scan_relay_bands(evaluator: Evaluator, best: Population, fitness: float,
     return out, fitness, evals
 
 
+@dataclass(frozen=True)
+class Candidate:
+    """A candidate for the search's model: a step best as the GA left it, or its refit."""
+
+    matrix: ElementMatrix
+    #: The step whose best it is (1-based).
+    step: int
+    #: Refitted on the whole training part (True) or as the GA left it.
+    refitted: bool
+    #: The search it comes from (several independent searches; 0 with one).
+    search: int = 0
+
+
 def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout, *,
                     max_evaluations: int, reject_poles: bool = True
-                    ) -> list[tuple[ElementMatrix, int, bool]]:
+                    ) -> list[Candidate]:
     """The step bests, each followed by its refit on the whole training part where that helps.
 
     The steps of the schedule optimise different weightings (eq. 15's windows,
@@ -215,12 +229,12 @@ def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdou
 
     Returns
     -------
-    list of (ElementMatrix, int, bool)
-        Each candidate's matrix, step and whether it is a refit.
+    list of Candidate
+        Each step best, then its refit where that fits better (``search`` 0).
     """
     out = []
     if not max_evaluations:
-        return [(s.matrix, s.step, False) for s in steps]
+        return [Candidate(s.matrix, s.step, False) for s in steps]
     n = hold.n_train
     x = np.ascontiguousarray(hold.training.x[:, :n])
     with Evaluator(x, hold.training.y[:n], comp.sample_time, comp.ranges, workers=1,
@@ -228,7 +242,7 @@ def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdou
                    starts=hold.training.starts) as ev:
         ev.set_weights(mask_weights(np.ones(n), hold.mask))
         for s in steps:
-            out.append((s.matrix, s.step, False))
+            out.append(Candidate(s.matrix, s.step, False))
             pop = Population.from_matrix(s.matrix)
             f0 = float(ev.evaluate(pop.inputs, pop.codes, pop.ps)[0])
             tuned, f1, _ = tune_parameters(ev, pop, f0, max_evaluations=max_evaluations)
@@ -238,5 +252,5 @@ def step_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdou
                 # A band moved: the other parameters settle around it again.
                 tuned, f1, _ = tune_parameters(ev, scanned, f2, max_evaluations=max_evaluations)
             if f1 < f0:
-                out.append((tuned.matrix(0, s.matrix.inputs), s.step, True))
+                out.append(Candidate(tuned.matrix(0, s.matrix.inputs), s.step, True))
     return out

@@ -12,7 +12,7 @@ docs/elements.md). ``tan(523 sat(omega, 0.0075))`` is one the GA found
 
 The GA gives an individual with such a row an infinite fitness (``[ga]
 reject_poles``, default true); after the search, a step best with one is
-not a starting point of pruning (:func:`~edm_sym.engines.abstraction.validation.fragile_rows`).
+not a starting point of pruning (:func:`~edm_sym.engines.abstraction.holdout.fragile_rows`).
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ them through a :class:`ChunkPrefixes` and answers which slots it wrote, which
 the main process then records as each piece comes in (:meth:`PrefixPlan.record`).
 
 Both kinds of store answer the same calls (``lookup``, ``get``, ``place``,
-``commit``, ``storing``), so :func:`~edm_sym.engines.abstraction.rowsim.simulate_into`
+``commit``, ``storing``), so :func:`~edm_sym.engines.abstraction.worker.simulate_into`
 runs the same way on either.
 """
 

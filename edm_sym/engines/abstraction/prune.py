@@ -3,7 +3,7 @@
 After the search, a deterministic greedy backward elimination starts from the
 search's model (by default the step best, refitted or as the GA left it, of
 the lowest plain RMSE over the whole log, the held-out RMSE choosing among
-those within ``[parsimony] tie`` of it: ``abstraction.run.start_candidate``). At
+those within ``[parsimony] tie`` of it: ``abstraction.finish.start_candidate``). At
 every stage it tries each simplification:
 
 * replace one element by ``through``;
@@ -49,9 +49,9 @@ import numpy as np
 from edm_sym.core.bounds import BOUND_MARGIN, bound_flags, complexity
 from edm_sym.core.elements import BY_NAME
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.engines.abstraction.polish import HOMOGENEOUS, SCALABLE, scale_position
-from edm_sym.engines.abstraction.selection import ParsimonySettings, check_select, select
-from edm_sym.engines.abstraction.validation import Scorer
+from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, SCALABLE, row_gains, scale_position
+from edm_sym.engines.abstraction.holdout import Scorer
+from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_select, select
 
 THROUGH = BY_NAME["through"].code
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
@@ -157,10 +157,9 @@ def _refit(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix
         rhs = np.einsum("in,n,n->i", a, b, w)
         if not (np.all(np.isfinite(gram)) and np.all(np.isfinite(rhs))):
             return None
-        try:
-            c = np.linalg.solve(gram + 1e-12 * np.trace(gram) * np.eye(len(free)), rhs)
-        except np.linalg.LinAlgError:
-            return None
+        c = row_gains(gram, rhs, ridge=1e-12)
+    if c is None:
+        return None
     rows = list(m.rows)
     for q, j in enumerate(free):
         i = places[j][0]

@@ -11,7 +11,7 @@ batches; without it the reference realisations run, row after row.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -19,17 +19,33 @@ from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.prefixes import ChunkPrefixes, prefix_key
 
-if TYPE_CHECKING:
-    from edm_sym.engines.abstraction.rowsim import Worker
+
+class WorkerView(Protocol):
+    """What the row simulation reads of a worker: its data (``ctx``), gene decoder,
+    stores and stages (:class:`~edm_sym.engines.abstraction.worker.Worker`, which
+    imports this module)."""
+
+    ctx: Any
+    decoder: dict
+    use_kernel: bool
+
+    def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The cached sine and cosine of input ``k``."""
+
+    def stage(self, code: int, p: float) -> Any:
+        """The realisation of element ``code`` at normalised parameter ``p``."""
+
+    def prefix_store(self) -> SlotStore:
+        """This process's prefix store."""
 
 
-def simulate_table(worker: Worker, table: np.ndarray,
+def simulate_table(worker: WorkerView, table: np.ndarray,
                    outs: list[np.ndarray] | np.ndarray | None = None) -> list[np.ndarray]:
     """Simulate the rows of a canonical gene table (see :func:`simulate_into`).
 
     Parameters
     ----------
-    worker : Worker
+    worker : WorkerView
         Context, decoder and prefix store of this process.
     table : numpy.ndarray
         Shape (R, 1 + 2 n).
@@ -59,7 +75,7 @@ def simulate_table(worker: Worker, table: np.ndarray,
 BATCH_ROWS = 64
 
 
-def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np.ndarray,
+def simulate_into(worker: WorkerView, table: np.ndarray, store: np.ndarray, dest: np.ndarray,
                   pool: SlotStore | ChunkPrefixes | None = None) -> int:
     """Simulate the rows of a canonical gene table into ``store[dest[r]]``.
 
@@ -74,7 +90,7 @@ def simulate_into(worker: Worker, table: np.ndarray, store: np.ndarray, dest: np
 
     Parameters
     ----------
-    worker : Worker
+    worker : WorkerView
         Context, decoder and prefix store of this process.
     table : numpy.ndarray
         Shape (R, 1 + 2 n).
@@ -173,7 +189,7 @@ def _run_batch(pool: SlotStore | ChunkPrefixes, batch: list, n: int, store: np.n
             _keep(pool, prefix_key(line, n, 1), keep)
 
 
-def _simulate_reference(worker: Worker, pool: SlotStore | ChunkPrefixes, line: np.ndarray,
+def _simulate_reference(worker: WorkerView, pool: SlotStore | ChunkPrefixes, line: np.ndarray,
                         out: np.ndarray) -> int:
     """One row with the realisations, from its longest stored prefix (storing the others).
 

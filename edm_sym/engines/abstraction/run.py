@@ -16,7 +16,6 @@ clock, and it ends a run at a generation boundary.
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import math
@@ -48,19 +47,17 @@ from edm_sym.engines.abstraction.checkpoint import (
 )
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
-from edm_sym.engines.abstraction.local_search import step_candidates, tune_parameters
-from edm_sym.engines.abstraction.polish import GAIN, scale_places
-from edm_sym.engines.abstraction.prune import apply_parsimony
-from edm_sym.engines.abstraction.rowsim import default_workers, warm_up
+from edm_sym.engines.abstraction.gain_fit import GAIN, scale_places
+from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_holdout
+from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
-from edm_sym.engines.abstraction.searches import on_cluster, search_seeds, side_by_side
-from edm_sym.engines.abstraction.validation import (
-    Holdout,
-    Scorer,
-    fragile_rows,
-    mask_weights,
-    plan_holdout,
+from edm_sym.engines.abstraction.searches import (
+    checkpoint_files,
+    finish_searches,
+    run_searches,
+    search_seeds,
 )
+from edm_sym.engines.abstraction.worker import default_workers
 from edm_sym.engines.simulate import fitness, simulate_rows
 
 #: Elements whose output is identically 0 at a = 0 (a new row that changes nothing):
@@ -329,12 +326,11 @@ class _Runner:
             return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
         gain = GAIN in ops.allowed
         places = scale_places(pop.codes, gain)
-        scales: list = []
-        fitted: list = []
         # The lanes make and evaluate the candidates where they fit them: one batch per
         # generation; only the genes of the better ones are written here.
-        fit = self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                                      scales_out=scales, gain_allowed=gain, fitted_out=fitted)
+        res = self.evaluator.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
+                                        gain_allowed=gain)
+        fit, scales, fitted = res.fitness, list(res.scales), res.fitted
         if keep_first:
             scales[0] = None
         made, better = 0, []
@@ -497,7 +493,7 @@ def abstract(
     validation_share : float, optional
         Share of ``data`` held out at its end, in [0, 0.9]; None: the
         config's ``[validation] share`` (default 0.2). See
-        :mod:`edm_sym.engines.abstraction.validation`.
+        :mod:`edm_sym.engines.abstraction.holdout`.
     scheduler : str or distributed.Client, optional
         A dask.distributed scheduler's address (``tcp://host:8786``) or a
         connected client: chunks of individuals go to its workers, one lane
@@ -615,30 +611,8 @@ def abstract(
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                      human=human, hold=hold, executor=executor, client=client, n=n, starts=starts)
     try:
-        if count == 1:
-            outcomes = [job.run(int(seed), workers, files[0], resume, time_limit, callback)]
-        else:
-            if client is not None:
-                # Each search a task of its own on the cluster, run by one worker alone.
-                task = functools.partial(_one_search, replace(job, client=None), seeds, files,
-                                         resume, workers=1)
-                ended = on_cluster(client, count, task, callback, time_limit)
-            else:
-                # Side by side on this machine's cores (one process each, sharing nothing);
-                # one after another with an executor, each search on all of it.
-                lanes = 1 if executor is not None else (workers or default_workers())
-                if lanes > 1:
-                    warm_up()  # the row kernel, loaded once before the searches are forked
-                per = max(1, lanes // min(count, lanes)) if lanes > 1 else workers
-                task = functools.partial(_one_search, job, seeds, files, resume, workers=per)
-                ended = side_by_side(count, lanes, task, callback, time_limit)
-            outcomes = []
-            for value, error in ended:
-                if error is not None and not isinstance(error, KeyboardInterrupt):
-                    raise error
-                # Not run: the run was stopped (or interrupted) before this search began.
-                outcomes.append(value if value is not None else
-                                ([], "interrupted" if error is not None else "stopped", []))
+        outcomes = run_searches(job, seeds, files, resume, workers=workers, time_limit=time_limit,
+                                callback=callback)
     finally:
         if own_client:
             client.close()
@@ -673,16 +647,6 @@ def abstract(
     records += (validate.record("validation"),) if validate else ()
     return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=records)
-
-
-def checkpoint_files(checkpoint: Path | None, count: int) -> list[Path | None]:
-    """The checkpoint file of each search: ``checkpoint`` itself for one search,
-    ``<checkpoint>.search<k>`` for each of several."""
-    if checkpoint is None:
-        return [None] * count
-    if count == 1:
-        return [checkpoint]
-    return [checkpoint.with_name(f"{checkpoint.name}.search{k}") for k in range(count)]
 
 
 @dataclass(frozen=True)
@@ -741,7 +705,7 @@ class _SearchJob:
                          mask=self.mask)
         reason = "completed"
         try:
-            # One BLAS thread in this process's lane too (see rowsim.worker_init).
+            # One BLAS thread in this process's lane too (see worker.worker_init).
             with threadpool_limits(1):
                 runner.run()
         except _Stop as stop:
@@ -765,61 +729,6 @@ class _SearchJob:
                                     history=tuple(r.history), generations=r.generations,
                                     evaluations=r.evaluations, weighting=r.weighting))
         return steps, reason
-
-
-def _one_search(job: _SearchJob, seeds: Sequence[int], files: Sequence[Path | None], resume: bool,
-                k: int, limit: float | None, report: Callable[[GenerationInfo], bool | None], *,
-                workers: int | None = 1) -> tuple[list[StepRecord], str, list]:
-    """Search ``k`` of a run with several, and its candidates for the search's model.
-
-    The refits of its step bests are made where it ran, beside the other searches'.
-    """
-    steps, why = job.run(seeds[k], workers, files[k], resume, limit, report)
-    if not steps or why == "interrupted":  # an interrupted run exports no refit (see abstract)
-        return steps, why, []
-    comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts)
-    return steps, why, search_candidates(steps, comp, job.hold, job.cfg)
-
-
-def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,
-                    cfg: AbstractionConfig, select: str | None = None,
-                    cands: Sequence[Sequence[tuple[ElementMatrix, int, bool]]] | None = None
-                    ) -> tuple[Compensator, dict[str, Any], dict[str, Any], int]:
-    """:func:`finish` over the step bests of one or several searches; also which search won.
-
-    With ``[parsimony] start = "best-step"`` (the default) the step bests of
-    every search are the candidates of one choice (each candidate names its
-    search); otherwise, of the searches that ran the most steps, the one whose
-    last step best has the lowest fitness (eq. 8 of that step's weighting) is
-    finished alone. A search without any step (stopped before its first
-    population) is passed over.
-    ``cands``: each search's :func:`search_candidates`, when already made.
-    """
-    ran = [k for k, g in enumerate(groups) if g]
-    if len(groups) == 1 or not cfg.parsimony.from_step_bests:
-        # The search that ran the most steps (a stopped one may not have reached the last).
-        chosen = min(ran, key=lambda k: (-len(groups[k]), groups[k][-1].fitness, k))
-        steps = groups[chosen]
-        out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select)
-        return (*out, chosen)
-    pooled = [s for k in ran for s in groups[k]]
-    made = [(*c, k) for k in ran for c in (cands[k] if cands is not None
-                                            else search_candidates(groups[k], comp, hold, cfg))]
-    comp, parsimony, final = finish(pooled, comp, hold, cfg, select, candidates_in=made)
-    chosen = next(c["search"] for c in parsimony["start_candidates"] if c["chosen"])
-    return comp, parsimony, final, chosen
-
-
-def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
-                      cfg: AbstractionConfig) -> list[tuple[ElementMatrix, int, bool]]:
-    """One search's candidates for the search's model: its step bests and their refits
-    (:func:`~edm_sym.engines.abstraction.local_search.step_candidates`); made where the
-    search ran, side by side with the other searches'."""
-    if not (steps and cfg.parsimony.from_step_bests):
-        return []
-    return step_candidates(steps, replace(comp, matrix=steps[-1].matrix), hold,
-                           max_evaluations=cfg.parsimony.refit,
-                           reject_poles=cfg.steps[-1].ga.reject_poles)
 
 
 def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
@@ -908,97 +817,6 @@ def check_data(data: DataLog, target: str, inputs: Sequence[str], *,
         raise DataFormatError(f"{data.source}: column {target!r}", problem)
 
 
-def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
-           cfg: AbstractionConfig, select: str | None = None, *,
-           candidates_in: Sequence[tuple[ElementMatrix, int, bool, int]] | None = None
-           ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
-    """After the search: choose the search's model, prune it, score the exported one.
-
-    Parameters
-    ----------
-    steps : sequence of StepRecord
-        The steps' bests.
-    comp : Compensator
-        The last step's best (its ranges and sample time serve every model).
-    hold : Holdout
-        What was held out (:func:`plan_holdout`).
-    cfg : AbstractionConfig
-    select : str, optional
-        A selection rule overriding the config's.
-    candidates_in : sequence of (ElementMatrix, int, bool, int), optional
-        The candidates of the search's model already made (several searches:
-        each made its own, :func:`search_candidates`): matrix, step, refitted,
-        search. Each of ``start_candidates`` then names its ``search``.
-
-    Returns
-    -------
-    comp, parsimony, validation
-        The exported model, result.json's ``parsimony`` and ``validation`` entries.
-    """
-    scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
-    start_step, refitted, refit = steps[-1].step, False, 0
-    candidates: list[dict[str, Any]] = []
-    if cfg.parsimony.from_step_bests:
-        # The step best with the lowest plain RMSE over the whole log: Step 4's eq. 16
-        # weighting, say, may buy large torques with reversals and the cold start, which
-        # only the whole log holds. Step bests within ``tie`` of it are tied, and the
-        # held-out blocks choose among them (then a later step): a refit lowers the fitted
-        # samples' RMSE by construction (docs/abstraction.md, "Parsimony").
-        # A step best with a tangent pole inside its input's range is passed over while
-        # another is sound (validation.fragile_rows).
-        # Each step best is also refitted on the whole training part: one that learnt a law
-        # on eq. 15's windows often beats the others there (docs/abstraction.md#seed-robustness).
-        refit = cfg.parsimony.refit
-        cands = (list(candidates_in) if candidates_in is not None
-                 else [(*c, 0) for c in step_candidates(steps, comp, hold, max_evaluations=refit,
-                                                        reject_poles=cfg.steps[-1].ga.reject_poles)])
-        sound = [q for q, c in enumerate(cands)
-                 if not fragile_rows(replace(comp, matrix=c[0]), hold.training.x)]
-        pool = sound or list(range(len(cands)))
-        q, candidates = start_candidate([replace(comp, matrix=cands[q][0]) for q in pool],
-                                        scorer, cfg.parsimony.tie)
-        q = pool[q]
-        comp, start_step, refitted = replace(comp, matrix=cands[q][0]), cands[q][1], cands[q][2]
-        for c, r in zip(candidates, pool, strict=True):
-            c.update(step=cands[r][1], refitted=cands[r][2])
-            if candidates_in is not None:
-                c["search"] = cands[r][3]
-    comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
-                                      refit=refit, refitted=refitted)
-    if parsimony and candidates:
-        parsimony["start_tie"] = cfg.parsimony.tie
-        parsimony["start_candidates"] = candidates
-    return comp, parsimony, scorer.report(comp)
-
-
-def start_candidate(comps: Sequence[Compensator], scorer: Scorer, tie: float
-                    ) -> tuple[int, list[dict[str, Any]]]:
-    """Which candidate the pruning starts from, and each one's scores (result.json).
-
-    The lowest plain RMSE over the whole abstraction log wins, unless others are
-    within ``tie`` (relative) of it: then the lowest held-out RMSE among those
-    (a later candidate on a tie). With nothing held out, the whole log alone.
-
-    Returns
-    -------
-    index, candidates
-        The index into ``comps``; per candidate ``{"whole_rmse": [v, unit],
-        "held_out_rmse": [v or None, unit], "tied": bool, "chosen": bool}``.
-    """
-    whole = [scorer.whole_rmse(c) for c in comps]
-    held = [scorer.held_out_rmse(c) for c in comps]
-    low = min(whole)
-    tied = [q for q, w in enumerate(whole) if w <= low * (1.0 + tie)]
-    q = min(tied, key=lambda q: (whole[q] if held[q] is None else held[q], whole[q], -q))
-    unit = scorer.holdout.unit
-
-    def finite(v: float | None) -> float | None:
-        return v if v is not None and math.isfinite(v) else None
-
-    return q, [{"whole_rmse": [finite(whole[k]), unit], "held_out_rmse": [finite(held[k]), unit],
-                "tied": k in tied, "chosen": k == q} for k in range(len(comps))]
-
-
 def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig, *,
                      blocks: bool = False) -> None:
     """Refuse a training part too short to fit the schedule's largest matrix.
@@ -1040,7 +858,6 @@ def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
         Naming the config and the largest step, with the estimate and the limit.
     """
     from edm_sym.core.budget import StepSize, abstraction_estimate, check
-    from edm_sym.engines.abstraction.rowsim import default_workers
 
     # A step runs at least one block (or its patience), and each restart as much again.
     sizes = [StepSize(s.ga.population, s.n_rows, s.n_elements,

@@ -24,8 +24,8 @@ from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.fileio import read_toml
 from edm_sym.core.formats import parse_names
 from edm_sym.core.units import AXES
-from edm_sym.engines.abstraction.selection import ParsimonySettings, parse_parsimony
-from edm_sym.engines.abstraction.validation import ValidationSettings, parse_validation
+from edm_sym.engines.abstraction.holdout import ValidationSettings, parse_validation
+from edm_sym.engines.abstraction.parsimony import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.weighting import Weighting, parse_weighting
 
 CONTINUE_MODES = ("no", "improving", "always")
@@ -108,7 +108,7 @@ class GaSettings:
     gain_fit : bool
         Lamarckian local search: give new individuals the least-squares row
         scales where a gain-like element allows it (see
-        :mod:`edm_sym.engines.abstraction.polish`); False runs the plain Algorithm 1.
+        :mod:`edm_sym.engines.abstraction.gain_fit`); False runs the plain Algorithm 1.
     local_search : int
         When the best has not improved for this many generations (and again
         every this many, and when the step would end), tune the best

@@ -8,7 +8,7 @@ schedule, each from its own seed, share nothing until they end: each runs in
 a process of its own, forked from this one, with its own row stores, and only
 its generation reports and its step bests come back. The search's model is
 then chosen among the step bests of all of them
-(:func:`edm_sym.engines.abstraction.run.finish`).
+(:func:`finish_searches`).
 
 A search's outcome depends only on the data, the config and its seed
 (:func:`search_seeds`), so the run's result does not depend on how many
@@ -17,15 +17,25 @@ searches ran at once, nor on which ended first.
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import os
 import pickle
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from multiprocessing.connection import wait
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from edm_sym.core.matrix import Compensator
+from edm_sym.core.result import StepRecord
+from edm_sym.engines.abstraction.finish import finish
+from edm_sym.engines.abstraction.holdout import Holdout
+from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
+from edm_sym.engines.abstraction.schedule import AbstractionConfig
+from edm_sym.engines.abstraction.worker import default_workers, warm_up
 
 #: (search index, its time limit, its callback) -> the search's outcome.
 SearchFn = Callable[[int, "float | None", "Callable[[Any], bool | None] | None"], Any]
@@ -47,6 +57,126 @@ def search_seeds(seed: int, count: int) -> list[int]:
     """
     children = np.random.SeedSequence(int(seed)).spawn(count)
     return [int(seed)] + [int(c.generate_state(1, np.uint64)[0]) >> 11 for c in children[1:]]
+
+
+def checkpoint_files(checkpoint: Path | None, count: int) -> list[Path | None]:
+    """The checkpoint file of each search: ``checkpoint`` itself for one search,
+    ``<checkpoint>.search<k>`` for each of several."""
+    if checkpoint is None:
+        return [None] * count
+    if count == 1:
+        return [checkpoint]
+    return [checkpoint.with_name(f"{checkpoint.name}.search{k}") for k in range(count)]
+
+
+def run_searches(job: Any, seeds: Sequence[int], files: Sequence[Path | None], resume: bool, *,
+                 workers: int | None, time_limit: float | None,
+                 callback: Callable[[Any], bool | None] | None) -> list[tuple]:
+    """Every search of a run, where they run best; each one's outcome.
+
+    Parameters
+    ----------
+    job : run._SearchJob
+        What the searches share; ``job.run(seed, workers, checkpoint, resume,
+        time_limit, callback)`` runs one of them (its ``client`` and
+        ``executor`` say where).
+    seeds : sequence of int
+        Each search's seed (:func:`search_seeds`); one seed: one search, here.
+    files : sequence of pathlib.Path or None
+        Each search's checkpoint (:func:`checkpoint_files`).
+    resume : bool
+        Continue each search from its checkpoint.
+    workers, time_limit, callback
+        As for :func:`edm_sym.engines.abstraction.abstract`.
+
+    Returns
+    -------
+    list of tuple
+        One search: ``[(steps, reason)]``. Several: per search ``(steps,
+        reason, candidates)`` (:func:`search_candidates`); a search that never
+        began has no steps and the reason ``"stopped"`` or ``"interrupted"``.
+    """
+    count, client, executor = len(seeds), job.client, job.executor
+    if count == 1:
+        return [job.run(int(seeds[0]), workers, files[0], resume, time_limit, callback)]
+    if client is not None:
+        # Each search a task of its own on the cluster, run by one worker alone.
+        task = functools.partial(_one_search, replace(job, client=None), seeds, files,
+                                 resume, workers=1)
+        ended = on_cluster(client, count, task, callback, time_limit)
+    else:
+        # Side by side on this machine's cores (one process each, sharing nothing);
+        # one after another with an executor, each search on all of it.
+        lanes = 1 if executor is not None else (workers or default_workers())
+        if lanes > 1:
+            warm_up()  # the row kernel, loaded once before the searches are forked
+        per = max(1, lanes // min(count, lanes)) if lanes > 1 else workers
+        task = functools.partial(_one_search, job, seeds, files, resume, workers=per)
+        ended = side_by_side(count, lanes, task, callback, time_limit)
+    outcomes: list[tuple] = []
+    for value, error in ended:
+        if error is not None and not isinstance(error, KeyboardInterrupt):
+            raise error
+        # Not run: the run was stopped (or interrupted) before this search began.
+        outcomes.append(value if value is not None else
+                        ([], "interrupted" if error is not None else "stopped", []))
+    return outcomes
+
+
+def _one_search(job: Any, seeds: Sequence[int], files: Sequence[Path | None], resume: bool,
+                k: int, limit: float | None, report: Callable[[Any], bool | None], *,
+                workers: int | None = 1) -> tuple[list[StepRecord], str, list[Candidate]]:
+    """Search ``k`` of a run with several, and its candidates for the search's model.
+
+    The refits of its step bests are made where it ran, beside the other searches'.
+    """
+    steps, why = job.run(seeds[k], workers, files[k], resume, limit, report)
+    if not steps or why == "interrupted":  # an interrupted run exports no refit (see run.abstract)
+        return steps, why, []
+    comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts)
+    return steps, why, search_candidates(steps, comp, job.hold, job.cfg)
+
+
+def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, hold: Holdout,
+                    cfg: AbstractionConfig, select: str | None = None,
+                    cands: Sequence[Sequence[Candidate]] | None = None
+                    ) -> tuple[Compensator, dict[str, Any], dict[str, Any], int]:
+    """:func:`~edm_sym.engines.abstraction.finish.finish` over the step bests of one or several
+    searches; also which search won.
+
+    With ``[parsimony] start = "best-step"`` (the default) the step bests of
+    every search are the candidates of one choice (each candidate names its
+    search); otherwise, of the searches that ran the most steps, the one whose
+    last step best has the lowest fitness (eq. 8 of that step's weighting) is
+    finished alone. A search without any step (stopped before its first
+    population) is passed over.
+    ``cands``: each search's :func:`search_candidates`, when already made.
+    """
+    ran = [k for k, g in enumerate(groups) if g]
+    if len(groups) == 1 or not cfg.parsimony.from_step_bests:
+        # The search that ran the most steps (a stopped one may not have reached the last).
+        chosen = min(ran, key=lambda k: (-len(groups[k]), groups[k][-1].fitness, k))
+        steps = groups[chosen]
+        out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select)
+        return (*out, chosen)
+    pooled = [s for k in ran for s in groups[k]]
+    made = [replace(c, search=k) for k in ran
+            for c in (cands[k] if cands is not None else search_candidates(groups[k], comp, hold, cfg))]
+    comp, parsimony, final = finish(pooled, comp, hold, cfg, select, candidates_in=made)
+    chosen = next(c["search"] for c in parsimony["start_candidates"] if c["chosen"])
+    return comp, parsimony, final, chosen
+
+
+def search_candidates(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
+                      cfg: AbstractionConfig) -> list[Candidate]:
+    """One search's candidates for the search's model: its step bests and their refits
+    (:func:`~edm_sym.engines.abstraction.local_search.step_candidates`); made where the
+    search ran, side by side with the other searches'."""
+    if not (steps and cfg.parsimony.from_step_bests):
+        return []
+    return step_candidates(steps, replace(comp, matrix=steps[-1].matrix), hold,
+                           max_evaluations=cfg.parsimony.refit,
+                           reject_poles=cfg.steps[-1].ga.reject_poles)
 
 
 def side_by_side(count: int, lanes: int, job: SearchFn,

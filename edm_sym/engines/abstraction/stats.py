@@ -12,7 +12,7 @@ class EvalStats:
     ``elements_simulated`` counts elements run over the signal (a row that
     starts from a stored prefix runs only its other elements),
     ``element_samples`` the rows simulated times their elements and samples.
-    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluate`
+    ``eval_seconds`` is the wall time spent in :meth:`Evaluator.evaluation`
     (simulation and scoring, in whichever process), ``sim_seconds`` and
     ``task_seconds`` the time the workers spent simulating rows and running
     tasks, summed over workers; ``peak_rss`` the peak resident memory of

@@ -1,7 +1,7 @@
 """The report's validation and parsimony section: held-out scores, the front, its plot.
 
 Reads the ``validation`` and ``parsimony`` entries of a result (see
-:mod:`edm_sym.engines.abstraction.validation` and :mod:`edm_sym.engines.abstraction.prune`);
+:mod:`edm_sym.engines.abstraction.holdout` and :mod:`edm_sym.engines.abstraction.prune`);
 results without them get a one-line note. The context is lists of zero or
 one item, so the template needs nothing but loops.
 """

@@ -43,7 +43,7 @@ from edm_sym.core.elements.realisation import StaticMap
 from edm_sym.engines import kernel
 from edm_sym.engines.abstraction.cache import SlotStore
 from edm_sym.engines.abstraction.ga import Population
-from edm_sym.engines.abstraction.polish import gain_fit, row_scales, scale_places
+from edm_sym.engines.abstraction.gain_fit import gain_fit, row_scales, scale_places
 from edm_sym.engines.abstraction.prefixes import ChunkPrefixes, prefix_key
 from edm_sym.engines.abstraction.rows import simulate_into
 from edm_sym.engines.simulate import segments
@@ -122,7 +122,7 @@ class Chunk:
     free : numpy.ndarray or None
         Shape (P, m) bool: the rows whose scale the gain fit may change; when
         given, each scored individual also gets its least-squares scales
-        (:func:`~edm_sym.engines.abstraction.polish.row_scales`).
+        (:func:`~edm_sym.engines.abstraction.gain_fit.row_scales`).
     slots : numpy.ndarray or None
         Shape (R,): where each row is in the shared store (the main process
         manages it); None: the worker finds them in its own store.
@@ -135,7 +135,7 @@ class Chunk:
         row starts, where its new prefixes go).
     gain_allowed : bool or None
         With ``free``: also evaluate each scored individual's gain-fit
-        candidate (:func:`~edm_sym.engines.abstraction.polish.gain_fit`;
+        candidate (:func:`~edm_sym.engines.abstraction.gain_fit.gain_fit`;
         the value says whether a ``through`` may become a ``gain``). None: no
         candidates.
     spare : numpy.ndarray or None
@@ -468,7 +468,7 @@ def _candidates(worker: Worker, chunk: Chunk, keys: list[bytes], slots: np.ndarr
     """Evaluate the gain-fit candidates of a chunk's scored individuals, where their rows are.
 
     The candidates are made as the main process would make them
-    (:func:`~edm_sym.engines.abstraction.polish.gain_fit` on the same genes),
+    (:func:`~edm_sym.engines.abstraction.gain_fit.gain_fit` on the same genes),
     their new rows simulated from the prefixes they share with their
     individuals' rows, and scored: the generation needs no second batch.
 

@@ -125,8 +125,36 @@ def row_scales(gram: np.ndarray, gy: np.ndarray, free: np.ndarray, fitness: floa
         return None
     # Residual e = y - sum(r): r_i' W e = r_i' W y - sum_j r_i' W r_j.
     g = (gy - gram.sum(axis=1))[free]
-    delta = np.linalg.lstsq(gram[np.ix_(free, free)], g, rcond=1e-10)[0]
+    delta = row_gains(gram[np.ix_(free, free)], g)
+    assert delta is not None  # without a ridge there is always a (minimum-norm) solution
     return delta, float(g @ delta), float(fitness) ** 2 * n_samples
+
+
+def row_gains(gram: np.ndarray, rhs: np.ndarray, *, ridge: float | None = None
+              ) -> np.ndarray | None:
+    """The row-gain least squares: the normal equations ``gram @ c = rhs`` solved.
+
+    ``gram[i, j] = sum(Lambda r_i r_j)`` over the rows to scale and ``rhs[i] =
+    sum(Lambda r_i e)`` with the part of the target they are to fit. The
+    GA's gain fit (:func:`row_scales`: ``c`` a change of scale, around 0)
+    takes the minimum-norm solution (``lstsq``, relative cutoff 1e-10), so
+    rows that are collinear keep their scales; the refit of a pruned model
+    (:mod:`~edm_sym.engines.abstraction.prune`: ``c`` the gains themselves)
+    adds ``ridge * trace(gram)`` to the diagonal and solves.
+
+    The caller checks that ``gram`` and ``rhs`` are finite.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        ``c``; None when the ridged system is singular.
+    """
+    if ridge is None:
+        return np.linalg.lstsq(gram, rhs, rcond=1e-10)[0]
+    try:
+        return np.linalg.solve(gram + ridge * np.trace(gram) * np.eye(len(rhs)), rhs)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def gain_fit(
@@ -145,7 +173,7 @@ def gain_fit(
         The individuals.
     scales : sequence
         Per individual :func:`row_scales` over its free rows (as
-        :meth:`Evaluator.evaluate` gives them with ``free=``); None: skip it.
+        ``Evaluator.evaluation(..., free=...).scales``); None: skip it.
     places : tuple of numpy.ndarray
         :func:`scale_places` of ``pop.codes``: where each row is scaled.
     ranges : mapping

@@ -65,7 +65,7 @@ class ParsimonySettings:
         ``"best-step"`` (default): prune the step best with the lowest plain
         RMSE over the whole abstraction log, or among those within ``tie``
         of it the one with the lowest held-out RMSE
-        (:func:`~edm_sym.engines.abstraction.run.start_candidate`);
+        (:func:`~edm_sym.engines.abstraction.finish.start_candidate`);
         ``"last-step"``: the last step's best (the paper's model).
     refit : int
         With ``start = "best-step"``: before choosing, each step best's
