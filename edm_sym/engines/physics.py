@@ -448,11 +448,60 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     return runs
 
 
-def run_inputs(run: Run, roles: Sequence[str | None]) -> np.ndarray:
-    """The model's inputs on a run: each input the signal of its role (zero without one)."""
+def run_inputs(run: Run, roles: Sequence[str | None],
+               lags: Mapping[str, float] | None = None, ts: float = 1.0) -> np.ndarray:
+    """The model's inputs on a run: each input the signal of its role (zero without one).
+
+    ``lags`` (role -> time constant [s], :func:`input_lags`) delays the velocity and
+    acceleration through a first-order low-pass, as the log's own signals lag the
+    motion (a filtered encoder difference): the model was fitted to those.
+    """
+    from scipy.signal import lfilter
+
     by_role = {"angle": run.theta, "angle_wrapped": np.mod(run.theta, TWO_PI),
                "velocity": run.velocity, "acceleration": run.acceleration}
+    for role, tau in (lags or {}).items():
+        if role in by_role and tau > 0:
+            alpha = ts / (tau + ts)
+            by_role[role] = lfilter([alpha], [1.0, alpha - 1.0], by_role[role])
     return np.stack([by_role.get(r, np.zeros_like(run.velocity)) for r in roles])
+
+
+def input_lags(x: np.ndarray, roles: Sequence[str | None], ts: float) -> dict[str, float]:
+    """How far the velocity and acceleration inputs lag the angle's derivatives [s].
+
+    A logged velocity is a filtered difference of the encoder angle, the
+    acceleration a filtered difference of that; a model fitted to them holds
+    their lag (a viscous law on a velocity that lags by ``tau`` reads as an
+    inertia of ``D tau`` on a lag-free one). Estimated by least squares,
+    ``x_logged - x_true = -tau d(x_true)/dt``, with ``x_true`` the central
+    differences of the unwrapped angle, both sides smoothed alike over 9
+    samples; kept within ``[0, 50 ts]``. Empty without an angle input.
+    """
+    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
+    angle = by_role.get("angle")
+    if angle is None and "angle_wrapped" in by_role:
+        angle = np.unwrap(by_role["angle_wrapped"])
+    if angle is None or angle.size < 32:
+        return {}
+    kernel = np.ones(9) / 9.0
+
+    def smooth(z: np.ndarray) -> np.ndarray:
+        return np.convolve(z, kernel, mode="same")[8:-8]
+
+    v_true = np.gradient(angle, ts)
+    a_true = np.gradient(v_true, ts)
+    out = {}
+    for role, true, rate in (("velocity", v_true, a_true),
+                             ("acceleration", a_true, np.gradient(a_true, ts))):
+        logged = by_role.get(role)
+        if logged is None:
+            continue
+        d, r = smooth(logged - true), smooth(rate)
+        denom = float(np.dot(r, r))
+        if denom > 0 and np.all(np.isfinite(d)):
+            out[role] = float(np.clip(-np.dot(d, r) / denom, 0.0, 50 * ts))
+    return out
 
 
 # --------------------------------------------------------------------------- laws
@@ -513,6 +562,7 @@ def model_physics(
     bandwidth: float | None = None,
     data: Mapping[str, Any] | None = None,
     options: PhysicsOptions | None = None,
+    lags: Mapping[str, float] | None = None,
 ) -> Physics:
     """Name the laws a model holds by driving it with probe motions.
 
@@ -537,6 +587,9 @@ def model_physics(
         and ``rows`` (shape (m, N): each row's output, un-lagged like the probes).
         Without it the shares are measured on the probes, against the model's RMS there.
     options : PhysicsOptions, optional
+    lags : mapping of str to float, optional
+        The lag of the velocity and acceleration inputs behind the motion
+        (:func:`input_lags`, estimated on a log): the probes' signals lag alike.
 
     Returns
     -------
@@ -560,10 +613,15 @@ def model_physics(
     if bandwidth is None:
         notes.append("no observer bandwidth: the target is taken as lag-free (its inertia is "
                      "not told from the observer's lag)")
+    lags = {k: v for k, v in (lags or {}).items() if v > 0.1 * ts}
+    if lags:
+        notes.append("the probes' " + " and ".join(f"{k} lags by {1e3 * v:.3g} ms" for k, v in
+                                                    sorted(lags.items()))
+                     + ", as the log's own signals lag the angle's derivatives")
     runs = probe_runs(ranges, ts, settle, rotary=rotary, options=opts)
     ys, v, a, th, w = [], [], [], [], []
     for run in runs:
-        out = simulate_rows(comp, comp.matrix.rows, run_inputs(run, roles))
+        out = simulate_rows(comp, comp.matrix.rows, run_inputs(run, roles, lags, ts))
         if bandwidth is not None and out.shape[1] > 2:
             out = out + np.gradient(out, ts, axis=1) / bandwidth
         m = np.nonzero(run.steady)[0]
@@ -831,4 +889,4 @@ def physics_on_log(
             "angle": None if angle is None else angle[part],
             "target": np.asarray(target, dtype=float)[part], "rows": out[:, part]}
     return model_physics(comp, roles, ranges, axis=axis, bandwidth=bandwidth, data=data,
-                         options=options)
+                         options=options, lags=input_lags(x, roles, ts))
