@@ -34,7 +34,7 @@ all physics within tolerance, per parameter the relative error median
 
     python benchmarks/bench_naming.py [--draws 0-3,100-111] [--seeds 1,2,3]
         [--jobs 2] [--workers 1] [--time-limit S] [--generations G | --max-blocks B]
-        [--out bench_naming.json] [--keep DIR]
+        [--out bench_naming.json] [--keep DIR] [--reuse] [--by {behaviour,rows}]
 
 The full run (16 draws x 3 seeds under the default schedule) takes hours on
 2 cores. A quick check of the machinery, one draw and one seed, 5
@@ -161,14 +161,17 @@ def run_one(draw: int, seed: int, work: str, opts: dict) -> dict:
         cfg.write_text(opts["config"], encoding="utf-8")
         args += ["--config", str(cfg)]
     start = time.perf_counter()
-    done = _edm(*args)
+    if not (opts.get("reuse") and result.is_file()):
+        done = _edm(*args)
+        if done.returncode != 0:
+            return {"draw": draw, "seed": seed, "error": done.stderr.strip()[-2000:]}
     seconds = time.perf_counter() - start
-    if done.returncode != 0:
-        return {"draw": draw, "seed": seed, "error": done.stderr.strip()[-2000:]}
     described = _edm("describe", str(result), "--data", evaluation, "--json")
     if described.returncode != 0:
         return {"draw": draw, "seed": seed, "error": described.stderr.strip()[-2000:]}
     doc = json.loads(described.stdout)
+    if opts.get("by") == "rows":  # the row-by-row names, as describe gave them before the physics
+        doc.pop("physics", None)
     simulated = _edm("simulate", str(result), evaluation, "-o", str(sim))
     if simulated.returncode != 0:
         return {"draw": draw, "seed": seed, "error": simulated.stderr.strip()[-2000:]}
@@ -251,6 +254,11 @@ def main(argv: list[str] | None = None) -> int:
     budget.add_argument("--max-blocks", type=int, help="[ga] max_blocks: blocks of 50 a step")
     ap.add_argument("--out", default="bench_naming.json", help="the JSON of every run")
     ap.add_argument("--keep", help="folder for the results (default: a temporary one)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="with --keep: describe the result.json a run left there instead of "
+                         "searching again (to measure a change of the naming alone)")
+    ap.add_argument("--by", choices=["behaviour", "rows"], default="behaviour",
+                    help="the physics describe names by behaviour (default), or its rows' terms")
     args = ap.parse_args(argv)
 
     config = None
@@ -258,7 +266,8 @@ def main(argv: list[str] | None = None) -> int:
         config = f'[ga]\ngenerations = {args.generations}\ncontinue = "no"\n'
     elif args.max_blocks:
         config = f"[ga]\nmax_blocks = {args.max_blocks}\n"
-    opts = {"workers": args.workers, "time_limit": args.time_limit, "config": config}
+    opts = {"workers": args.workers, "time_limit": args.time_limit, "config": config,
+            "reuse": args.reuse, "by": args.by}
     jobs = [(d, s) for d in _ints(args.draws) for s in _ints(args.seeds)]
     with tempfile.TemporaryDirectory() as tmp:
         work = args.keep or tmp
