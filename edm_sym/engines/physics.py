@@ -284,6 +284,12 @@ ROW_SHARE = 0.1
 DATA_UNEXPLAINED = 0.5
 
 
+def _pct(share: float) -> str:
+    """A share as a percentage for a message; below 1e-6 it is "0" (rounding noise, which
+    differs from one machine to the next, must not reach a report)."""
+    return "0" if abs(share) < 1e-6 else f"{100 * share:.2g}"
+
+
 def _finite(v: float) -> float | None:
     v = float(v)
     return v if math.isfinite(v) else None
@@ -327,7 +333,8 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
 def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.ndarray | None,
                      source: str) -> MotionRange | None:
     """The motion a log reaches: the 99th percentile of |v| and |a|, the slowest moving
-    speed (the 5th percentile of |v| above 2 % of the fastest), the angle's span."""
+    speed (the 5th percentile of |v| above 2 % of the fastest, at most a fiftieth of
+    the fastest), the angle's span."""
     v = np.abs(np.asarray(velocity, dtype=float))
     v = v[np.isfinite(v)]
     if v.size < 2:
@@ -345,7 +352,10 @@ def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.n
         th = np.asarray(angle, dtype=float)
         th = th[np.isfinite(th)]
         pos = (float(th.min()), float(th.max())) if th.size else None
-    return MotionRange(vmax, min(max(slowest, vmax / 200.0), vmax / 5.0),
+    # Down to the slowest moving speed, and at least to a fiftieth of the fastest: the
+    # log the model was fitted to may hold slower speeds than this one (a Stribeck
+    # hump at 2 rad/s is invisible from 5 rad/s up).
+    return MotionRange(vmax, min(max(slowest, vmax / 200.0), vmax / 50.0),
                        amax if amax > 0 else 10.0 * vmax, pos, source)
 
 
@@ -651,12 +661,13 @@ def model_physics(
     # The Stribeck velocity: scanned; kept when it improves the fit and the hump is a hump.
     base = _Basis(harmonics, None, profile, span)
     coef0, res0 = _fit(base.matrix(V, A, TH), y, W)
-    best = (float(np.sum(W * res0 ** 2)), None, coef0)
+    without = float(np.sum(W * res0 ** 2))
+    best = (without, None, coef0)
     for vs in np.geomspace(ranges.slowest, ranges.velocity / 2.0, 24):
         basis = _Basis(harmonics, float(vs), profile, span)
         coef, res = _fit(basis.matrix(V, A, TH), y, W)
         ssr = float(np.sum(W * res ** 2))
-        if coef[4] > 0 and ssr < 0.7 * best[0]:
+        if coef[4] > 0 and ssr < 0.7 * without and ssr < best[0]:
             best = (ssr, float(vs), coef)
     ssr, vs, coef = best
     basis = _Basis(harmonics, vs, profile, span)
@@ -714,7 +725,7 @@ def model_physics(
                  errors: dict[str, float], bad_sign: str = "", extra: tuple = ()) -> None:
         s = share(cols, coef)
         if s < th_:
-            left.append((kind, f"{100 * s:.2g} % of {of}, below the {100 * th_:g} % threshold"))
+            left.append((kind, f"{_pct(s)} % of {of}, below the {100 * th_:g} % threshold"))
             return
         if bad_sign:
             left.append((kind, bad_sign))
@@ -731,7 +742,11 @@ def model_physics(
              {"level": rel(idx["coulomb"])},
              "" if fc > 0 else f"level {fc:.4g} {units.force}: a negative Coulomb level drives "
                                "the motion, not friction")
-    if vs is not None:
+    if vs is None:
+        left.append((TermKind.STRIBECK, f"no hump at low speed down to {ranges.slowest:.3g} "
+                                        f"{units.velocity} (a Stribeck term lowers the residual "
+                                        "by less than 30 %)"))
+    else:
         fs = float(coef[idx["stribeck"]])
         if fc > 0 and fc + fs >= opts.stribeck_ratio * fc:
             consider(TermKind.STRIBECK, [idx["stribeck"]],
