@@ -10,7 +10,8 @@ Two figures describe a build:
   speaks for such a row;
 * the **measured deviation**: the bit-exact model
   (:mod:`~edm_sym.engines.fixedpoint.model`) against the reference simulator
-  on the excitation (or on a log).
+  on the recorded log the formats were sized on, or on the excitation when
+  no log is at hand.
 
 The export promises the word's goal (:attr:`Word.goal` of the RMS of the
 compensation) and refuses the model when the measurement exceeds it, naming
@@ -22,7 +23,7 @@ errs by itself or amplifies its input's rounding (a sign after a gain).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -31,6 +32,9 @@ from edm_sym.engines.fixedpoint.design import FixedDesign, FixedPointError
 from edm_sym.engines.fixedpoint.formats import to_int, to_real
 from edm_sym.engines.fixedpoint.model import run_fixed, run_stage
 from edm_sym.engines.simulate import simulate_rows
+
+#: What a build is sized and measured on when no log is at hand.
+EXCITATION = "the synthetic excitation"
 
 
 @dataclass(frozen=True)
@@ -181,19 +185,64 @@ class Build:
     ----------
     design : FixedDesign
     accuracy : Accuracy
-        Measured on the excitation the formats were sized on.
+        Measured on the synthetic excitation (the promise is checked there).
+    log : Accuracy or None
+        Measured on the recorded log the formats were also sized on (not
+        refused: a relay whose input lingers at its threshold switches a
+        sample apart), or None without a log.
+    log_name : str
+        The log's name ("" without one).
+    log_miss : str
+        Where and why the build misses its promise on the log ("" when it does not).
+    signals : numpy.ndarray or None
+        The log's real inputs (n_inputs, N), or None.
     """
 
     design: FixedDesign
     accuracy: Accuracy
+    log: Accuracy | None = None
+    log_name: str = ""
+    log_miss: str = ""
+    signals: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def log_kept(self) -> bool:
+        """True when the build meets its promise on the log too (the kit's vectors come from it)."""
+        return self.log is not None and self.log.measured <= self.accuracy.goal
+
+    def lines(self, unit: str) -> list[str]:
+        """The deviation lines the header and the command line state."""
+        out = self.accuracy.lines(self.design.word.name, unit, EXCITATION)
+        if self.log is not None:
+            verdict = ("within the promise" if self.log_kept else
+                       f"beyond the promise, from {self.log_miss}")
+            out.append(f"on the log {self.log_name}: measured {self.log.measured:.3g} {unit} on "
+                       f"{self.log.samples} samples, {verdict}")
+        return out
 
 
-def build(comp: Any, word: Any, ranges: Any, *, labels: Any = None) -> Build:
-    """Design ``comp`` in ``word`` over ``ranges`` and check it on the excitation (refusing a miss)."""
+def build(comp: Any, word: Any, ranges: Any, *, labels: Any = None,
+          log: tuple[np.ndarray, str] | None = None) -> Build:
+    """Design ``comp`` in ``word`` over ``ranges`` and check it (refusing a miss).
+
+    Without ``log`` the internal signals are sized on the synthetic
+    excitation. With ``log`` (real inputs of shape (n_inputs, N) and the
+    log's name) they are sized on the excitation followed by the log (each
+    format covers both), and the deviation is measured on the log as well.
+    The promise is checked, and a miss refused, on the excitation.
+    """
     from edm_sym.engines.fixedpoint.design import design
     from edm_sym.engines.fixedpoint.excitation import excitation
     from edm_sym.engines.fixedpoint.formats import EXCITATION_SAMPLES
 
-    d = design(comp, word, ranges, labels=labels)
-    x = excitation(d.inputs, ranges, d.sample_time, EXCITATION_SAMPLES)
-    return Build(d, check_accuracy(d, comp, x))
+    ts = comp.sample_time
+    x = excitation(tuple(comp.matrix.inputs), ranges, ts, EXCITATION_SAMPLES)
+    if log is None:
+        d = design(comp, word, ranges, labels=labels)
+        return Build(d, check_accuracy(d, comp, x))
+    xl = np.asarray(log[0], dtype=float)
+    d = design(comp, word, ranges, labels=labels, signals=np.hstack([x, xl]))
+    acc = check_accuracy(d, comp, x)
+    on_log = check_accuracy(d, comp, xl, on=f"the log {log[1]}", refuse=False)
+    miss = "" if on_log.measured <= acc.goal else ": ".join(culprit(d, comp, xl))
+    return Build(d, acc, on_log, log[1], miss, xl)
