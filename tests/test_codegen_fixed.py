@@ -21,7 +21,7 @@ import pytest
 from firmware import cg_support as cg  # noqa: E402
 
 from edm_sym import load_result
-from edm_sym.application.exporting import export
+from edm_sym.application.exporting import export, recorded_log
 from edm_sym.core.elements import all_elements
 from edm_sym.engines.fixedpoint import FixedPointError, excitation, input_ints, run_fixed
 from edm_sym.engines.fixedpoint.formats import KIT_SAMPLES
@@ -78,8 +78,10 @@ def model_outputs(result, real: str, input_range=None) -> np.ndarray:  # noqa: A
     source = source_of(result)
     model = build_model(result.compensator, sha256=source.sha256, target=result.target,
                         axis=source.axis)
-    d = fixed_build(model, source, real, input_range).design
-    x = excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES)
+    b = fixed_build(model, source, real, input_range, recorded_log(result))
+    d = b.design
+    x = (b.signals[:, :KIT_SAMPLES] if b.log_kept
+         else excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES))
     return run_fixed(d, input_ints(d, x))[1]
 
 
@@ -134,3 +136,27 @@ def test_kit_of_the_real_builds_passes(real: str, tmp_path: Path) -> None:
             "-lm"], cwd=tmp_path)
     kit = subprocess.run(["./kit"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert kit.returncode == 0 and kit.stdout.startswith("PASS"), kit.stdout
+
+
+def test_example_is_sized_on_its_recorded_log(tmp_path: Path) -> None:
+    # The shipped example stores plant:auger/abstraction: the q31 build is sized and
+    # measured on it, and the kit's vectors come from it.
+    result = load_result(cg.EXAMPLE)
+    export(result, "c", tmp_path, real="q31")
+    export(result, "test", tmp_path, real="q31")
+    header = (tmp_path / "edm_comp.h").read_text()
+    kit = (tmp_path / "edm_comp_test.c").read_text()
+    assert "on the log plant:auger/abstraction: measured" in " ".join(
+        line.strip(" *") for line in header.splitlines())
+    assert "4000 samples of the log plant:auger/abstraction" in " ".join(
+        line.strip(" *") for line in kit.splitlines()[:8])
+
+
+def test_a_given_log_is_used_and_a_bad_one_refused(tmp_path: Path) -> None:
+    from edm_sym.core.errors import DataFormatError
+
+    result = load_result(cg.EXAMPLE)
+    x, name = recorded_log(result, data="plant:auger/evaluation")
+    assert name == "plant:auger/evaluation" and x.shape[0] == len(result.compensator.matrix.inputs)
+    with pytest.raises(DataFormatError):
+        recorded_log(result, data=str(tmp_path / "missing.csv"))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 from firmware import cg_support as cg  # noqa: E402
@@ -58,3 +59,23 @@ def test_an_input_without_range_is_refused(tmp_path, capsys) -> None:  # noqa: A
     code = export_main([str(path), "--target", "c", "--real", "q31", "-o", str(tmp_path / "o")])
     assert code == 2
     assert "--input-range" in capsys.readouterr().err
+
+
+def test_refusal_names_the_stage_that_leaves_the_simulator() -> None:
+    # gain -> sign -> ...: the gain's rounding flips the sign near zero; the sign stage is
+    # exact on its quantised input, so naming the stage with the largest own error would
+    # blame an innocent later stage.
+    from edm_sym.engines.fixedpoint import FixedPointError
+    from edm_sym.engines.symbolic.model import build_model
+    from edm_sym.outputs.render.fixed_context import fixed_build
+
+    result = cg.as_result(cg.element_compensator("sign"))
+    source = source_of(result)
+    model = build_model(result.compensator, sha256=source.sha256, target=result.target,
+                        axis=source.axis)
+    ranges = {"theta_w": (0.0, 2 * math.pi), "theta_uw": (0.0, 50.0), "omega": (-40.0, 40.0)}
+    with pytest.raises(FixedPointError) as info:
+        fixed_build(model, source, "q31", ranges)
+    msg = str(info.value)
+    assert re.match(r"rows\[\d\]\.elements\[1\] \(sign\): ", msg), msg
+    assert "turns its input's deviation" in msg and "\n" not in msg

@@ -53,6 +53,11 @@ class Case:
 CASES = (
     # The shipped example's double C and Python are generated/auger/ (checked there).
     Case("auger_float", EXAMPLE, (("c", {"real": "float", "prefix": "edm_comp_f32"}),)),
+    # Its fixed-point C and kits (sized and checked on the log the result stores).
+    Case("auger_q31", EXAMPLE, (("c", {"real": "q31", "prefix": "edm_comp_q31"}),
+                                ("test", {"real": "q31", "prefix": "edm_comp_q31"}))),
+    Case("auger_q15", EXAMPLE, (("c", {"real": "q15", "prefix": "edm_comp_q15"}),
+                                ("test", {"real": "q15", "prefix": "edm_comp_q15"}))),
     Case("kinds", GOLDEN / "kinds" / "result.json", (("c", {}), ("python", {}),
                                                      ("c", {"real": "float",
                                                             "prefix": "kinds_f32"})),

@@ -10,6 +10,7 @@ call it.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,7 @@ from edm_sym.core.errors import ExternalToolError, ToolMissingError
 from edm_sym.outputs.render import REPORT, render, target_names, write_files
 from edm_sym.outputs.render.context import FIXED_REALS, source_of, validate_prefix, validate_real
 
-__all__ = ["export", "report_inputs"]
+__all__ = ["export", "recorded_log", "report_inputs"]
 
 
 def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_comp",
@@ -43,8 +44,9 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     real : {"float", "double", "q31", "q15"}
         The C real type, or an integer-only fixed-point build; default ``"double"``.
     pdf, data, eval_data, lugre, ts
-        Options of the LaTeX report (see :func:`edm_sym.outputs.report.write_report`);
-        unused by the C and Python targets.
+        Options of the LaTeX report (see :func:`edm_sym.outputs.report.write_report`).
+        ``data`` (else ``eval_data``, else the result's stored logs) also sizes a
+        fixed-point build and gives the kit's vectors (:func:`recorded_log`).
     input_range : mapping of str to (float, float), optional
         Input ranges over those the result records (fixed-point builds and the kit).
     notes : list of str, optional
@@ -85,11 +87,13 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     model = build_model(result.compensator, sha256=source.sha256, target=result.target,
                         axis=source.axis)
     options: dict[str, Any] = {"input_range": input_range}
+    if "test" in names or (real in FIXED_REALS and "c" in names):
+        options["log"] = recorded_log(result, data=data, eval_data=eval_data)
     if real in FIXED_REALS and ({"c", "test"} & set(names)):
         from edm_sym.core.units import axis_units
         from edm_sym.outputs.render.fixed_context import accuracy_lines, fixed_build
 
-        options["build"] = fixed_build(model, source, real, input_range)
+        options["build"] = fixed_build(model, source, real, input_range, options["log"])
         if notes is not None:
             notes += [f"{real}: {line}" for line in accuracy_lines(
                 options["build"], axis_units(source.axis).force)]
@@ -143,3 +147,50 @@ def report_inputs(result: Any, *, data: Any = None, eval_data: Any = None,
             value = spec if is_plant_spec(spec) else base / spec
         out[key] = value
     return out
+
+
+def recorded_log(result: Any, *, data: Any = None, eval_data: Any = None
+                 ) -> tuple[Any, str] | None:
+    """The recorded log a fixed-point build is sized on and the kit's vectors come from.
+
+    ``data`` (else ``eval_data``) when given, else the result's stored
+    ``report_inputs`` (``data``, then ``eval_data``; a ``plant:`` spec, or a
+    file relative to the result). A stored log that cannot be read, lacks an
+    input or has another sample time is passed over (the synthetic excitation
+    stands in); a given one is refused.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, str) or None
+        The model's inputs, shape (n_inputs, N), and the log's name; None when
+        no log is at hand.
+
+    Raises
+    ------
+    DataFormatError
+        When a given log cannot be read, lacks an input or has another sample time.
+    """
+    import numpy as np
+
+    from edm_sym.core.errors import DataFormatError, EdmError
+    from edm_sym.engines.sources import load_data
+
+    given = [s for s in (data, eval_data) if s is not None]
+    stored = report_inputs(result)
+    specs = [(s, True) for s in given] or [(stored[k], False) for k in ("data", "eval_data")
+                                            if stored[k] is not None]
+    ts = result.compensator.sample_time
+    inputs = tuple(result.compensator.matrix.inputs)
+    for spec, strict in specs:
+        try:
+            log = load_data(spec, default_ts=ts, require=list(inputs))
+            if not math.isclose(log.ts, ts, rel_tol=1e-6):
+                raise DataFormatError(f"{spec}: sample time", f"expected {ts:g} s as the "
+                                      f"result's, found {log.ts:g} s")
+            x = np.vstack([np.asarray(log.column(n), dtype=float) for n in inputs])
+        except (EdmError, OSError):
+            if strict:
+                raise
+            continue
+        return x, str(spec)
+    return None

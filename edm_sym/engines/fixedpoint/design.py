@@ -16,7 +16,8 @@ realisation's type like the printers do:
 
 A signal's format comes from its range: an input's from the range result.json
 records (widened by :data:`~edm_sym.engines.fixedpoint.formats.INPUT_HEADROOM`),
-an internal signal's from its range on the excitation widened by
+an internal signal's from its range on a recorded log (when one is at hand;
+else on the excitation) through the reference simulator, widened by
 :data:`~edm_sym.engines.fixedpoint.formats.MARGIN`, or from a guaranteed bound
 where that is tighter (a table's largest entry, a relay's 1, a filter's input
 bound times the l1 norm of its impulse response). Each stage also carries an a
@@ -391,8 +392,8 @@ def input_ranges(inputs: tuple[str, ...], used: set[str], recorded: Mapping[str,
 
 def design(comp: Any, word: Word, ranges: Mapping[str, tuple[float, float]], *,
            labels: Mapping[tuple[int, int], str] | None = None,
-           samples: int = EXCITATION_SAMPLES) -> FixedDesign:
-    """The integer realisation of ``comp`` in ``word``, its formats sized on the excitation.
+           samples: int = EXCITATION_SAMPLES, signals: np.ndarray | None = None) -> FixedDesign:
+    """The integer realisation of ``comp`` in ``word``, its formats sized on a log or the excitation.
 
     Parameters
     ----------
@@ -406,6 +407,9 @@ def design(comp: Any, word: Word, ranges: Mapping[str, tuple[float, float]], *,
         Stage labels for messages and comments (default: element names).
     samples : int
         Length of the excitation.
+    signals : numpy.ndarray, optional
+        Real inputs, shape (n_inputs, N), a recorded log's: the internal
+        signals are sized on them instead of on the excitation.
 
     Raises
     ------
@@ -414,7 +418,11 @@ def design(comp: Any, word: Word, ranges: Mapping[str, tuple[float, float]], *,
     """
     ts = comp.sample_time
     inputs = tuple(comp.matrix.inputs)
-    x_all = excitation(inputs, ranges, ts, samples)
+    if signals is None:
+        x_all = excitation(inputs, ranges, ts, samples)
+    else:
+        x_all = np.asarray(signals, dtype=float)
+        samples = x_all.shape[-1]
     fracs = []
     for name in inputs:
         lo, hi = ranges.get(name, (0.0, 0.0))

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.engines.fixedpoint import WORDS, Build, build, excitation, input_ints, input_ranges
+from edm_sym.engines.fixedpoint.accuracy import EXCITATION
 from edm_sym.engines.fixedpoint.formats import KIT_SAMPLES, describe_format, to_int, to_real
 from edm_sym.engines.simulate import simulate_rows
 from edm_sym.engines.symbolic.model import SymbolicModel
@@ -43,8 +44,11 @@ def _labels(rows: tuple[RowPlan, ...]) -> dict[tuple[int, int], str]:
 
 
 def fixed_build(model: SymbolicModel, source: Source, real: str,
-                input_range: Any = None) -> Build:
+                input_range: Any = None, log: Any = None) -> Build:
     """The fixed-point build of ``model`` in ``real`` (``"q31"``/``"q15"``), checked.
+
+    ``log``, (real inputs of shape (n_inputs, N), name), sizes the internal
+    signals and measures the deviation instead of the synthetic excitation.
 
     Raises
     ------
@@ -55,12 +59,12 @@ def fixed_build(model: SymbolicModel, source: Source, real: str,
     rows = plan(model, "edm_comp")
     used = {r.input for r in rows}
     ranges = input_ranges(tuple(model.inputs), used, source.ranges, input_range)
-    return build(comp, WORDS[real], ranges, labels=_labels(rows))
+    return build(comp, WORDS[real], ranges, labels=_labels(rows), log=log)
 
 
 def accuracy_lines(b: Build, unit: str) -> list[str]:
     """The deviation lines of a build (header and command line)."""
-    return b.accuracy.lines(b.design.word.name, unit, "the synthetic excitation")
+    return b.lines(unit)
 
 
 def _format_notes(b: Build, rows: tuple[RowPlan, ...]) -> list[str]:
@@ -97,10 +101,10 @@ def _stage_notes(b: Build) -> list[str]:
 
 def fixed_c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
                     real: str = "q31", build: Build | None = None,
-                    input_range: Any = None) -> dict[str, Any]:
+                    input_range: Any = None, log: Any = None) -> dict[str, Any]:
     """The context of the fixed-point header and source templates."""
     rows = plan(model, prefix)
-    b = build or fixed_build(model, source, real, input_range)
+    b = build or fixed_build(model, source, real, input_range, log)
     d = b.design
     pr = FixedCPrinter(d.word, prefix)
     macro = prefix.upper()
@@ -155,7 +159,7 @@ def fixed_c_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_
         "accuracy": [[c_comment_text(t) for t in wrap(s, 76)] for s in accuracy_lines(b, unit)],
         "margin_note": [c_comment_text(t) for t in textwrap.wrap(
             "Formats: an input's from its range (x1.25); an internal signal's from its range on "
-            "a synthetic excitation inside the input ranges through the reference simulator, "
+            f"{_sized_on(b)} through the reference simulator, "
             "widened x2, or from a guaranteed bound where tighter. Outside its format a value "
             "saturates, never wraps; a table clamps its input to its range.", 78)],
         "source_name": c_comment_text(source.name),
@@ -177,11 +181,13 @@ FIXED_KEYS = ("prefix", "macro", "real", "q_t", "state_t", "header_file", "sourc
 
 def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp",
                 real: str = "double", build: Build | None = None,
-                input_range: Any = None) -> dict[str, Any]:
+                input_range: Any = None, log: Any = None) -> dict[str, Any]:
     """The context of the verification kit ``<prefix>_test.c`` for the ``real`` build.
 
-    The vectors are the synthetic excitation inside the input ranges (as the
-    build reads them: rounded to float, or to each input's Q format) and the
+    The vectors are the first :data:`KIT_SAMPLES` samples of the recorded log
+    (``log``: real inputs (n_inputs, N) and its name; a fixed-point build's
+    own log), else the synthetic excitation inside the input ranges, as the
+    build reads them (rounded to float, or to each input's Q format), and the
     reference simulator's output on exactly those inputs.
     """
     comp = model.compensator
@@ -189,9 +195,14 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
     macro = prefix.upper()
     used = {r.input for r in rows}
     if real in FIXED:
-        b = build or fixed_build(model, source, real, input_range)
+        b = build or fixed_build(model, source, real, input_range, log)
         d = b.design
-        x = excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES)
+        if b.log_kept:
+            x, vectors = b.signals[:, :KIT_SAMPLES], f"the log {b.log_name}"
+        else:
+            x = excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES)
+            vectors = EXCITATION + ("" if b.log is None else
+                                    f" (the build misses its promise on the log {b.log_name})")
         u = input_ints(d, x)
         xr = np.vstack([to_real(u[i], d.input_fracs[i]) for i in range(len(d.inputs))])
         ref = simulate_rows(comp, comp.matrix.rows, xr).sum(axis=0)
@@ -208,10 +219,14 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
         printf = ('"%s: max deviation %lld LSB (tolerance %lld), 2^-' + str(d.out_frac) + ' '
                   + _unit(source) + ' each\\n"')
         print_cast = "(long long)"
-        promise = b.accuracy.lines(d.word.name, _unit(source), "the synthetic excitation")[0]
+        promise = b.lines(_unit(source))[0]
     else:
         ranges = input_ranges(tuple(model.inputs), used, source.ranges, input_range)
-        x = excitation(tuple(model.inputs), ranges, comp.sample_time, KIT_SAMPLES)
+        if log is not None:
+            x, vectors = np.asarray(log[0], dtype=float)[:, :KIT_SAMPLES], f"the log {log[1]}"
+        else:
+            x = excitation(tuple(model.inputs), ranges, comp.sample_time, KIT_SAMPLES)
+            vectors = EXCITATION
         if real == "float":
             x = x.astype(np.float32).astype(float)
         ref = simulate_rows(comp, comp.matrix.rows, x).sum(axis=0)
@@ -237,8 +252,18 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
         "printf": printf, "print_cast": print_cast,
         "promise": [c_comment_text(t) for t in textwrap.wrap(promise, 76)],
         "source_name": c_comment_text(source.name), "source": source,
+        "vectors": [c_comment_text(t) for t in textwrap.wrap(
+            f"The vectors: {len(y_text)} samples of {vectors}, as this build reads them, and the "
+            "reference simulator's output on exactly those inputs.", 76)],
     }
     return ctx
+
+
+def _sized_on(b: Build) -> str:
+    if b.signals is None:
+        return "a synthetic excitation inside the input ranges"
+    return (f"a synthetic excitation inside the input ranges and on the log {b.log_name} "
+            f"({b.signals.shape[-1]} samples)")
 
 
 def _unit(source: Source) -> str:

@@ -21,6 +21,7 @@ from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import matrix_diagram
+from edm_sym.outputs.report.fixed import fixed_context
 from edm_sym.outputs.report.flags import (
     bounds_fact,
     judge_report_rows,
@@ -430,6 +431,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
              if inp.lugre is not None and compare is not None and compare.lugre is not None else [])
     fig = inp.figures
     prov = result.provenance
+    fixed, fixed_refused = fixed_context(p, model, result, runs, units.force)
     ctx: dict[str, Any] = {
         "title": p.text(f"EDM compensator {inp.prefix}: model report"),
         "subtitle": p.mono(inp.source_name),
@@ -452,6 +454,10 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
         "time": _time_figures(p, runs, fig, units.effort),
         "lugre": lugre,
+        "fixed": fixed,
+        "fixed_refused": fixed_refused,
+        "fixed_log": [p.mono(r.name) for r in runs[:1]],
+        "fixed_no_log": [] if runs else ["no log"],
         "no_lugre": [] if lugre else ["no LuGre result was given (edm-export --lugre LUGRE.json)"],
         "provenance": [
             {"label": p.text("sha256 of the result"), "value": p.digest(inp.source_sha256)},
