@@ -296,6 +296,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--decimate", type=int, metavar="K",
                    help="keep every K-th sample of each log after an anti-alias filter; the model "
                         "then runs at K times the log's sample time (docs/data.md#decimation)")
+    p.add_argument("--decimate-to", type=_positive_float, metavar="SECONDS",
+                   help="decimate each log to this sample time, a whole multiple of the log's "
+                        "(K chosen per log; docs/data.md#decimation)")
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
