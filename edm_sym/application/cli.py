@@ -417,10 +417,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
     notes: list[str] = []
-    # The report draws the first log of each kind; the summary judges all of them.
+    # The report draws the first log of each kind and tables the RMSE on every one; the
+    # summary judges all of them.
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=args.data[0] if args.data else None,
-                     eval_data=args.eval_data[0] if args.eval_data else None, lugre=args.lugre,
+                     data=_one_or_all(args.data), eval_data=_one_or_all(args.eval_data),
+                     lugre=args.lugre,
                      ts=args.ts, input_range=dict(args.input_range or ()), notes=notes)
     for path in written:
         print(path)
@@ -428,6 +429,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
         print(line)
     _export_summary(result, args, log)
     return 0
+
+
+def _one_or_all(specs: list[str] | None) -> str | list[str] | None:
+    """A report option's logs: None, the one log, or the list of several."""
+    return None if not specs else specs[0] if len(specs) == 1 else list(specs)
 
 
 def _summary_log(result, args: argparse.Namespace):  # noqa: ANN001, ANN202
