@@ -27,8 +27,9 @@ from a small TOML file of data (never code)::
 
 It writes ``lugre.json``, ``result.json`` and ``evaluation.json`` beside the
 TOML file, and exports into ``generated/<folder of the TOML file>/``. The
-result records its data and LuGre file (``report_inputs``), so a plain
-``edm-export result.json --target all`` reproduces the same report.
+result records its data and LuGre file (``report_inputs``; a kind's log only
+when it is one), so a plain ``edm-export result.json --target all``
+reproduces the same report.
 """
 
 from __future__ import annotations
@@ -435,7 +436,9 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
                   for kind, m in models.items()}
         if len(kind_logs) > 1:
             for k, log in enumerate(kind_logs):
-                summary[f"{label}: {Path(log.source).name}"] = _scores(
+                src = str(log.source)
+                shown = src if is_plant_spec(src) else Path(src).name
+                summary[f"{label}: {shown}"] = _scores(
                     {kind: e[k] for kind, e in errors.items()})
         summary[label] = _scores({kind: np.concatenate(e) for kind, e in errors.items()})
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
