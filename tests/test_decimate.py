@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from edm_sym.application.cli import main
-from edm_sym.core.data import DECIMATE_FILTER, DataLog, decimate, write_csv
+from edm_sym.core.data import DECIMATE_FILTER, DataLog, decimate, decimation_factor, write_csv
 from edm_sym.core.errors import DataFormatError
 
 TS = 1e-4
@@ -75,3 +75,54 @@ def test_edm_abstract_decimates_and_records_it(tmp_path: Path) -> None:
     (log,) = doc["logs"]
     assert log["rows"] == 600 and log["decimate"]["factor"] == 10
     assert log["file"] == "fast.csv (decimated 10)"
+
+
+@pytest.mark.parametrize("target,factor", [(TS, 1), (10 * TS, 10), (1e-3 * (1 + 1e-5), 10)])
+def test_a_target_sample_time_gives_its_whole_factor(target: float, factor: int) -> None:
+    assert decimation_factor(_log(), target) == factor
+
+
+@pytest.mark.parametrize("target", [2.5 * TS, 0.5 * TS, 10.05 * TS])
+def test_a_target_that_is_no_whole_multiple_is_refused_naming_the_file(target: float) -> None:
+    with pytest.raises(DataFormatError) as info:
+        decimation_factor(_log(), target)
+    assert info.value.where == "fast.csv: --decimate-to"
+    assert "expected a whole multiple of the log's sample time 0.0001 s" in info.value.problem
+
+
+def _fast_log(tmp_path: Path, name: str, ts: float, n: int) -> Path:
+    t = np.arange(n) * ts
+    omega = np.sin(2 * np.pi * 3 * t)
+    return write_csv(tmp_path / name, {"t": t, "omega": omega,
+                                       "tau": 0.3 * np.tanh(30 * omega) + 0.05 * omega})
+
+
+def test_edm_abstract_decimates_each_log_to_a_target_sample_time(tmp_path: Path) -> None:
+    # A 10 kHz and a 5 kHz log meet at 1 ms: factors 10 and 5.
+    a = _fast_log(tmp_path, "a.csv", TS, 6000)
+    b = _fast_log(tmp_path, "b.csv", 2 * TS, 3000)
+    cfg = tmp_path / "cfg.toml"
+    cfg.write_text("[ga]\npopulation = 12\ngenerations = 2\n\n[[step]]\nn_rows = 2\n"
+                   "n_elements = 2\n")
+    out = tmp_path / "r.json"
+    assert main(["abstract", str(a), str(b), "--target", "tau", "--inputs", "omega", "--config",
+                 str(cfg), "--decimate-to", "0.001", "--quiet", "--workers", "1",
+                 "-o", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["sample_time"] == pytest.approx(10 * TS)
+    assert [log["decimate"]["factor"] for log in doc["logs"]] == [10, 5]
+
+
+@pytest.mark.parametrize("extra,where", [
+    (["--decimate-to", "0.00025"], "a.csv: --decimate-to: expected a whole multiple"),
+    (["--decimate-to", "0.001", "--decimate", "10"], "--decimate-to: expected either"),
+])
+def test_edm_abstract_refuses_a_target_it_cannot_reach(tmp_path: Path, capsys, extra: list[str],
+                                                        where: str) -> None:
+    a = _fast_log(tmp_path, "a.csv", TS, 600)
+    out = tmp_path / "r.json"
+    assert main(["abstract", str(a), "--target", "tau", "--inputs", "omega", "--quiet",
+                 "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and where in err, err
+    assert not out.exists()

@@ -241,3 +241,37 @@ def test_a_lugre_weighting_zero_on_the_whole_log_names_its_key(tmp_path: Path, c
     assert len(err.splitlines()) == 1, err
     assert "pipeline.toml: lugre.weighting: expected a weighting above zero somewhere" in err
     assert not (tmp_path / "lugre.json").exists()
+
+
+def test_pipeline_takes_lists_of_logs(tmp_path: Path, capsys) -> None:
+    text = PIPELINE.replace(
+        'abstraction = "plant:lugre/abstraction"\nevaluation = "plant:lugre/evaluation"',
+        'abstraction = ["plant:lugre/abstraction", "plant:lugre/evaluation"]\n'
+        'evaluation = ["plant:lugre/evaluation", "plant:lugre/abstraction"]').replace(
+        'target = "c"', 'target = "latex"')
+    p = _write(tmp_path, text)
+    assert main(["pipeline", str(p), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "evaluation.json").read_text())
+    assert set(summary) == {"abstraction", "abstraction: plant:lugre/abstraction",
+                            "abstraction: plant:lugre/evaluation", "evaluation",
+                            "evaluation: plant:lugre/evaluation", "evaluation: plant:lugre/abstraction"}
+    # Over all: the pooled RMSE of the two logs (the same two logs in both kinds).
+    both = [summary[f"abstraction: plant:lugre/{k}"]["edm"] for k in ("abstraction", "evaluation")]
+    assert min(both) <= summary["abstraction"]["edm"] <= max(both)
+    assert summary["evaluation"]["edm"] == pytest.approx(summary["abstraction"]["edm"])
+    assert "abstraction: plant:lugre/evaluation" in out
+    res = load_result(tmp_path / "result.json")
+    assert res.report_inputs == {"lugre": "lugre.json"}  # several logs: given to the export
+    assert [log["file"] for log in res.logs] == ["plant:lugre/abstraction", "plant:lugre/evaluation"]
+    tex = (tmp_path / "gen" / "edm_comp_report.tex").read_text()
+    assert "tab:log-rmse" in tex
+
+
+def test_a_pipeline_list_of_no_logs_is_refused(tmp_path: Path, capsys) -> None:
+    p = _write(tmp_path, PIPELINE.replace('abstraction = "plant:lugre/abstraction"',
+                                          'abstraction = []'))
+    assert main(["pipeline", str(p), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pipeline.toml: data.abstraction: expected a log or a list" \
+        in err, err

@@ -81,10 +81,17 @@ def run_cli(args: argparse.Namespace) -> int:
     names = getattr(args, "columns", None) or config.column_names
     specs = _specs(args, config)
     logs = [load_data(spec, ts=args.ts, columns=columns, names=names) for spec in specs]
-    from edm_sym.core.data import decimate
+    from edm_sym.core.data import decimate, decimation_factor
 
     factor = getattr(args, "decimate", None)
-    if factor is not None:
+    period = getattr(args, "decimate_to", None)
+    if factor is not None and period is not None:
+        raise ConfigError("--decimate-to", f"expected either --decimate or --decimate-to, "
+                                           f"found both (--decimate {factor})")
+    if period is not None:  # each log's own factor: logs of several rates meet at one
+        logs = [decimate(log, decimation_factor(log, period), where="--decimate-to")
+                for log in logs]
+    elif factor is not None:
         logs = [decimate(log, factor) for log in logs]
     for log in logs:
         log.column(target, role="target column")
@@ -107,7 +114,10 @@ def run_cli(args: argparse.Namespace) -> int:
     if validate_path is not None:
         validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
                              names=names)
-        if factor is not None:
+        if period is not None:
+            validate = decimate(validate, decimation_factor(validate, period),
+                                where="--decimate-to")
+        elif factor is not None:
             validate = decimate(validate, factor)
     output = Path(args.output)
     ckpt = checkpoint_path(output)

@@ -296,6 +296,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--decimate", type=int, metavar="K",
                    help="keep every K-th sample of each log after an anti-alias filter; the model "
                         "then runs at K times the log's sample time (docs/data.md#decimation)")
+    p.add_argument("--decimate-to", type=_positive_float, metavar="SECONDS",
+                   help="decimate each log to this sample time, a whole multiple of the log's "
+                        "(K chosen per log; docs/data.md#decimation)")
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
@@ -352,8 +355,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_observe)
 
-    p = sub.add_parser("lugre", help="identify the LuGre baseline model on a log")
-    p.add_argument("data", metavar="DATA", help=DATA_HELP)
+    p = sub.add_parser("lugre", help="identify the LuGre baseline model on one or more logs")
+    p.add_argument("data", metavar="DATA", nargs="+",
+                   help=DATA_HELP + "; several logs are each simulated from rest and fitted together")
     p.add_argument("--target", metavar="COL",
                    help="the torque column the model fits (or --role COL=target)")
     p.add_argument("--velocity", metavar="COL", help="the velocity column (or --role COL=velocity)")
@@ -413,10 +417,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
     notes: list[str] = []
-    # The report draws the first log of each kind; the summary judges all of them.
+    # The report draws the first log of each kind and tables the RMSE on every one; the
+    # summary judges all of them.
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=args.data[0] if args.data else None,
-                     eval_data=args.eval_data[0] if args.eval_data else None, lugre=args.lugre,
+                     data=_one_or_all(args.data), eval_data=_one_or_all(args.eval_data),
+                     lugre=args.lugre,
                      ts=args.ts, input_range=dict(args.input_range or ()), notes=notes)
     for path in written:
         print(path)
@@ -424,6 +429,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
         print(line)
     _export_summary(result, args, log)
     return 0
+
+
+def _one_or_all(specs: list[str] | None) -> str | list[str] | None:
+    """A report option's logs: None, the one log, or the list of several."""
+    return None if not specs else specs[0] if len(specs) == 1 else list(specs)
 
 
 def _summary_log(result, args: argparse.Namespace):  # noqa: ANN001, ANN202
@@ -624,10 +634,18 @@ def _option_or_role(value: str | None, given, role: str, option: str,  # noqa: A
 def _cmd_lugre(args: argparse.Namespace) -> int:
     from edm_sym.application.progress import ProgressReporter
     from edm_sym.application.summary import print_summary
+    from edm_sym.core.data import join_logs
     from edm_sym.core.errors import ConfigError
     from edm_sym.core.result import target_name_problem
     from edm_sym.core.units import axis_units
-    from edm_sym.engines.lugre import identify_lugre, save_lugre, shape_bound_flags
+    from edm_sym.engines.abstraction.holdout import log_starts
+    from edm_sym.engines.lugre import (
+        identify_lugre,
+        save_lugre,
+        shape_bound_flags,
+        simulate_lugre,
+        weighted_rmse,
+    )
     from edm_sym.engines.sources import load_data
 
     given = _columns(args)
@@ -640,15 +658,20 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     if velocity == target:
         raise UsageError(f"edm lugre: --velocity: expected a column other than the target "
                          f"{target!r}, found it")
-    check_outputs([args.output], [args.data])
-    data = load_data(args.data, ts=args.ts, require=[target, velocity], columns=given,
-                     names=args.columns)
-    data.require_varying([velocity])  # named by file and column, before the fit
+    check_outputs([args.output], args.data)
+    logs = [load_data(spec, ts=args.ts, require=[target, velocity], columns=given,
+                      names=args.columns) for spec in args.data]
+    for log in logs:
+        log.require_varying([velocity])  # named by file and column, before the fit
+    # Several logs: one sample time and column roles (exit 2 naming the file), laid end to
+    # end, each simulated from rest.
+    data = logs[0] if len(logs) == 1 else join_logs(logs, [target, velocity])
+    starts = log_starts(logs)
     with ProgressReporter("edm lugre", quiet=args.quiet) as reporter, \
             data.naming(target=target, velocity=velocity):
         res = identify_lugre(data.columns[target], data.columns[velocity], data.ts,
                              method=args.method, seed=args.seed, time_limit=args.time_limit,
-                             progress=reporter.lugre)
+                             progress=reporter.lugre, starts=starts)
     save_lugre(args.output, res, target=target, velocity=velocity,
                data_sha256=data.sha256, seed=args.seed)
     unit = axis_units(args.axis or "rotary").force
@@ -656,6 +679,10 @@ def _cmd_lugre(args: argparse.Namespace) -> int:
     for name, score in (res.comparison or {}).items():
         print(f"{name} fitness {score.fitness:.10g} {unit} ({score.evaluations} evaluations)")
     print(f"rmse {res.rmse:.10g} {unit}")
+    if len(logs) > 1:
+        for log in logs:
+            tau = simulate_lugre(res.params, log.columns[velocity], log.ts)
+            print(f"rmse {weighted_rmse(log.columns[target], tau):.10g} {unit} on {log.source}")
     print_summary("edm lugre", fitness=[f"fitness (weighted eq. 8): training {res.rmse:.6g} "
                                         f"{unit}, validation: none held out"],
                   flags=shape_bound_flags(res.params, data.columns[velocity], data.ts))

@@ -129,7 +129,8 @@ def report_inputs(result: Any, *, data: Any = None, eval_data: Any = None,
     Parameters
     ----------
     result : EdmResult
-    data, eval_data, lugre : path-like or str, optional
+    data, eval_data : path-like or str, or a list of several, optional
+    lugre : path-like or str, optional
         Override the stored abstraction log, evaluation log and LuGre file.
 
     Returns

@@ -4,8 +4,8 @@
 from a small TOML file of data (never code)::
 
     [data]
-    abstraction = "plant:auger/abstraction"   # a file, or a simulated plant log
-    evaluation = "plant:auger/evaluation"
+    abstraction = "plant:auger/abstraction"   # a file, a simulated plant log, or a list of them
+    evaluation = "plant:auger/evaluation"     # (a list: each log simulated from rest)
     axis = "rotary"                           # or "linear" (the units; default rotary)
 
     [columns]                                 # optional: COLUMN = "ROLE" (docs/data.md)
@@ -27,8 +27,9 @@ from a small TOML file of data (never code)::
 
 It writes ``lugre.json``, ``result.json`` and ``evaluation.json`` beside the
 TOML file, and exports into ``generated/<folder of the TOML file>/``. The
-result records its data and LuGre file (``report_inputs``), so a plain
-``edm-export result.json --target all`` reproduces the same report.
+result records its data and LuGre file (``report_inputs``; a kind's log only
+when it is one), so a plain ``edm-export result.json --target all``
+reproduces the same report.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, match_sample_time
+from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, join_logs, match_sample_time
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, OutputError
 from edm_sym.core.fileio import check_outputs, read_toml, write_atomic
 from edm_sym.core.fitness import rms
@@ -63,8 +64,8 @@ class Pipeline:
     """A parsed pipeline file; paths are resolved against its folder."""
 
     folder: Path
-    abstraction_data: str
-    evaluation_data: str | None
+    abstraction_data: tuple[str, ...]
+    evaluation_data: tuple[str, ...]
     target: str
     inputs: tuple[str, ...]
     config: Path | None = None
@@ -120,8 +121,8 @@ def load_pipeline(path: str | Path) -> Pipeline:
                 raise ConfigError(f"{name}: {section}.{key}", f"expected one of "
                                   f"{', '.join(sorted(SECTIONS[section]))}, found {key!r}")
     data, abst = doc.get("data", {}), doc.get("abstraction", {})
-    abstraction_data = _get(f"{name}: data", data, "abstraction", str)
-    evaluation_data = _get(f"{name}: data", data, "evaluation", str, None)
+    abstraction_data = _logs(f"{name}: data", data, "abstraction", required=True)
+    evaluation_data = _logs(f"{name}: data", data, "evaluation", required=False)
     config = _get(f"{name}: abstraction", abst, "config", str, None)
     # The abstraction config's [columns] and axis, under the pipeline's own.
     base = None
@@ -185,6 +186,19 @@ def load_pipeline(path: str | Path) -> Pipeline:
 
 
 
+def _logs(where: str, table: Mapping[str, Any], key: str, *, required: bool) -> tuple[str, ...]:
+    """A ``[data]`` key: one log (a string) or several (a list of strings)."""
+    if isinstance(table.get(key), str):
+        return (_get(where, table, key, str),)
+    value = _get(where, table, key, (str, list), ... if required else None)
+    if value is None:
+        return ()
+    if not value or not all(isinstance(v, str) and v.strip() for v in value):
+        raise ConfigError(f"{where}.{key}", f"expected a log or a list of one or more logs, "
+                                            f"found {value!r}")
+    return tuple(value)
+
+
 def _check_lugre(name: str, table: Mapping[str, Any]) -> None:
     """Refuse a bad ``[lugre]`` value, naming the file and key (before anything runs)."""
     from edm_sym.engines.abstraction.weighting import parse_weighting
@@ -242,6 +256,23 @@ def _lugre_weights(spec: Any, data: DataLog, target: str, where: str) -> Any:
     return w
 
 
+def _scores(errors: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """The RMSE of each model's residual (and EDM/LuGre when both are there)."""
+    row = {kind: rms(e) for kind, e in errors.items()}
+    if "lugre" in row:
+        row["ratio"] = row["edm"] / row["lugre"]
+    return row
+
+
+def _report_logs(pipe: Pipeline) -> dict[str, list[str | Path]]:
+    """The report's logs of a kind given several (one of each is recorded in the result)."""
+    out = {}
+    for key, specs in (("data", pipe.abstraction_data), ("eval_data", pipe.evaluation_data)):
+        if len(specs) > 1:
+            out[key] = [pipe.data_path(s) for s in specs]
+    return out
+
+
 def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False,
                  out: Any = None, axis: str | None = None) -> dict[str, Any]:
     """Run the whole flow of a pipeline file.
@@ -276,6 +307,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     from edm_sym.core.result import load_result, save_result
     from edm_sym.engines.abstraction import abstract, default_config, load_config
     from edm_sym.engines.abstraction.checkpoint import read_checkpoint
+    from edm_sym.engines.abstraction.holdout import log_starts
     from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
     from edm_sym.engines.abstraction.searches import checkpoint_files
     from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
@@ -286,27 +318,34 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
     if axis is not None:  # --axis, over the file's
         pipe = replace(pipe, axis=axis)
     name = Path(path).name
-    logs = {"abstraction": load_data(pipe.data_path(pipe.abstraction_data),
-                                     require=[*pipe.inputs, pipe.target], columns=pipe.columns)}
+    def load(spec: str) -> DataLog:
+        return load_data(pipe.data_path(spec), require=[*pipe.inputs, pipe.target],
+                         columns=pipe.columns)
+
+    logs = {"abstraction": [load(spec) for spec in pipe.abstraction_data]}
     if pipe.evaluation_data:
-        logs["evaluation"] = load_data(pipe.data_path(pipe.evaluation_data),
-                                       require=[*pipe.inputs, pipe.target], columns=pipe.columns)
-    abst = logs["abstraction"]
+        logs["evaluation"] = [load(spec) for spec in pipe.evaluation_data]
+    abst_logs = logs["abstraction"]
+    # Several logs: one sample time and column roles (exit 2 naming the file); each is
+    # simulated from rest on its own.
+    abst = abst_logs[0] if len(abst_logs) == 1 else join_logs(abst_logs,
+                                                                [pipe.target, *pipe.inputs])
     # What the abstraction and the evaluation will refuse, refused before any work: a
     # refused pipeline leaves the outputs of an earlier run as they were.
     try:
         check_inputs(pipe.target, pipe.inputs)
     except ConfigError as exc:
         raise ConfigError(f"{name}: abstraction.{exc.where}", exc.problem) from None
-    check_data(abst, pipe.target, pipe.inputs)
-    if "evaluation" in logs:
-        match_sample_time(logs["evaluation"], abst.ts, model=str(abst.source))
+    for log in abst_logs:
+        check_data(log, pipe.target, pipe.inputs)
+    for log in logs.get("evaluation", []):
+        match_sample_time(log, abst.ts, model=str(abst_logs[0].source))
     lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
     ex = pipe.export
     out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
         Path("generated") / pipe.folder.name
     # Every output is checked before the long work: none may be an input, all must be writable.
-    data_files = [pipe.data_path(s) for s in (pipe.abstraction_data, pipe.evaluation_data) if s]
+    data_files = [pipe.data_path(s) for s in (*pipe.abstraction_data, *pipe.evaluation_data)]
     ckpt = result_file.with_name(result_file.name + ".checkpoint")
     prefix = ex.get("prefix", "edm_comp")
     inputs = [path, pipe.config, *data_files]
@@ -342,33 +381,44 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         if velocity == pipe.target:  # as edm lugre --velocity
             raise ConfigError(f"{name}: lugre.velocity", f"expected a column other than the "
                                                          f"target {velocity!r}, found it")
-        abst.require_varying([velocity])  # a constant column, or the clock, is no velocity
+        for log in abst_logs:
+            log.require_varying([velocity])  # a constant column, or the clock, is no velocity
+        lugre_data = abst_logs[0] if len(abst_logs) == 1 else join_logs(abst_logs,
+                                                                         [pipe.target, velocity])
         if not (reuse and lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
+            spec = pipe.lugre.get("weighting")
+            weights = None if spec is None else np.concatenate([
+                _lugre_weights(spec, log, pipe.target, f"{name}: lugre.weighting")
+                for log in abst_logs])
             with ProgressReporter("edm pipeline", quiet=not progress) as reporter, \
-                    abst.naming(target=pipe.target, velocity=velocity):
+                    lugre_data.naming(target=pipe.target, velocity=velocity):
                 res = identify_lugre(
-                    abst.columns[pipe.target], abst.column(velocity, role="velocity column"),
-                    abst.ts, method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"),
+                    lugre_data.columns[pipe.target],
+                    lugre_data.column(velocity, role="velocity column"),
+                    lugre_data.ts,
+                    method=_get(f"{name}: lugre", pipe.lugre, "method", str, "scipy"),
                     seed=seed,
                     time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
-                    weights=_lugre_weights(pipe.lugre.get("weighting"), abst, pipe.target,
-                                           f"{name}: lugre.weighting"),
-                    progress=reporter.lugre)
+                    weights=weights, progress=reporter.lugre, starts=log_starts(abst_logs))
             save_lugre(lugre_file, res, target=pipe.target, velocity=velocity,
-                       data_sha256=abst.sha256, seed=seed)
+                       data_sha256=lugre_data.sha256, seed=seed)
         lugre = load_lugre(lugre_file)
         print(f"lugre: {lugre_file}", file=out)
 
     if not keep_result:
         with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
-            result = abstract(abst, target=pipe.target, inputs=pipe.inputs, config=config,
+            result = abstract(abst_logs[0] if len(abst_logs) == 1 else abst_logs,
+                              target=pipe.target, inputs=pipe.inputs, config=config,
                               seed=pipe.seed, time_limit=pipe.time_limit,
                               callback=reporter.abstraction,
                               checkpoint=ckpt, resume=reuse, axis=pipe.axis)
-        stored = {"data": pipe.abstraction_data}
-        if pipe.evaluation_data:
-            stored["eval_data"] = pipe.evaluation_data
+        # The result records one log of each kind; several are given to the export here.
+        stored = {}
+        if len(pipe.abstraction_data) == 1:
+            stored["data"] = pipe.abstraction_data[0]
+        if len(pipe.evaluation_data) == 1:
+            stored["eval_data"] = pipe.evaluation_data[0]
         if lugre is not None:
             stored["lugre"] = lugre_file.name
         save_result(replace(result, report_inputs=stored), result_file)
@@ -380,26 +430,36 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
 
     summary: dict[str, Any] = {}
     models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None else {})
-    for label, log in logs.items():
-        row = {kind: rms(log.columns[pipe.target] - m.run(log).torque) for kind, m in models.items()}
-        if "lugre" in row:
-            row["ratio"] = row["edm"] / row["lugre"]
-        summary[label] = row
+    for label, kind_logs in logs.items():
+        # Each log simulated from rest; several logs give a row each and one over all.
+        errors = {kind: [log.columns[pipe.target] - m.run(log).torque for log in kind_logs]
+                  for kind, m in models.items()}
+        if len(kind_logs) > 1:
+            for k, log in enumerate(kind_logs):
+                src = str(log.source)
+                shown = src if is_plant_spec(src) else Path(src).name
+                summary[f"{label}: {shown}"] = _scores(
+                    {kind: e[k] for kind, e in errors.items()})
+        summary[label] = _scores({kind: np.concatenate(e) for kind, e in errors.items()})
     write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
-    print(f"{'log':<12} {'EDM RMSE':>12} {'LuGre RMSE':>12} {'EDM/LuGre':>10}", file=out)
+    width = max(12, *(len(label) for label in summary))
+    print(f"{'log':<{width}} {'EDM RMSE':>12} {'LuGre RMSE':>12} {'EDM/LuGre':>10}", file=out)
     for label, row in summary.items():
         lug = f"{row['lugre']:12.4g} {row['ratio']:10.3f}" if "lugre" in row else ""
-        print(f"{label:<12} {row['edm']:12.4g} {lug}", file=out)
+        print(f"{label:<{width}} {row['edm']:12.4g} {lug}", file=out)
 
     written = export(result, _get(f"{name}: export", ex, "target", str, "all"), out_dir,
                      prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
                      real=_get(f"{name}: export", ex, "real", str, "double"),
-                     pdf=_get(f"{name}: export", ex, "pdf", bool, False))
+                     pdf=_get(f"{name}: export", ex, "pdf", bool, False),
+                     **_report_logs(pipe))
     for p in written:
         print(f"wrote {p}", file=out)
-    flags = result_flags(result, logs.get("evaluation", abst))
+    judged = logs.get("evaluation", abst_logs)
+    flags = result_flags(result, judged[0] if len(judged) == 1 else judged)
     if lugre is not None:
-        flags += shape_bound_flags(lugre.params, abst.columns[lugre.velocity_name], abst.ts)
+        velocity = np.concatenate([log.columns[lugre.velocity_name] for log in abst_logs])
+        flags += shape_bound_flags(lugre.params, velocity, abst.ts)
     print_summary("edm pipeline", fitness=[fitness_line(result)], flags=flags,
                   describe=result_file)
     return summary

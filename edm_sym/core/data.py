@@ -907,6 +907,26 @@ def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog
                    dict(log.roles), decimation=log.decimation * factor)
 
 
+def decimation_factor(log: DataLog, target: float, *, where: str = "--decimate-to") -> int:
+    """The factor K that takes ``log`` to the sample time ``target`` (``K = target / ts``).
+
+    Raises
+    ------
+    DataFormatError
+        Naming the file: a target that is not a whole multiple (within
+        :data:`TIME_RTOL`) of the log's sample time, or is below it.
+    """
+    if not (isinstance(target, numbers.Real) and math.isfinite(target) and target > 0):
+        raise DataFormatError(where, f"expected a sample time in seconds > 0, found {target!r}")
+    ratio = float(target) / float(log.ts)
+    factor = round(ratio)
+    if factor < 1 or abs(factor - ratio) > TIME_RTOL * ratio:
+        raise DataFormatError(f"{log.source}: {where}",
+                              f"expected a whole multiple of the log's sample time {log.ts:g} s, "
+                              f"found {target:g} s ({ratio:.6g} times it)")
+    return int(factor)
+
+
 def write_csv(path: str | Path, columns: Mapping[str, np.ndarray]) -> Path:
     """Write columns as CSV atomically, with round-trip float precision.
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import inspect
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,7 +40,7 @@ from edm_sym.engines.lugre.model import (
     _as_velocity,
     _check_ts,
     bristle_coefficients,
-    bristle_trajectory,
+    bristle_trajectories,
     simulate_lugre,
     weighted_rmse,
 )
@@ -82,6 +82,9 @@ class LuGreProblem:
         engine prints nothing; the caller renders and throttles it).
     method : str
         The method's name, for ``progress``.
+    starts : tuple of int
+        Where further logs begin in the series (several logs laid end to
+        end, each simulated from rest); empty for one log.
     """
 
     target: np.ndarray
@@ -92,6 +95,7 @@ class LuGreProblem:
     progress: Callable[[LuGreProgress], None] | None = None
     method: str = ""
     start: float = field(default_factory=time.monotonic)
+    starts: tuple[int, ...] = ()
 
     @property
     def torque_scale(self) -> float:
@@ -117,7 +121,8 @@ class LuGreProblem:
         float
             Weighted RMS of ``target - simulate_lugre(params, velocity, ts)``.
         """
-        return weighted_rmse(self.target, simulate_lugre(params, self.velocity, self.ts), self.weights)
+        return weighted_rmse(self.target, simulate_lugre(params, self.velocity, self.ts,
+                                                         starts=self.starts), self.weights)
 
     def time_is_up(self) -> bool:
         """Whether the deadline has passed.
@@ -294,7 +299,7 @@ class _VarPro:
         v_s, r, ell = 10.0 ** theta[0], 10.0 ** theta[1], 10.0 ** theta[2]
         g = ell * (1.0 + (r - 1.0) * np.exp(-self.v2 / (v_s * v_s)))
         z_ss, decay, rate = bristle_coefficients(g, self.v, self.problem.ts)
-        e = bristle_trajectory(z_ss, decay, theta[3] * ell * max(r, 1.0))
+        e = bristle_trajectories(z_ss, decay, theta[3] * ell * max(r, 1.0), self.problem.starts)
         return np.stack([(z_ss + e) / ell, -rate * e, self.v])
 
     def solve(self, theta: np.ndarray) -> tuple[float, np.ndarray]:
@@ -479,6 +484,7 @@ def identify_lugre(
     time_limit: float | None = None,
     weights: ArrayLike | None = None,
     progress: Callable[[LuGreProgress], None] | None = None,
+    starts: Sequence[int] = (),
 ) -> LuGreResult:
     """Identify LuGre parameters that reproduce ``target`` from ``velocity``.
 
@@ -508,6 +514,11 @@ def identify_lugre(
         Called with a :class:`LuGreProgress` after every evaluation; the
         engine prints nothing (``edm lugre`` renders it with
         :class:`edm_sym.application.progress.ProgressReporter`).
+    starts : sequence of int, optional
+        Several logs laid end to end: where each after the first begins
+        (:func:`edm_sym.engines.abstraction.holdout.log_starts`). Each log is
+        simulated from rest (the bristle state ``z0``) on its own, and the
+        fitness is over all samples. Empty (the default) for one log.
 
     Returns
     -------
@@ -551,6 +562,10 @@ def identify_lugre(
         problem = magnitude_problem(x)  # eq. 12 squares the velocity, eq. 8 the error
         if problem:
             raise DataFormatError(name, problem)
+    cuts = tuple(int(k) for k in starts)
+    if any(not a < b for a, b in zip((0, *cuts), (*cuts, len(v)), strict=True)):
+        raise DataFormatError("starts", f"expected increasing sample indices between 0 and "
+                              f"{len(v)}, found {list(starts)!r}")
     w = np.ones(len(v)) if weights is None else _as_series("weights", weights, len(v))
     if np.any(w < 0.0) or not np.any(w > 0.0):
         raise DataFormatError("weights", "expected non-negative values, not all zero")
@@ -560,7 +575,7 @@ def identify_lugre(
     for k, name in enumerate(names):
         deadline = None if time_limit is None else start + float(time_limit) * (k + 1) / len(names)
         problem = LuGreProblem(target=y, velocity=v, ts=ts_f, weights=w, deadline=deadline,
-                               progress=progress, method=name)
+                               progress=progress, method=name, starts=cuts)
         outcome = METHODS[name](problem, seed=int(seed))
         found[name] = (outcome.params, MethodScore(problem.fitness(outcome.params), outcome.evaluations))
     best = min(names, key=lambda name: found[name][1].fitness)  # min keeps the first on a tie

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -42,6 +43,7 @@ __all__ = [
     "PARAMETER_NAMES",
     "LuGreParams",
     "bristle_coefficients",
+    "bristle_trajectories",
     "bristle_trajectory",
     "simulate_lugre",
     "steady_state",
@@ -266,7 +268,21 @@ def bristle_trajectory(z_ss: np.ndarray, decay: np.ndarray, z_start: float) -> n
     return np.array(out, dtype=float)
 
 
-def simulate_lugre(params: LuGreParams, velocity: ArrayLike, ts: float) -> np.ndarray:
+def bristle_trajectories(z_ss: np.ndarray, decay: np.ndarray, z_start: float,
+                         starts: Sequence[int] = ()) -> np.ndarray:
+    """:func:`bristle_trajectory` of each log laid end to end, each from ``z_start``.
+
+    ``starts`` are where the logs after the first begin (empty: one log).
+    """
+    if not starts:
+        return bristle_trajectory(z_ss, decay, z_start)
+    edges = [0, *starts, len(z_ss)]
+    return np.concatenate([bristle_trajectory(z_ss[a:b], decay[a:b], z_start)
+                           for a, b in zip(edges[:-1], edges[1:], strict=True)])
+
+
+def simulate_lugre(params: LuGreParams, velocity: ArrayLike, ts: float, *,
+                   starts: Sequence[int] = ()) -> np.ndarray:
     """Friction torque of the LuGre model per sample (eqs. 10-12).
 
     Parameters
@@ -277,6 +293,10 @@ def simulate_lugre(params: LuGreParams, velocity: ArrayLike, ts: float) -> np.nd
         1-D velocity log, uniformly sampled.
     ts : float
         Sample time [s].
+    starts : sequence of int, optional
+        Where further logs begin in ``velocity`` (several logs laid end to
+        end): each starts again from ``params.z0``, never from the state the
+        log before it left.
 
     Returns
     -------
@@ -296,7 +316,7 @@ def simulate_lugre(params: LuGreParams, velocity: ArrayLike, ts: float) -> np.nd
     v = _as_velocity(velocity)
     ts_f = _check_ts(ts)
     z_ss, decay, rate = bristle_coefficients(params.g(v), v, ts_f)
-    e = bristle_trajectory(z_ss, decay, params.z0)
+    e = bristle_trajectories(z_ss, decay, params.z0, starts)
     z = z_ss + e
     zdot = -rate * e
     return params.sigma0 * z + params.sigma1 * zdot + params.sigma2 * v

@@ -10,6 +10,7 @@ lists of zero or one item, so the template needs nothing but loops.
 
 from __future__ import annotations
 
+import math
 import shlex
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -68,6 +69,10 @@ class ReportInputs:
     classify : ClassifyOptions or None
         The options ``model`` was decoded and its rows are judged with
         (:func:`edm_sym.outputs.report.flags.report_classify`; None: the axis's defaults).
+    more : sequence of LogRun
+        Further logs of either kind after the first (``abstraction`` and
+        ``evaluation`` are the first of each): only the per-log RMSE table
+        shows them.
     """
 
     result: Any
@@ -83,6 +88,7 @@ class ReportInputs:
     ts: float | None = None
     steady: SteadyState | None = None
     classify: Any = None
+    more: Sequence[LogRun] = ()
 
 
 def package_versions() -> tuple[tuple[str, str], ...]:
@@ -342,6 +348,32 @@ def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun, u: AxisUnits) -> dict
     }
 
 
+def _log_rmse(p: EdmLatexPrinter, inp: ReportInputs) -> list[dict[str, Any]]:
+    """The RMSE on each log and over all logs of a kind: one table when a kind has several."""
+    if not inp.more:
+        return []
+    runs = [r for r in (inp.abstraction, inp.evaluation) if r is not None]
+    compared = inp.lugre is not None and all(r.lugre is not None for r in [*runs, *inp.more])
+
+    def cells(label: str, name: str, samples: int, edm: float, lugre: float | None) -> dict:
+        return {"log": p.text(label), "name": name, "samples": str(samples),
+                "rmse": p.math(p.number(edm)),
+                "lugre": [p.math(p.number(lugre))] if compared else []}
+
+    rows = []
+    for first in runs:
+        kind = [first, *(r for r in inp.more if r.label == first.label)]
+        for r in kind:
+            rows.append(cells(r.label, p.mono(r.name), len(r.t), r.rmse, r.lugre_rmse))
+        if len(kind) > 1:
+            n = sum(len(r.t) for r in kind)
+            edm = math.sqrt(sum(r.rmse ** 2 * len(r.t) for r in kind) / n)
+            lug = math.sqrt(sum(r.lugre_rmse ** 2 * len(r.t) for r in kind) / n) if compared \
+                else None
+            rows.append(cells(first.label, p.text(f"over all {len(kind)} logs"), n, edm, lug))
+    return [{"lugre_head": [p.text("LuGre")] if compared else [], "rows": rows}]
+
+
 def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
     """The shell commands that regenerate the report and check its numbers."""
     q = shlex.quote
@@ -349,7 +381,8 @@ def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
     export = [f"edm-export {name} --target latex --prefix {inp.prefix}"]
     for flag, run in (("--data", inp.abstraction), ("--eval-data", inp.evaluation)):
         if run is not None:
-            export.append(f"    {flag} {q(run.name)}")
+            further = "".join(f" {q(r.name)}" for r in inp.more if r.label == run.label)
+            export.append(f"    {flag} {q(run.name)}{further}")
     if inp.lugre is not None:
         export.append(f"    --lugre {q(inp.lugre.name)}")
     if inp.ts is not None:
@@ -453,6 +486,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "steps": _steps(p, result),
         "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
         "time": _time_figures(p, runs, fig, units.effort),
+        "log_rmse": _log_rmse(p, inp),
         "lugre": lugre,
         "fixed": fixed,
         "fixed_refused": fixed_refused,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -100,7 +101,8 @@ def render_report(inputs: ReportInputs) -> str:
 
 
 def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", model: Any = None,
-                 data: str | Path | None = None, eval_data: str | Path | None = None,
+                 data: str | Path | Sequence[str | Path] | None = None,
+                 eval_data: str | Path | Sequence[str | Path] | None = None,
                  lugre: str | Path | None = None, ts: float | None = None,
                  pdf: bool = False) -> list[Path]:
     """Write the LaTeX model report of ``result`` (and compile it with ``pdf=True``).
@@ -115,10 +117,12 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
         File prefix: ``<prefix>_report.tex``, ``<prefix>_fig_*.pdf``, ``<prefix>_report.pdf``.
     model : SymbolicModel, optional
         ``edm_sym.decode(result)`` when the caller has it already.
-    data : path-like, optional
-        The abstraction log: RMSE, row contributions, time responses.
-    eval_data : path-like, optional
-        An evaluation log: the same on new data.
+    data : path-like or list of them, optional
+        The abstraction log: RMSE, row contributions, time responses. With
+        several logs the first is drawn and a table gives the RMSE on each
+        log (each simulated from rest) and over all of them.
+    eval_data : path-like or list of them, optional
+        An evaluation log (or several): the same on new data.
     lugre : path-like, optional
         A LUGRE.json: the comparison with the LuGre model (on the evaluation
         log, else on the abstraction log).
@@ -150,11 +154,16 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     out = Path(out_dir)
     ref = load_lugre_ref(lugre) if lugre is not None else None
     runs: dict[str, LogRun] = {}
+    more: list[LogRun] = []  # the logs after the first of each kind: the per-log table only
     v_max = 0.0
-    for label, path in (("abstraction", data), ("evaluation", eval_data)):
-        if path is not None:
-            log = load_log(path, result, ts=ts, lugre=ref)
-            runs[label] = run_log(result, log, label=label, lugre=ref)
+    for label, given in (("abstraction", data), ("evaluation", eval_data)):
+        paths = [] if given is None else [given] if isinstance(given, (str, Path)) else list(given)
+        for k, path in enumerate(paths):
+            run = run_log(result, load_log(path, result, ts=ts, lugre=ref), label=label, lugre=ref)
+            if k == 0:
+                runs[label] = run
+            else:
+                more.append(run)
     # Decoded and judged as `edm describe` does on the same log (the last one), so both
     # name the rows alike.
     classify = report_classify(result, list(runs.values()))
@@ -174,7 +183,7 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     inputs = ReportInputs(result, model, source.name, source.sha256, prefix,
                           runs.get("abstraction"), runs.get("evaluation"), ref,
                           {k: figure_name(prefix, k) for k in _figure_keys(result, runs, steady)},
-                          package_versions(), ts, steady, classify)
+                          package_versions(), ts, steady, classify, tuple(more))
     text = render_report(inputs)
     tex_name = f"{prefix}_report.tex"
     written = write_files(out, {tex_name: text})
