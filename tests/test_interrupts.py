@@ -279,9 +279,12 @@ local_search = 0
 [[step]]
 n_rows = 2
 n_elements = 3
+# The step the signal meets: far longer than the test waits, so an idle machine
+# cannot finish the run before the signal is sent.
 [[step]]
 n_rows = 3
 n_elements = 3
+generations = 100000
 [[step]]
 n_rows = 3
 n_elements = 4
