@@ -88,3 +88,27 @@ def test_a_previous_result_of_another_sample_time_is_refused(tmp_path: Path, cap
     assert code == 2
     err = capsys.readouterr().err
     assert "expected the sample time 0.002 s of the logs, found 0.001 s" in err
+
+
+@pytest.mark.parametrize("edit, where", [
+    (lambda d: d["provenance"].__setitem__("initial", {"file": "prev.json", "sha256": "abc"}),
+     "provenance.initial.sha256"),
+    (lambda d: d["provenance"].__setitem__("initial", 3), "provenance.initial"),
+    (lambda d: d["logs"][0].__setitem__("decimate", {"factor": 1, "filter": "fir"}),
+     "logs[0].decimate.factor"),
+    (lambda d: d["logs"][0].__setitem__("decimate", {"factor": 4}), "logs[0].decimate"),
+    (lambda d: d["validation"]["held_out"].__setitem__("layout", "middle"),
+     "validation.held_out.layout"),
+], ids=["initial-sha256", "initial-type", "decimate-factor", "decimate-filter", "layout"])
+def test_a_malformed_key_of_several_logs_is_refused_by_name(tmp_path: Path, capsys, edit,  # noqa: ANN001
+                                                            where: str) -> None:
+    doc = json.loads((Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json")
+                     .read_text("utf-8"))
+    edit(doc)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    before = path.read_bytes()
+    assert main(["describe", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.json" in err[0] and where in err[0], err
+    assert path.read_bytes() == before
