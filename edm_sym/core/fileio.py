@@ -319,6 +319,21 @@ _LONG_LITERAL = re.compile(r"(?<![\w.+-])([+-]?)[0-9][0-9_]{" + str(INT_DIGITS_L
 _TOML_STAND_IN = int("31415926535897932384" * 16)
 
 
+def read_utf8(path: str | os.PathLike, error: Callable[[str, str], EdmError], *,
+              where: str, expected: str) -> str:
+    """A file's text: ``error(path, "cannot be read (...)")`` when it cannot be read,
+    ``error(where, "expected EXPECTED, found binary data")`` when it is not UTF-8."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise error(str(path), f"cannot be read ({exc.strerror})") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(where, f"expected {expected}, found binary data") from None
+
+
 def read_toml(path: str | os.PathLike, error: Callable[[str, str], EdmError], *,
               where: str | None = None) -> dict[str, Any]:
     """Read a TOML file (a config, a pipeline file) strictly.
@@ -343,14 +358,7 @@ def read_toml(path: str | os.PathLike, error: Callable[[str, str], EdmError], *,
     """
     path = Path(path)
     where = path.name if where is None else where
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise error(str(path), f"cannot be read ({exc.strerror})") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise error(where, "expected UTF-8 TOML text, found binary data") from None
+    text = read_utf8(path, error, where=where, expected="UTF-8 TOML text")
     try:
         doc = _toml_loads(text)
     except _TomlError as exc:

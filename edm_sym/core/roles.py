@@ -13,7 +13,9 @@ lower case, first as it is, then without a trailing number (``omega_2``,
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
+
+import numpy as np
 
 from edm_sym.core.errors import ConfigError
 
@@ -90,3 +92,26 @@ def input_roles(
                               f"{', '.join(LOG_ROLE_NAMES)} or None, found {role!r}")
         out[name] = role
     return out
+
+
+def motion_signals(inputs: Sequence[np.ndarray], roles: Sequence[str | None],
+                   ts: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(velocity, acceleration) from a model's inputs on one contiguous log.
+
+    The velocity input, else the unwrapped angle differentiated; the
+    acceleration input, else the velocity differentiated. None without either.
+    """
+    by_role = {r: np.asarray(x, dtype=float) for x, r in zip(inputs, roles, strict=True)
+               if r is not None}
+    if "velocity" in by_role:
+        v = by_role["velocity"]
+    elif "angle" in by_role and by_role["angle"].size > 1:
+        v = np.gradient(by_role["angle"], ts)
+    else:
+        return None
+    a = by_role.get("acceleration")
+    if a is None:
+        if v.size < 2:
+            return None
+        a = np.gradient(v, ts)
+    return v, a

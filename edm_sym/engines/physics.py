@@ -48,6 +48,7 @@ import numpy as np
 
 from edm_sym.core.elements.realisation import DelayLine, LinearFilter
 from edm_sym.core.matrix import Compensator
+from edm_sym.core.roles import motion_signals
 from edm_sym.core.units import axis_units
 
 TWO_PI = 2.0 * math.pi
@@ -883,16 +884,12 @@ def physics_on_log(
     Physics or None
         None when there is no motion to probe over.
     """
-    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
-    vel = by_role.get("velocity")
-    if vel is None and "angle" in by_role and by_role["angle"].size > 1:
-        vel = np.gradient(by_role["angle"], ts)
-    if vel is None:
+    motion = motion_signals(list(x), roles, ts)
+    if motion is None:
         return None if fallback is None else model_physics(
             comp, roles, fallback, axis=axis, bandwidth=bandwidth, options=options)
-    acc = by_role.get("acceleration")
-    if acc is None:
-        acc = np.gradient(vel, ts) if vel.size > 1 else np.zeros_like(vel)
+    vel, acc = motion
+    by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
     angle = by_role.get("angle", by_role.get("angle_wrapped"))
     ranges = ranges_from_data(vel, acc, angle, source) or fallback
     if ranges is None:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.errors import ConfigError
-from edm_sym.core.fileio import json_kind, parse_json, write_atomic
+from edm_sym.core.fileio import json_kind, parse_json, read_utf8, write_atomic
 from edm_sym.core.version import __version__
 from edm_sym.engines.abstraction.ga import Population
 
@@ -155,14 +155,7 @@ def read_checkpoint(path: str | Path) -> dict[str, Any]:
         Naming the file, and both versions for a checkpoint of another format version.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(str(path), f"cannot be read ({exc.strerror})") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ConfigError(str(path), "expected a checkpoint (JSON), found binary data") from None
+    text = read_utf8(path, ConfigError, where=str(path), expected="a checkpoint (JSON)")
     # A checkpoint holds the fitness of failed individuals: infinities are written as such.
     doc = parse_json(text, str(path), ConfigError, finite=False)
     from edm_sym.core.validation import show_value

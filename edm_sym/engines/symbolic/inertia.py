@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from edm_sym.core.roles import motion_signals
+
 
 @dataclass(frozen=True)
 class ModelInertia:
@@ -48,29 +50,6 @@ class ModelInertia:
     rows: tuple[float, ...]
     rms: float
     bandwidth: float
-
-
-def motion_signals(inputs: Sequence[np.ndarray], roles: Sequence[str | None],
-                   ts: float) -> tuple[np.ndarray, np.ndarray] | None:
-    """(velocity, acceleration) from a model's inputs on one contiguous log.
-
-    The velocity input, else the unwrapped angle differentiated; the
-    acceleration input, else the velocity differentiated. None without either.
-    """
-    by_role = {r: np.asarray(x, dtype=float) for x, r in zip(inputs, roles, strict=True)
-               if r is not None}
-    if "velocity" in by_role:
-        v = by_role["velocity"]
-    elif "angle" in by_role and by_role["angle"].size > 1:
-        v = np.gradient(by_role["angle"], ts)
-    else:
-        return None
-    a = by_role.get("acceleration")
-    if a is None:
-        if v.size < 2:
-            return None
-        a = np.gradient(v, ts)
-    return v, a
 
 
 def model_inertia(outputs: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray,
