@@ -80,7 +80,7 @@ def model_outputs(result, real: str, input_range=None) -> np.ndarray:  # noqa: A
                         axis=source.axis)
     b = fixed_build(model, source, real, input_range, recorded_log(result))
     d = b.design
-    x = (b.signals[:, :KIT_SAMPLES] if b.log_kept
+    x = (b.signals[:, :KIT_SAMPLES] if b.signals is not None
          else excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES))
     return run_fixed(d, input_ints(d, x))[1]
 

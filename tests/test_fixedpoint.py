@@ -14,6 +14,8 @@ from edm_sym.engines.fixedpoint import WORDS, check_accuracy, design, excitation
 from edm_sym.engines.fixedpoint.formats import frac_for
 from edm_sym.outputs.render.context import source_of
 
+RANGES = {"theta_w": (0.0, 2 * math.pi), "theta_uw": (0.0, 50.0), "omega": (-40.0, 40.0)}
+
 
 def test_frac_for_fits_the_bound() -> None:
     for bits in (16, 32):
@@ -61,21 +63,98 @@ def test_an_input_without_range_is_refused(tmp_path, capsys) -> None:  # noqa: A
     assert "--input-range" in capsys.readouterr().err
 
 
-def test_refusal_names_the_stage_that_leaves_the_simulator() -> None:
-    # gain -> sign -> ...: the gain's rounding flips the sign near zero; the sign stage is
-    # exact on its quantised input, so naming the stage with the largest own error would
-    # blame an innocent later stage.
-    from edm_sym.engines.fixedpoint import FixedPointError
+def _fixed_build(comp, real: str):  # noqa: ANN001, ANN202
     from edm_sym.engines.symbolic.model import build_model
     from edm_sym.outputs.render.fixed_context import fixed_build
 
-    result = cg.as_result(cg.element_compensator("sign"))
+    result = cg.as_result(comp)
     source = source_of(result)
     model = build_model(result.compensator, sha256=source.sha256, target=result.target,
                         axis=source.axis)
-    ranges = {"theta_w": (0.0, 2 * math.pi), "theta_uw": (0.0, 50.0), "omega": (-40.0, 40.0)}
+    return fixed_build(model, source, real, RANGES)
+
+
+def test_refusal_names_the_stage_that_leaves_the_simulator() -> None:
+    # sin_amp -> hysteresis -> gain: the sine's table errs by about 16 LSB of its output
+    # (within its tolerance), more than the switching rule's 2 LSB, so the relay steps
+    # where the double one does not. The relay is exact on its quantised input: naming the
+    # stage with the largest own error would blame the innocent sine.
+    from edm_sym.core.matrix import Compensator, make_matrix
+    from edm_sym.engines.fixedpoint import FixedPointError
+
+    rows = [("theta_w", [("sin_amp", cg._p("sin_amp", 3.123636996293847)),
+                         ("hysteresis", cg._p("hysteresis", 1.2271888696943782)),
+                         ("gain", cg._p("gain", 0.5))])]
+    comp = Compensator(make_matrix(cg.INPUTS, rows), cg.TS, {}, 20.0)
     with pytest.raises(FixedPointError) as info:
-        fixed_build(model, source, "q31", ranges)
+        _fixed_build(comp, "q15")
     msg = str(info.value)
-    assert re.match(r"rows\[\d\]\.elements\[1\] \(sign\): ", msg), msg
+    assert re.match(r"rows\[0\]\.elements\[1\] \(hysteresis \(a_2 = 1\.22719\)\): ", msg), msg
     assert "turns its input's deviation" in msg and "\n" not in msg
+
+
+def test_a_sign_a_rounding_flips_is_a_switching_event() -> None:
+    # gain -> sign: the gain's rounding flips the sign near zero. The switching rule lets
+    # the reference's sign read the build's input (within 2 LSB of the double one): the
+    # build meets its promise, and the events and the raw deviation are stated.
+    b = _fixed_build(cg.element_compensator("sign"), "q31")
+    acc = b.accuracy
+    assert acc.events and {e.where for e in acc.events} == {"rows[1].elements[1] (sign)"}
+    assert all(e.samples == 1 for e in acc.events)
+    assert acc.measured <= acc.goal < acc.raw
+    line = b.lines("N m")[1]
+    assert f"{len(acc.events)} switching events" in line and "without the rule 0.3 N m" in line
+    assert any(t.startswith("switching rule: ") for t in b.lines("N m"))
+
+
+@pytest.mark.parametrize(("real", "goal"), [("q31", 1e-3), ("q15", 2e-2)])
+def test_example_meets_its_goal_on_its_recorded_log(real: str, goal: float) -> None:
+    # The q15 relay reads omega in Q7.8 (LSB 0.0039 rad/s) against a threshold of 0.0105
+    # rad/s: on the log it switches where the unrounded velocity misses the threshold by
+    # a fraction of an LSB. Under the switching rule the build meets the goal there, and
+    # the events are the relay's.
+    from edm_sym.application.exporting import recorded_log
+    from edm_sym.engines.fixedpoint import build
+
+    result = load_result(cg.EXAMPLE)
+    comp = result.compensator
+    ins = tuple(comp.matrix.inputs)
+    ranges = input_ranges(ins, {ins[r.input] for r in comp.matrix.rows}, source_of(result).ranges,
+                          None)
+    x, name = recorded_log(result)
+    b = build(comp, WORDS[real], ranges, log=(x, name))
+    assert name == "plant:auger/abstraction" and b.log.samples == x.shape[-1]
+    assert b.log.measured < goal * b.log.rms
+    assert b.log.measured < 0.2 * goal * b.log.rms  # room to spare
+    relay = "rows[0].elements[0] (hysteresis)"
+    assert {e.where for e in b.log.events} <= {relay}
+    if real == "q15":
+        assert [e.samples for e in b.log.events] == [75, 7]
+        assert b.log.raw > 1.0  # what the switching events cost without the rule
+
+
+def test_the_rule_feeds_a_first_switching_element_the_build_s_input() -> None:
+    # Oracle: a row that starts with the relay is, under the rule, the double simulator
+    # on the input as the build rounds it (the rounding is at most half an LSB).
+    import numpy as np
+
+    from edm_sym.engines.fixedpoint import input_ints, reference, run_fixed
+    from edm_sym.engines.fixedpoint.formats import to_real
+    from edm_sym.engines.simulate import simulate_row
+
+    result = load_result(cg.EXAMPLE)
+    comp = result.compensator
+    ins = tuple(comp.matrix.inputs)
+    ranges = input_ranges(ins, {ins[r.input] for r in comp.matrix.rows}, source_of(result).ranges,
+                          None)
+    d = design(comp, WORDS["q15"], ranges)
+    x = excitation(ins, ranges, d.sample_time, 4000)
+    x[2, 100:140] = 0.0104  # omega just under the threshold 0.0104647: rounded, it is over
+    u = input_ints(d, x)
+    _, _, per = run_fixed(d, u, stages=True)
+    ref = reference(d, comp, x, u, per)
+    row = comp.matrix.rows[0]
+    seen = to_real(u[row.input], d.input_fracs[row.input])
+    np.testing.assert_array_equal(ref.stages[0][-1], simulate_row(comp, row, seen))
+    assert ref.events and ref.events[0].where.startswith("rows[0].elements[0] (hysteresis")
+    assert not np.array_equal(ref.total, ref.raw)

@@ -208,6 +208,10 @@ class Element:
     #: in the GA's row kernel (measured on the development machine). It only balances the
     #: GA's work among its workers; a kind's default fits most elements of that kind.
     cost: ClassVar[float] = 0.3
+    #: The output steps between levels where the input crosses a threshold (a relay, the
+    #: sign): a rounding of the input by one LSB can move the step by samples, which a
+    #: fixed-point build's measurement allows for (:mod:`edm_sym.engines.fixedpoint.switching`).
+    switches: ClassVar[bool] = False
 
     # -- units (the report traces each parameter's SI unit along its row) ------
     #: How the output's unit follows from the input's: ``"input"`` (the same unit:
@@ -326,6 +330,7 @@ class RelayElement(Element):
 
     kind: ClassVar[str] = Relay.kind
     cost: ClassVar[float] = 0.33
+    switches: ClassVar[bool] = True
     _abstract: ClassVar[bool] = True
 
     @classmethod

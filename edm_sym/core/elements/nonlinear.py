@@ -85,6 +85,7 @@ class Sign(StaticElement):
     title = "Sign function"
     category = "nonlinear"
     formula = "y = sgn(x)   (sgn(0) = 0)"
+    switches = True
 
     @staticmethod
     def f(m: Any, x: Any, a: Any) -> Any:

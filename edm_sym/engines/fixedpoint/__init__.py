@@ -6,6 +6,7 @@
 | `excitation.py` | the synthetic excitation inside the recorded input ranges |
 | `design.py` | `design()`: every signal's format and every stage's integer realisation |
 | `model.py` | the bit-exact model of the generated integer C (plain integers, numpy int64) |
+| `switching.py` | the switching rule: the reference a build is measured against, its switching events |
 | `accuracy.py` | the deviation from the double simulator: a priori bound, measurement, refusal |
 """
 
@@ -25,9 +26,11 @@ from edm_sym.engines.fixedpoint.design import (
 from edm_sym.engines.fixedpoint.excitation import excitation
 from edm_sym.engines.fixedpoint.formats import WORDS, Word
 from edm_sym.engines.fixedpoint.model import run_fixed
+from edm_sym.engines.fixedpoint.switching import SWITCH_LSB, Reference, SwitchEvent, reference
 
 __all__ = [
-    "WORDS", "Accuracy", "Build", "FilterStage", "FixedDesign", "FixedPointError", "RelayStage",
-    "RingStage", "TableStage", "Word", "build", "check_accuracy", "design", "excitation",
-    "input_ints", "input_ranges", "run_fixed",
+    "SWITCH_LSB", "WORDS", "Accuracy", "Build", "FilterStage", "FixedDesign", "FixedPointError",
+    "Reference", "RelayStage", "RingStage", "SwitchEvent", "TableStage", "Word", "build",
+    "check_accuracy", "design", "excitation", "input_ints", "input_ranges", "reference",
+    "run_fixed",
 ]

@@ -74,6 +74,9 @@ class Stage:
         The bound of its output that chose ``fout``.
     error : float
         A priori bound of its output's deviation from the double simulator (inf: none).
+    switches : bool
+        The element steps where its input crosses a threshold (the switching rule,
+        :mod:`~edm_sym.engines.fixedpoint.switching`).
     """
 
     row: int
@@ -83,6 +86,7 @@ class Stage:
     fout: int
     bound: float
     error: float
+    switches: bool = False
 
     @property
     def where(self) -> str:
@@ -280,6 +284,8 @@ class _Designer:
             shift.append(k)
             steep = max(steep, abs(dy) / width * 2.0 ** (fin - fout))
         error = steep * err_in + worst + 2.0 * 2.0 ** -fout
+        if base["switches"] and err_in > 0.0:
+            error = math.inf  # any rounding of the input can move a step by samples
         bound_out = float(np.max(np.abs(ys))) * 2.0 ** -fout
         return TableStage(**base, fout=fout, bound=bound_out, error=error, period=period,
                           xb=tuple(int(v) for v in xs), yb=tuple(int(v) for v in ys),
@@ -439,7 +445,8 @@ def design(comp: Any, word: Word, ranges: Mapping[str, tuple[float, float]], *,
             real = gene.element.realise(comp.value(gene), ts)
             y = real.run(x.copy())
             label = (labels or {}).get((r, c), gene.element.name)
-            base = {"row": r, "col": c, "label": label, "fin": fin}
+            base = {"row": r, "col": c, "label": label, "fin": fin,
+                    "switches": gene.element.switches}
             st = designer.stage(real, x=x, y=y, base=base, bound_in=bound_in, err_in=err_in)
             stages.append(st)
             x, fin, bound_in, err_in = y, st.fout, st.bound, st.error

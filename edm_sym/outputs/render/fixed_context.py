@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from edm_sym.engines.fixedpoint import WORDS, Build, build, excitation, input_ints, input_ranges
-from edm_sym.engines.fixedpoint.accuracy import EXCITATION
+from edm_sym.engines.fixedpoint.accuracy import EXCITATION, measure
 from edm_sym.engines.fixedpoint.formats import KIT_SAMPLES, describe_format, to_int, to_real
+from edm_sym.engines.fixedpoint.switching import SWITCH_LSB, describe_events
 from edm_sym.engines.simulate import simulate_rows
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing import EdmC99Printer, c_comment_text
@@ -194,19 +195,18 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
     rows = plan(model, prefix)
     macro = prefix.upper()
     used = {r.input for r in rows}
+    raw_parts: list[dict[str, Any]] = []
     if real in FIXED:
         b = build or fixed_build(model, source, real, input_range, log)
         d = b.design
-        if b.log_kept:
+        if b.signals is not None:
             x, vectors = b.signals[:, :KIT_SAMPLES], f"the log {b.log_name}"
         else:
-            x = excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES)
-            vectors = EXCITATION + ("" if b.log is None else
-                                    f" (the build misses its promise on the log {b.log_name})")
+            x, vectors = excitation(d.inputs, d.ranges, d.sample_time, KIT_SAMPLES), EXCITATION
         u = input_ints(d, x)
-        xr = np.vstack([to_real(u[i], d.input_fracs[i]) for i in range(len(d.inputs))])
-        ref = simulate_rows(comp, comp.matrix.rows, xr).sum(axis=0)
-        expected = to_int(ref, d.out_frac, d.word)
+        _, ref = measure(d, comp, x)
+        expected = to_int(ref.total, d.out_frac, d.word)
+        raw = to_int(ref.raw, d.out_frac, d.word)
         pr = FixedCPrinter(d.word, prefix)
         value_t, dev_t = pr.q_t, "int64_t"
         lit = pr.word_literal
@@ -220,6 +220,7 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
                   + _unit(source) + ' each\\n"')
         print_cast = "(long long)"
         promise = b.lines(_unit(source))[0]
+        raw_parts = [_raw_part(expected, raw, ref.events, lit, macro)]
     else:
         ranges = input_ranges(tuple(model.inputs), used, source.ranges, input_range)
         if log is not None:
@@ -254,9 +255,36 @@ def kit_context(model: SymbolicModel, source: Source, *, prefix: str = "edm_comp
         "source_name": c_comment_text(source.name), "source": source,
         "vectors": [c_comment_text(t) for t in textwrap.wrap(
             f"The vectors: {len(y_text)} samples of {vectors}, as this build reads them, and the "
-            "reference simulator's output on exactly those inputs.", 76)],
+            + ("reference simulator's output on the unrounded inputs under the switching rule "
+               "(below)." if raw_parts else "reference simulator's output on exactly those inputs."),
+            76)],
+        "raw": raw_parts,
     }
     return ctx
+
+
+def _raw_part(expected: np.ndarray, raw: np.ndarray, events: Any, lit: Any,
+              macro: str) -> dict[str, Any]:
+    """The kit's switching-rule block: where the plain double simulator's output differs.
+
+    The pairs (sample, plain output) end with a sentinel at the number of
+    samples, so the arrays are never empty.
+    """
+    where = np.nonzero(raw != expected)[0]
+    rule = (f"The switching rule (docs/codegen.md): a relay or sign of the reference reads the "
+            f"build's own input where it is within {SWITCH_LSB} LSB of the double "
+            "simulator's, so it steps where the build does when the two straddle a threshold "
+            f"by a rounding. In these vectors: {describe_events(tuple(events))}. The expected "
+            "outputs above follow the rule; the plain double simulator's outputs differ at "
+            f"{len(where)} samples, listed here.")
+    return {
+        "comment": [c_comment_text(t) for t in textwrap.wrap(rule, 76)],
+        "events": str(len(events)),
+        "count": f"{macro}_TEST_RAW_SAMPLES",
+        "samples": str(len(where)),
+        "k_lines": _chunks([f"{int(k)}u" for k in where] + [f"{macro}_TEST_SAMPLES"]),
+        "y_lines": _chunks([lit(v) for v in raw[where]] + [lit(0)]),
+    }
 
 
 def _sized_on(b: Build) -> str:

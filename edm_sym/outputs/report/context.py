@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.units import AxisUnits, axis_units
+from edm_sym.engines.fixedpoint.switching import SWITCH_LSB
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import matrix_diagram
@@ -490,6 +491,7 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "lugre": lugre,
         "fixed": fixed,
         "fixed_refused": fixed_refused,
+        "fixed_switch_lsb": str(SWITCH_LSB),
         "fixed_log": [p.mono(r.name) for r in runs[:1]],
         "fixed_no_log": [] if runs else ["no log"],
         "no_lugre": [] if lugre else ["no LuGre result was given (edm-export --lugre LUGRE.json)"],
