@@ -127,6 +127,50 @@ def test_random_matrices(seed: int, tmp_path: Path) -> None:
         np.testing.assert_array_equal(got, model_outputs(result, real, RANGES))
 
 
+@pytest.mark.parametrize("name", ["tan_amp", "tan_phase"])
+def test_the_tangents_clear_of_their_poles(name: str, tmp_path: Path) -> None:
+    # Over +-40 rad a tangent crosses its poles and is refused; over a range clear of
+    # them both words realise it (the table's margin doubles the range it covers).
+    narrow = {"theta_w": (0.0, 1.5), "theta_uw": (0.0, 50.0), "omega": (-1.5, 1.5)}
+    result = cg.as_result(cg.element_compensator(name))
+    for real in ("q31", "q15"):
+        got = build_and_run(result, real, tmp_path / real, input_range=narrow)
+        np.testing.assert_array_equal(got, model_outputs(result, real, narrow))
+
+
+@pytest.mark.parametrize("real", ["q31", "q15"])
+def test_the_kit_applies_the_switching_rule_as_the_export_measures(real: str,
+                                                                   tmp_path: Path) -> None:
+    # The kit's verdict, its switching events and its raw deviation are the Python
+    # measurement's on the same vectors, integer for integer.
+    from edm_sym.engines.fixedpoint.accuracy import measure
+    from edm_sym.engines.fixedpoint.formats import to_int
+
+    result = load_result(cg.EXAMPLE)
+    export(result, "c", tmp_path, real=real)
+    export(result, "test", tmp_path, real=real)
+    cg.run(["gcc", *WARN, *SANITIZE["gcc"], "-o", "kit", "edm_comp_test.c", "edm_comp.c"],
+           cwd=tmp_path)
+    out = subprocess.run(["./kit"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.startswith("PASS"), out.stdout + out.stderr
+    dev = int(re.search(r"max deviation (\d+) LSB \(tolerance", out.stdout).group(1))
+    events, raw = map(int, re.search(r"(\d+) switching event\(s\) under the rule; without it, "
+                                     r"max deviation (\d+) LSB", out.stdout).groups())
+    source = source_of(result)
+    model = build_model(result.compensator, sha256=source.sha256, target=result.target,
+                        axis=source.axis)
+    b = fixed_build(model, source, real, None, recorded_log(result))
+    d = b.design
+    x = b.signals[:, :KIT_SAMPLES]
+    _, ref = measure(d, result.compensator, x)
+    total = run_fixed(d, input_ints(d, x))[1]
+    assert dev == int(np.max(np.abs(total - to_int(ref.total, d.out_frac, d.word))))
+    assert raw == int(np.max(np.abs(total - to_int(ref.raw, d.out_frac, d.word))))
+    assert events == len(ref.events)
+    if real == "q15":  # the relay's first switching, 75 samples early, is in the kit's vectors
+        assert events == 1 and raw > 100 * dev
+
+
 @pytest.mark.parametrize("real", ["double", "float"])
 def test_kit_of_the_real_builds_passes(real: str, tmp_path: Path) -> None:
     result = load_result(cg.EXAMPLE)
