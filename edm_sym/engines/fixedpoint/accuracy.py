@@ -81,21 +81,27 @@ class Accuracy:
         """True when the a priori bound is finite."""
         return math.isfinite(self.bound)
 
-    def lines(self, word: str, unit: str, on: str) -> list[str]:
-        """The deviation lines the header and the command line state."""
+    def lines(self, word: str, unit: str, on: str, *, switching: bool = False) -> list[str]:
+        """The deviation lines the header and the command line state.
+
+        ``switching``: the model holds a switching element (the events are stated,
+        none included).
+        """
         bound = (f"a priori bound {self.bound:.3g} {unit} over the input ranges" if self.bounded
                  else "no a priori bound (a switching element or an integrator): measured only")
         return [f"promised: at most {self.goal:.3g} {unit} from the double simulator "
                 f"({_goal_text(self.goal, self.rms)} of the RMS {self.rms:.4g} {unit})",
                 f"measured: {self.measured:.3g} {unit} ({self.measured / self.rms:.2e} of the RMS) "
                 f"on {self.samples} samples of {on}, by the bit-exact model of the {word} C"
-                f"{self.rule_text(unit)}",
+                f"{self.rule_text(unit, switching)}",
                 bound]
 
-    def rule_text(self, unit: str) -> str:
-        """``"; 2 switching events (...); without the rule 1.2 N m"`` ("" without events)."""
-        if not self.events:
+    def rule_text(self, unit: str, switching: bool) -> str:
+        """``"; 2 switching events (...); without the rule 1.2 N m"`` ("" without a switching element)."""
+        if not switching:
             return ""
+        if not self.events:
+            return "; no switching event"
         return f"; {describe_events(self.events)}; without the rule {self.raw:.3g} {unit}"
 
 
@@ -238,13 +244,14 @@ class Build:
 
     def lines(self, unit: str) -> list[str]:
         """The deviation lines the header and the command line state."""
-        out = self.accuracy.lines(self.design.word.name, unit, EXCITATION)
+        switching = any(st.switches for row in self.design.rows for st in row.stages)
+        out = self.accuracy.lines(self.design.word.name, unit, EXCITATION, switching=switching)
         if self.log is not None:
             out.append(f"on the log {self.log_name}: measured {self.log.measured:.3g} {unit} "
                        f"({self.log.measured / self.log.rms:.2e} of its RMS {self.log.rms:.4g} "
                        f"{unit}) on {self.log.samples} samples, within the promise"
-                       f"{self.log.rule_text(unit)}")
-        if any(st.switches for row in self.design.rows for st in row.stages):
+                       f"{self.log.rule_text(unit, switching)}")
+        if switching:
             out.append(f"switching rule: a relay or sign reads the build's own input where it "
                        f"is within {SWITCH_LSB} LSB of the double simulator's (docs/codegen.md, "
                        "The switching rule); the figures hold under it")
