@@ -4,7 +4,8 @@ The harness (tests/firmware/m4_harness.c, start-up and linker script beside
 it) reads the log through semihosting file I/O, steps the compensator and
 writes every row and the total; they must match the host float build within
 1e-4 of the RMS of the compensation torque. The test prints the step
-function's code size and stack use.
+function's code size and stack use, the init function's, the object's .text
+and the state's size (the figures docs/codegen.md tables).
 """
 
 from __future__ import annotations
@@ -55,9 +56,14 @@ def build_m4(folder: Path) -> dict[str, int]:
     su = (folder / "edm_comp.su").read_text()
     stack = {m.group(1): int(m.group(2)) for m in re.finditer(r":(\w+)\s+(\d+)\s+(\w+)", su)}
     text = int(cg.run(["arm-none-eabi-size", "edm_comp.o"], cwd=folder).splitlines()[1].split()[0])
+    # The state's size on the target: an object as large as the state type, measured by nm.
+    (folder / "state_size.c").write_text('#include "edm_comp.h"\n'
+                                         "char edm_comp_state_size[sizeof(edm_comp_state_t)];\n")
+    cg.run([cc, *cg.M4, "-c", "state_size.c", "-o", "state_size.o"], cwd=folder)
+    state = int(cg.run(["arm-none-eabi-nm", "--size", "state_size.o"], cwd=folder).split()[0], 16)
     return {"step_bytes": sizes["edm_comp_step"], "init_bytes": sizes["edm_comp_init"],
             "text_bytes": text, "step_stack": stack["edm_comp_step"],
-            "init_stack": stack["edm_comp_init"]}
+            "init_stack": stack["edm_comp_init"], "state_bytes": state}
 
 
 @pytest.mark.parametrize("case", list(CASES))
@@ -90,5 +96,6 @@ def test_cortex_m4f_under_qemu_matches_host_float(case: str, tmp_path: Path,
         print(f"\n[cortex-m4f -Os, {case}] edm_comp_step {figures['step_bytes']} B code, "
               f"{figures['step_stack']} B stack; edm_comp_init {figures['init_bytes']} B, "
               f"{figures['init_stack']} B stack; .text {figures['text_bytes']} B; "
+              f"state {figures['state_bytes']} B; "
               f"max |M4 - host float| = {err_host:.2e} ({err_host / rms:.1e} RMS), "
               f"|M4 - simulator| = {err_sim:.2e} ({err_sim / rms:.1e} RMS)")
