@@ -1,6 +1,7 @@
 """The q31 and q15 C on the host: strict warnings, sanitizers, bit for bit the Python model.
 
-Each build is compiled by gcc (and clang for the shipped example) with
+Each build is compiled by gcc (and clang: for the shipped example always, for
+every element kind and the random matrices with ``--slow``) with
 ``-Wall -Wextra -Wconversion`` and the undefined-behaviour sanitizer (signed
 overflow included); a harness runs the kit's vectors through ``<prefix>_step``
 and every output must equal the bit-exact model's integer; the kit itself must
@@ -100,12 +101,19 @@ def test_example_bit_exact_and_kit_passes(real: str, cc: str, tmp_path: Path) ->
     assert not re.search(r"\b\d+\.\d*|\b\d+[eE][-+]?\d", code), "a real literal"
 
 
+#: gcc always; clang too with --slow (it doubles the compile time).
+COMPILERS = ["gcc", pytest.param("clang", marks=pytest.mark.slow)]
+
+
+@pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("real", ["q31", "q15"])
 @pytest.mark.parametrize("name", sorted(e.name for e in all_elements()))
-def test_every_element_kind(name: str, real: str, tmp_path: Path) -> None:
+def test_every_element_kind(name: str, real: str, cc: str, tmp_path: Path) -> None:
+    if not shutil.which(cc):
+        pytest.skip(f"{cc} is not installed")
     result = cg.as_result(cg.element_compensator(name))
     try:
-        got = build_and_run(result, real, tmp_path, input_range=RANGES)
+        got = build_and_run(result, real, tmp_path, cc, input_range=RANGES)
     except FixedPointError as exc:  # a refusal names the stage and says why
         assert str(exc).startswith("rows[") and "elements[" in str(exc), str(exc)
         assert "\n" not in str(exc)
@@ -113,28 +121,34 @@ def test_every_element_kind(name: str, real: str, tmp_path: Path) -> None:
     np.testing.assert_array_equal(got, model_outputs(result, real, RANGES))
 
 
+@pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("seed", range(4))
-def test_random_matrices(seed: int, tmp_path: Path) -> None:
+def test_random_matrices(seed: int, cc: str, tmp_path: Path) -> None:
+    if not shutil.which(cc):
+        pytest.skip(f"{cc} is not installed")
     rng = np.random.default_rng(1000 + seed)
     codes = [e.code for e in all_elements()]
     result = cg.as_result(cg.random_compensator(rng, must_use=codes[(7 * seed) % len(codes)]))
     for real in ("q31", "q15"):
         try:
-            got = build_and_run(result, real, tmp_path / real, input_range=RANGES)
+            got = build_and_run(result, real, tmp_path / real, cc, input_range=RANGES)
         except FixedPointError as exc:
             assert str(exc).startswith(("rows[", "inputs:")), str(exc)
             continue
         np.testing.assert_array_equal(got, model_outputs(result, real, RANGES))
 
 
+@pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("name", ["tan_amp", "tan_phase"])
-def test_the_tangents_clear_of_their_poles(name: str, tmp_path: Path) -> None:
+def test_the_tangents_clear_of_their_poles(name: str, cc: str, tmp_path: Path) -> None:
     # Over +-40 rad a tangent crosses its poles and is refused; over a range clear of
     # them both words realise it (the table's margin doubles the range it covers).
+    if not shutil.which(cc):
+        pytest.skip(f"{cc} is not installed")
     narrow = {"theta_w": (0.0, 1.5), "theta_uw": (0.0, 50.0), "omega": (-1.5, 1.5)}
     result = cg.as_result(cg.element_compensator(name))
     for real in ("q31", "q15"):
-        got = build_and_run(result, real, tmp_path / real, input_range=narrow)
+        got = build_and_run(result, real, tmp_path / real, cc, input_range=narrow)
         np.testing.assert_array_equal(got, model_outputs(result, real, narrow))
 
 

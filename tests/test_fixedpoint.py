@@ -158,3 +158,16 @@ def test_the_rule_feeds_a_first_switching_element_the_build_s_input() -> None:
     np.testing.assert_array_equal(ref.stages[0][-1], simulate_row(comp, row, seen))
     assert ref.events and ref.events[0].where.startswith("rows[0].elements[0] (hysteresis")
     assert not np.array_equal(ref.total, ref.raw)
+
+
+def test_a_log_beyond_an_input_s_format_is_refused_naming_the_input(tmp_path, capsys) -> None:  # noqa: ANN001
+    # omega given as -10 .. 10 (format +-16) while the stored log reaches 63 rad/s: the
+    # excitation meets the promise, the log saturates and misses it.
+    code = export_main([str(cg.EXAMPLE), "--target", "c", "--real", "q31", "-o",
+                        str(tmp_path / "out"), "--input-range", "omega=-10:10"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert err[-1].startswith("edm-export: inputs: omega: reaches 63.2235, beyond the range +-16 "
+                              "of its format"), err[-1]
+    assert "on the log plant:auger/abstraction, more than its promise" in err[-1]
+    assert not (tmp_path / "out" / "edm_comp.c").exists()

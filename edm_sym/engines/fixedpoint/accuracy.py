@@ -207,15 +207,35 @@ def check_accuracy(d: FixedDesign, comp: Any, x: np.ndarray, *, on: str = "the e
     goal = d.word.goal * rms if promise is None else promise
     acc = Accuracy(rms, goal, dev, d.error, x.shape[-1], raw, ref.events)
     if refuse and dev > acc.goal:
+        miss = (f"the {d.word.name} build misses the double simulator by {dev:.3g} on {on}"
+                + ("" if not ref.events else
+                   f" (under the switching rule, {describe_events(ref.events)})")
+                + f", more than {_goal_text(acc.goal, rms) if promise is None else 'its promise'}"
+                + f"{' of the RMS' if promise is None else ''} ({acc.goal:.3g})")
+        outside = _outside(d, x)
+        if outside:
+            raise FixedPointError(f"{outside}; {miss}")
         where, why = culprit(d, comp, x)
-        rule = "" if not ref.events else f" (under the switching rule, {describe_events(ref.events)})"
         raise FixedPointError(
-            f"{where}: the {d.word.name} build misses the double simulator by {dev:.3g} on "
-            f"{on}{rule}, more than {_goal_text(acc.goal, rms) if promise is None else 'its promise'}"
-            f"{' of the RMS' if promise is None else ''} ({acc.goal:.3g}); {why}; use "
+            f"{where}: {miss}; {why}; use "
             f"{'--real q31' if d.word.name == 'q15' else '--real float'} or narrow the input "
             "ranges (--input-range)")
     return acc
+
+
+def _outside(d: FixedDesign, x: np.ndarray) -> str:
+    """The first read input of ``x`` beyond its format's range (it saturates), or ""."""
+    read = {row.input_index for row in d.rows}
+    for i in sorted(read):
+        top = d.word.max_int * 2.0 ** -d.input_fracs[i]
+        peak = float(np.max(np.abs(x[i]), initial=0.0))
+        if peak > top:
+            name = d.inputs[i]
+            lo, hi = d.ranges[name]
+            return (f"inputs: {name}: reaches {peak:.6g}, beyond the range +-{top:.6g} of its "
+                    f"format (from the range {lo:.6g} .. {hi:.6g}), where it saturates; widen it "
+                    f"with --input-range {name}=LO:HI")
+    return ""
 
 
 @dataclass(frozen=True)
