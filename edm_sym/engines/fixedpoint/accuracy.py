@@ -73,8 +73,8 @@ class Accuracy:
     measured: float
     bound: float
     samples: int
-    raw: float = 0.0
-    events: tuple[SwitchEvent, ...] = ()
+    raw: float
+    events: tuple[SwitchEvent, ...]
 
     @property
     def bounded(self) -> bool:
@@ -146,7 +146,8 @@ def culprit(d: FixedDesign, comp: Any, x: np.ndarray) -> tuple[str, str]:
     deviates by more than the word's goal of its range (else the one that
     grows the deviation most). The reason says whether the stage errs by
     itself (its own error, on its quantised input) or turns its input's small
-    deviation into a large one (an integrator or a steep function).
+    deviation into a large one (an integrator, a steep function, or a switching
+    element whose input strays further than the rule allows).
     """
     u = input_ints(d, x)
     rows, _, per = run_fixed(d, u, stages=True)
