@@ -148,6 +148,9 @@ def run_cli(args: argparse.Namespace) -> int:
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})
+    from edm_sym.application.summary import physics_line, with_physics
+
+    result, phys = with_physics(result, data)
     save_result(result, output)
     reason = result.provenance.get("stop_reason")
     print(f"wrote {output}")
@@ -165,9 +168,7 @@ def run_cli(args: argparse.Namespace) -> int:
     line = searches_line(result.provenance, par)
     if line:
         print(line)
-    from edm_sym.application.summary import physics_line
-
-    line = physics_line(result, data) if reason != "interrupted" else None
+    line = physics_line(phys)
     if line:
         print(line)
     _warn_flags(result, output, data)

@@ -235,7 +235,9 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                               config=self._config(), seed=self.seed, time_limit=self.time_limit,
                               workers=self.workers, callback=reporter.abstraction, axis=axis,
                               searches=self.searches)
-        self.result_ = result
+        from edm_sym.application.summary import with_physics
+
+        self.result_ = with_physics(result, data)[0]
         self.n_features_in_ = X.shape[1]
         self.feature_names_in_ = np.asarray(names, dtype=object)
         return self

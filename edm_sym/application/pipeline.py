@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from edm_sym.application.summary import with_physics
 from edm_sym.core.data import ColumnRoles, DataLog, is_plant_spec, join_logs, match_sample_time
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, OutputError
 from edm_sym.core.fileio import check_outputs, read_toml, write_atomic
@@ -421,6 +422,7 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
             stored["eval_data"] = pipe.evaluation_data[0]
         if lugre is not None:
             stored["lugre"] = lugre_file.name
+        result, _ = with_physics(result, abst_logs[0] if len(abst_logs) == 1 else abst_logs)
         save_result(replace(result, report_inputs=stored), result_file)
         if result.provenance.get("stop_reason") == "interrupted":
             # The best result so far is saved; the rest of the flow must not run on it.

@@ -30,7 +30,8 @@ from edm_sym.core.bounds import bound_summary
 from edm_sym.core.fitness import rms
 from edm_sym.core.units import axis_units
 
-__all__ = ["fitness_line", "negligible_rows", "physics_line", "print_summary", "result_flags"]
+__all__ = ["fitness_line", "negligible_rows", "physics_line", "physics_of", "print_summary", "result_flags",
+           "with_physics"]
 
 #: A row below this share of the target's RMS is negligible (as in ``edm describe``).
 NEGLIGIBLE = 0.01
@@ -103,13 +104,12 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
     return out
 
 
-def physics_line(result: Any, log: Any) -> str | None:
-    """The laws the model holds by its behaviour on ``log``'s motion, in one line.
+def physics_of(result: Any, log: Any) -> Any:
+    """The laws the model holds by its behaviour on ``log``'s motion (one log or a list).
 
-    ``physics (by behaviour, over log.csv): coulomb level 0.948 N m; viscous
-    coefficient 0.00506 N m s/rad``: the same laws as ``edm describe``'s
-    ``physics`` (:mod:`edm_sym.engines.physics`), whose shares are measured on
-    the whole log. None when the log has no motion to probe over.
+    :func:`edm_sym.engines.physics.physics_on_log` with the shares measured on
+    the whole log: what ``edm abstract`` prints and writes into result.json's
+    ``physics``. None when the log has no motion to probe over.
     """
     from edm_sym.core.roles import input_roles
     from edm_sym.engines.physics import PhysicsOptions, physics_on_log
@@ -124,16 +124,41 @@ def physics_line(result: Any, log: Any) -> str | None:
         rows = np.concatenate([simulate_rows(comp, comp.matrix.rows, x) for x in xs], axis=1)
     x = np.concatenate(xs, axis=1)
     target = np.concatenate([lg.column(result.target, role="target column") for lg in logs])
-    log = logs[0]
+    first = logs[0]
     source = ", ".join(str(lg.source) for lg in logs)
-    g = log.scalars.get("observer_bandwidth")
+    g = first.scalars.get("observer_bandwidth")
     g = float(g) if isinstance(g, int | float) and not isinstance(g, bool) and g > 0 else None
     try:
-        phys = physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows, target=target,
-                              ts=log.ts, source=source, axis=getattr(result, "axis", "rotary"),
+        return physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows, target=target,
+                              ts=first.ts, source=source, axis=getattr(result, "axis", "rotary"),
                               bandwidth=g, options=PhysicsOptions())
     except (ValueError, np.linalg.LinAlgError):
         return None
+
+
+def with_physics(result: Any, log: Any) -> tuple[Any, Any]:
+    """``result`` with its ``physics`` measured on ``log`` (:func:`physics_of`), and the physics.
+
+    An interrupted run's result is returned as it is (its model is the search's
+    unfinished one, and the answer to an interrupt must not wait for probes).
+    """
+    from dataclasses import replace
+
+    if result.provenance.get("stop_reason") == "interrupted":
+        return result, None
+    phys = physics_of(result, log)
+    if phys is None:
+        return result, None
+    return replace(result, physics=phys.to_json()), phys
+
+
+def physics_line(phys: Any) -> str | None:
+    """The laws of ``phys`` (:func:`physics_of`) in one line.
+
+    ``physics (by behaviour, over log.csv): coulomb level 0.948 N m; viscous
+    coefficient 0.00506 N m s/rad``: the same laws as ``edm describe``'s
+    ``physics`` (:mod:`edm_sym.engines.physics`). None without physics.
+    """
     if phys is None:
         return None
     laws = "; ".join(f"{t.kind.value} " + ", ".join(f"{k.replace('_', ' ')} {v:.4g}"
@@ -141,7 +166,7 @@ def physics_line(result: Any, log: Any) -> str | None:
                                                      for k, (v, u) in t.parameters.items()
                                                      if k not in ("phase", "peak", "harmonics"))
                      for t in phys.terms) or "no law above the threshold"
-    return f"physics (by behaviour, over {source}): {laws}"
+    return f"physics (by behaviour, over {phys.ranges.source}): {laws}"
 
 
 def result_flags(result: Any, log: Any = None) -> list[str]:

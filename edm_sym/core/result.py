@@ -88,6 +88,11 @@ class EdmResult:
         (:meth:`edm_sym.core.data.DataLog.record`): ``use``, ``file``,
         ``sha256``, ``rows``, ``sample_time`` and ``columns`` with their roles;
         empty for a hand-written model.
+    physics : mapping
+        The laws the model holds by its behaviour on the abstraction logs'
+        motion (:func:`edm_sym.engines.physics.physics_on_log`, the ``physics``
+        key of ``edm describe --json``), as ``edm abstract`` printed them;
+        empty when not measured (a hand-written model, an interrupted run).
     """
 
     compensator: Compensator
@@ -102,6 +107,7 @@ class EdmResult:
     parsimony: Mapping[str, Any] = field(default_factory=dict)
     axis: str = "rotary"
     logs: tuple[Mapping[str, Any], ...] = ()
+    physics: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.axis not in AXES:
@@ -202,6 +208,7 @@ class EdmResult:
             **({"validation": dict(self.validation)} if self.validation else {}),
             **({"parsimony": dict(self.parsimony)} if self.parsimony else {}),
             **({"logs": [dict(g) for g in self.logs]} if self.logs else {}),
+            **({"physics": dict(self.physics)} if self.physics else {}),
         }
 
 
@@ -461,7 +468,8 @@ def parse_result(doc: Any, name: str = "result.json") -> EdmResult:
                      report_inputs=dict(doc.get("report_inputs", {})),
                      validation=dict(doc.get("validation", {})),
                      parsimony=_parsimony_from_json(name, doc, inputs),
-                     axis=doc.get("axis", "rotary"), logs=_logs_from_json(name, doc))
+                     axis=doc.get("axis", "rotary"), logs=_logs_from_json(name, doc),
+                     physics=dict(doc.get("physics", {})))
 
 
 def _logs_from_json(name: str, doc: Mapping[str, Any]) -> tuple[dict[str, Any], ...]:

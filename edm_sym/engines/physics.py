@@ -50,6 +50,7 @@ from edm_sym.core.elements.realisation import DelayLine, LinearFilter
 from edm_sym.core.matrix import Compensator
 from edm_sym.core.roles import motion_signals
 from edm_sym.core.units import axis_units
+from edm_sym.engines.plant.filters import lowpass
 
 TWO_PI = 2.0 * math.pi
 
@@ -91,6 +92,10 @@ class PhysicsOptions:
         The longest measuring window of one run [s].
     uncertain : float, default 0.1
         A named parameter whose relative standard error is above this is flagged.
+    support : float, default 0.01
+        With data, a law is named only when the model without its term (passed
+        through the observer's low-pass) fits the target worse by at least this
+        share of its RMSE: a term the data does not need is not physics.
     """
 
     threshold: float = 0.01
@@ -101,9 +106,10 @@ class PhysicsOptions:
     max_settle: float = 3.0
     max_window: float = 10.0
     uncertain: float = 0.1
+    support: float = 0.01
 
     def __post_init__(self) -> None:
-        for name in ("threshold", "uncertain"):
+        for name in ("threshold", "uncertain", "support"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and 0.0 <= v < 1.0):
                 raise ValueError(f"{name}: expected a number in [0, 1), found {v!r}")
@@ -717,6 +723,27 @@ def model_physics(
     def rel(i: int) -> float:
         return float(stderr[i] / abs(coef[i])) if coef[i] != 0 else math.inf
 
+    fit_on_data = None
+    if data is not None and data.get("model") is not None:
+        model_out = np.asarray(data["model"], dtype=float)
+        target_on_data = np.asarray(data["target"], dtype=float)
+        fit_on_data = float(np.sqrt(np.mean((target_on_data - model_out) ** 2)))
+
+    def _unsupported(cols: list[int]) -> str:
+        """Why the data does not support a law (empty when it does): the model without the
+        law's term fits the target no worse than with it (by :data:`SUPPORT`)."""
+        if fit_on_data is None or not fit_on_data > 0:
+            return ""
+        term = RX[:, cols] @ coef[cols]
+        if bandwidth is not None and term.size > 1:
+            term = lowpass(term, bandwidth, ts)
+        without = float(np.sqrt(np.mean((target_on_data - model_out + term) ** 2)))
+        if without >= (1.0 + opts.support) * fit_on_data:
+            return ""
+        return (f"the data does not support it: without its term the model fits the target "
+                f"{'better' if without < fit_on_data else 'no worse'} (RMSE {without:.4g} "
+                f"against {fit_on_data:.4g}, a rise under {100 * opts.support:g} %)")
+
     terms: list[Law] = []
     left: list[tuple[TermKind, str]] = []
     th_ = opts.threshold
@@ -730,6 +757,10 @@ def model_physics(
             return
         if bad_sign:
             left.append((kind, bad_sign))
+            return
+        unsupported = _unsupported(cols)
+        if unsupported:
+            left.append((kind, unsupported))
             return
         flags = list(extra)
         for k, e in errors.items():
@@ -899,6 +930,7 @@ def physics_on_log(
         out = out + np.gradient(out, ts, axis=1) / bandwidth
     data = {"velocity": vel[part], "acceleration": acc[part],
             "angle": None if angle is None else angle[part],
-            "target": np.asarray(target, dtype=float)[part], "rows": out[:, part]}
+            "target": np.asarray(target, dtype=float)[part], "rows": out[:, part],
+            "model": np.asarray(rows, dtype=float).sum(axis=0)[part]}
     return model_physics(comp, roles, ranges, axis=axis, bandwidth=bandwidth, data=data,
                          options=options, lags=input_lags(x, roles, ts))

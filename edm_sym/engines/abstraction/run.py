@@ -36,6 +36,7 @@ from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, N
 from edm_sym.core.fitness import magnitude_problem
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem, target_name_problem
+from edm_sym.core.roles import LOG_ROLE_NAMES, ROLES, default_role
 from edm_sym.core.units import axis_units
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
@@ -57,6 +58,7 @@ from edm_sym.engines.abstraction.searches import (
     run_searches,
     search_seeds,
 )
+from edm_sym.engines.abstraction.seeding import angle_input, harmonic_rows, residual_harmonics
 from edm_sym.engines.abstraction.worker import default_workers
 from edm_sym.engines.simulate import fitness, simulate_rows
 
@@ -217,9 +219,11 @@ class _Runner:
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
                  checkpoint: Path | None, time_limit: float | None,
                  callback: Callable[[GenerationInfo], bool | None] | None,
-                 mask: np.ndarray | None = None):
+                 mask: np.ndarray | None = None, periodic: int | None = None,
+                 starts: Sequence[int] = ()):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
-        self.mask = mask
+        self.mask, self.periodic, self.starts = mask, periodic, tuple(starts)
+        self._lam: np.ndarray | float = 1.0
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
         self.inputs = tuple(inputs)
         self.state, self.rng, self.checkpoint = state, rng, checkpoint
@@ -276,6 +280,7 @@ class _Runner:
                                   "expected a positive weight for some sample of the data, "
                                   "found all zero")
             self.evaluator.set_weights(lam)
+            self._lam = lam
             self.evaluator.set_reject_poles(step.ga.reject_poles)
             ops = Operators(step.ga, self.x.shape[0])
             cur = self.state.current
@@ -312,12 +317,32 @@ class _Runner:
                 # gain 0): a step starts where the previous one ended.
                 pop.codes[0, m0:], pop.ps[0, m0:] = THROUGH, 0.0
                 pop.codes[0, m0:, -1], pop.ps[0, m0:, -1] = zero
+            if m0 < m and ga.harmonic_seeds and self.periodic is not None:
+                self._seed_harmonics(pop, seed, step, count, ops)
         # Individual 0 is the seed as it is: the gain fit improves copies of it later.
         fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
         best = float(np.min(fit))
         return StepState(step=k, generation=0, blocks=0, block_start_best=best, ref_best=best,
                          since_improvement=0, done=False, population=pop, fitness=fit,
                          history=[best], evaluations=p + extra)
+
+    def _seed_harmonics(self, pop: Population, seed: Population, step: StepConfig, count: int,
+                        ops: Operators) -> None:
+        """Give inherited individuals 1, 2 ... a harmonic of the seed's residual as their
+        first new row (:mod:`edm_sym.engines.abstraction.seeding`)."""
+        matrix = seed.matrix(0, self.inputs)
+        comp = Compensator(matrix, self.ts, self.ranges, len(self.y) * self.ts)
+        with np.errstate(all="ignore"):
+            resid = self.y - simulate_rows(comp, matrix.rows, self.x, starts=self.starts).sum(axis=0)
+        if not np.all(np.isfinite(resid)):
+            return
+        w = np.broadcast_to(np.asarray(self._lam, dtype=float), resid.shape)
+        found = residual_harmonics(self.x[self.periodic], resid, w, step.ga.harmonic_seeds)
+        rows = harmonic_rows(found, self.ranges, step.n_elements, set(ops.allowed.tolist()))
+        m0 = seed.codes.shape[1]
+        for i, (codes, ps) in enumerate(rows[:max(count - 1, 0)], start=1):
+            pop.inputs[i, m0] = self.periodic
+            pop.codes[i, m0], pop.ps[i, m0] = codes, ps
 
     def _evaluate(self, pop: Population, ops: Operators, keep_first: bool = False
                   ) -> tuple[np.ndarray, int]:
@@ -609,7 +634,8 @@ def abstract(
                                          for s in seeds])
     client, own_client = _dask_client(scheduler)
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
-                     human=human, hold=hold, executor=executor, client=client, n=n, starts=starts)
+                     human=human, hold=hold, executor=executor, client=client, n=n, starts=starts,
+                     periodic=angle_input(_roles(data, inputs), axis))
     try:
         outcomes = run_searches(job, seeds, files, resume, workers=workers, time_limit=time_limit,
                                 callback=callback)
@@ -669,6 +695,8 @@ class _SearchJob:
     n: int = 0
     #: Where further logs begin in ``x`` (several logs, each simulated from rest).
     starts: tuple[int, ...] = ()
+    #: The input a ripple is a function of (:func:`seeding.angle_input`), or None.
+    periodic: int | None = None
 
     @property
     def mask(self) -> np.ndarray | None:
@@ -702,7 +730,7 @@ class _SearchJob:
         runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
                          checkpoint=checkpoint, time_limit=time_limit, callback=callback,
-                         mask=self.mask)
+                         mask=self.mask, periodic=self.periodic, starts=self.starts)
         reason = "completed"
         try:
             # One BLAS thread in this process's lane too (see worker.worker_init).
@@ -729,6 +757,16 @@ class _SearchJob:
                                     history=tuple(r.history), generations=r.generations,
                                     evaluations=r.evaluations, weighting=r.weighting))
         return steps, reason
+
+
+def _roles(data: DataLog, inputs: Sequence[str]) -> list[str | None]:
+    """Each input's physical role: the log's, else the default of its name."""
+    out = []
+    for name in inputs:
+        role = data.role_of(name)
+        role = LOG_ROLE_NAMES.get(role, role) if role is not None else default_role(name)
+        out.append(role if role in ROLES else None)
+    return out
 
 
 def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:

@@ -56,6 +56,7 @@ _GA_FIELDS: dict[str, tuple[str, float | None, float | None]] = {
     "local_search_evaluations": ("int", 1, None),
     "restarts": ("int", 0, None),
     "reject_poles": ("bool", None, None),
+    "harmonic_seeds": ("int", 0, 64),
     "elements": ("names", None, None),
 }
 
@@ -125,6 +126,11 @@ class GaSettings:
         rows has a pole inside the range the row's input takes in the data
         (:mod:`edm_sym.engines.abstraction.poles`). Such a row fits the log
         it was found on and fails on the next; False keeps them (the paper's GA).
+    harmonic_seeds : int
+        When a step adds rows on a rotary axis with an angle input, this many
+        inherited individuals get as their first new row one of the strongest
+        angle harmonics of the inherited model's residual
+        (:mod:`edm_sym.engines.abstraction.seeding`); 0: never.
     elements : tuple of str or None
         Element names the GA may use; None: every registered element.
     """
@@ -151,6 +157,7 @@ class GaSettings:
     local_search_evaluations: int = 300
     restarts: int = 0
     reject_poles: bool = True
+    harmonic_seeds: int = 3
     elements: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:

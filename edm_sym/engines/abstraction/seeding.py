@@ -1,0 +1,113 @@
+"""Harmonic seeds: new rows drawn from the residual's strongest angle harmonics.
+
+A ripple over the angle (cogging, a gear's mesh, a periodic load) needs a row
+``A sin(k theta + phi)``: a gain of k on the angle, a sine with its phase and
+an amplitude, three genes that must all be right before the row helps. A GA
+that draws rows at random meets that rarely (docs/benchmarks.md#bench_namingpy:
+the plants' ripple was missing from most models). So when a step adds rows to
+the model it inherits, a few of the inherited individuals get, as their first
+new row, a harmonic of the inherited model's residual over the angle:
+
+1. the inherited model is simulated on the training samples (held-out blocks
+   weigh nothing, as in the fitness);
+2. the residual is fitted by weighted least squares on ``cos k theta`` and
+   ``sin k theta`` for ``k = 1 .. MAX_ORDER`` and a constant;
+3. the ``ga.harmonic_seeds`` orders of largest amplitude each give one
+   individual the row ``theta -> gain(k) -> sin_phase(phi) -> gain(A)``.
+
+The GA decides the rest: a seed that does not lower the fitness is outranked
+and bred out like any other row, and pruning removes a row the held-out blocks
+do not need. Seeds are drawn on a rotary axis with an angle input only (a
+wrapped angle preferred; ``sin`` makes the unwrapped one alike). They take no
+random numbers, so a run stays a function of its seed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from edm_sym.core.elements import BY_NAME, ParamRange
+
+__all__ = ["MAX_ORDER", "angle_input", "harmonic_rows", "residual_harmonics"]
+
+#: Highest harmonic order looked for (cycles per revolution).
+MAX_ORDER = 10
+
+
+def angle_input(roles: Sequence[str | None], axis: str) -> int | None:
+    """The input a ripple is a function of: the wrapped angle, else the angle; None on a
+    linear axis or without one."""
+    if axis != "rotary":
+        return None
+    for want in ("angle_wrapped", "angle"):
+        if want in roles:
+            return list(roles).index(want)
+    return None
+
+
+def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndarray,
+                       count: int, max_order: int = MAX_ORDER
+                       ) -> list[tuple[int, float, float]]:
+    """The ``count`` strongest harmonics of ``residual`` over ``theta``.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        The angle [rad].
+    residual : numpy.ndarray
+        Target minus the model, same length.
+    weights : numpy.ndarray
+        Non-negative sample weights (0 on held-out samples).
+    count : int
+    max_order : int
+
+    Returns
+    -------
+    list of (int, float, float)
+        ``(k, amplitude, phase)`` of ``amplitude sin(k theta + phase)``, largest
+        amplitude first.
+    """
+    w = np.sqrt(np.maximum(np.asarray(weights, dtype=float), 0.0))
+    keep = w > 0
+    if count <= 0 or np.count_nonzero(keep) <= 2 * max_order + 1:
+        return []
+    th, r, w = np.asarray(theta, dtype=float)[keep], np.asarray(residual, dtype=float)[keep], w[keep]
+    ks = np.arange(1, max_order + 1)
+    arg = np.outer(th, ks)
+    basis = np.hstack([np.ones((th.size, 1)), np.cos(arg), np.sin(arg)])
+    coef, *_ = np.linalg.lstsq(basis * w[:, None], r * w, rcond=None)
+    if not np.all(np.isfinite(coef)):
+        return []
+    a, b = coef[1:max_order + 1], coef[max_order + 1:]
+    amp = np.hypot(a, b)
+    order = np.argsort(-amp, kind="stable")[:count]
+    # a cos + b sin = A sin(k theta + phi) with A = hypot(a, b), phi = atan2(a, b).
+    return [(int(ks[i]), float(amp[i]), float(math.atan2(a[i], b[i]))) for i in order
+            if amp[i] > 0]
+
+
+def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[str, ParamRange],
+                  n_elements: int, allowed: set[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each harmonic as a row's genes ``(codes, ps)`` of length ``n_elements``.
+
+    A harmonic whose gain or amplitude lies outside the gain's range, or a
+    schedule without ``gain`` and ``sin_phase`` (or with fewer than three
+    elements a row), gives no row.
+    """
+    gain, sine, through = BY_NAME["gain"], BY_NAME["sin_phase"], BY_NAME["through"]
+    if n_elements < 3 or not {gain.code, sine.code} <= allowed:
+        return []
+    g, s = ranges[gain.name], ranges[sine.name]
+    out = []
+    for k, amp, phase in harmonics:
+        if not (g.low <= k <= g.high and g.low <= amp <= g.high):
+            continue
+        codes = np.full(n_elements, through.code, dtype=np.int64)
+        ps = np.zeros(n_elements)
+        codes[:3] = gain.code, sine.code, gain.code
+        ps[:3] = g.encode(float(k)), s.encode(phase), g.encode(amp)
+        out.append((codes, ps))
+    return out
