@@ -371,3 +371,85 @@ def test_a_row_whose_prefix_a_row_of_its_batch_computes_starts_from_it(
     assert all(a is b for a, b in zip(simulate_table(reference, table, outs), outs, strict=True))
     for got_row, want in zip(got, outs, strict=True):
         _close(got_row, want)
+
+
+#: Logs laid end to end: a long one, one shorter than the longest delay, one of a sample.
+STARTS = (1200, 1203, 1204)
+
+
+def _logs_apart(fn, x: np.ndarray) -> np.ndarray:  # noqa: ANN001
+    """``fn`` on each log of ``x`` on its own, laid end to end again."""
+    edges = [0, *STARTS, x.shape[-1]]
+    return np.concatenate([fn(x[..., a:b]) for a, b in zip(edges, edges[1:], strict=False)],
+                          axis=-1)
+
+
+@pytest.mark.parametrize("el", all_elements(), ids=lambda e: e.name)
+def test_several_logs_each_run_from_rest_in_the_kernel(el) -> None:  # noqa: ANN001
+    # Each log alone and all of them in one pass give the same bits; the reference
+    # realisation on each log alone gives them to rounding.
+    x = _signal(el.code + 70)
+    for p in (0.0, 0.5, 1.0):
+        a = RANGES[el.name].decode(p) if el.param is not None else None
+        stage = el.realise(a, TS)
+        prog, _ = kernel.compile_row([stage])
+        got = kernel.run_program(prog, x, starts=STARTS)
+        _same_bits(got, _logs_apart(lambda s, p=prog: kernel.run_program(p, s.copy()), x))
+        with np.errstate(all="ignore"):
+            _close(got, _logs_apart(lambda s, st=stage: st.run(s.copy()), x))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_batch_over_several_logs_gives_each_log_its_own_numbers(seed: int) -> None:
+    # Filters run in groups of four and two, numpy steps between them, stored prefixes:
+    # no state crosses from one log into the next.
+    stages, inputs = _batch(seed)
+    x = np.vstack([_signal(30 * seed + k) for k in range(3)])
+    programs = [kernel.compile_row(s, store=True)[0] for s in stages]
+    count = len(programs)
+    slots = np.cumsum([0, *(p.stores for p in programs)])
+    store, inter = np.empty((count, N)), np.empty((slots[-1], N))
+    kernel.run_rows(programs, inputs, store, np.arange(count, dtype=np.int64), inter,
+                    [range(slots[r], slots[r + 1]) for r in range(count)], sources=x,
+                    bounds=kernel.log_bounds(N, STARTS))
+    for r, prog in enumerate(programs):
+        _same_bits(store[r], _logs_apart(lambda s, p=prog: kernel.run_program(p, s.copy()),
+                                         x[inputs[r]]))
+        y = _logs_apart(lambda s, st=stages[r]: simulate_row_stages(st, s), x[inputs[r]])
+        _close(store[r], y)
+
+
+def simulate_row_stages(stages, x: np.ndarray) -> np.ndarray:  # noqa: ANN001
+    """A row's realisations one after another on ``x`` (from rest)."""
+    y = x.copy()
+    with np.errstate(all="ignore"):
+        for stage in stages:
+            y = stage.run(y)
+    return y
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_kernel_worker_over_several_logs_equals_the_reference_worker(seed: int) -> None:
+    inputs, codes, ps = _random_rows(seed + 20, 60, 4)
+    x = np.vstack([_signal(10 * seed + k + 5) for k in range(3)])
+    ctx = SimContext(x, TS, RANGES, starts=STARTS)
+    table = row_table(inputs, codes, ps)
+    fast = Worker(ctx, ctx.decoder(), use_kernel=True)
+    reference = Worker(ctx, ctx.decoder(), use_kernel=False)
+    for _ in range(2):  # the second time from the prefixes the first one stored
+        got = simulate_table(fast, table)
+        want = simulate_table(reference, table)
+        for r in range(len(table)):
+            if REGISTRY[int(codes[r, 0])].from_sin_cos is not None:
+                scale = max(1.0, float(np.nanmax(np.abs(want[r]), initial=0.0)))
+                assert np.allclose(got[r], want[r], rtol=0, atol=1e-12 * scale, equal_nan=True)
+                continue
+            _close(got[r], want[r])
+
+
+def test_log_bounds_refuse_starts_outside_the_signal() -> None:
+    assert kernel.log_bounds(10).tolist() == [0, 10]
+    assert kernel.log_bounds(10, (4, 7)).tolist() == [0, 4, 7, 10]
+    for bad in ((0,), (4, 4), (7, 4), (10,)):
+        with pytest.raises(ValueError, match="starts: expected increasing sample indices"):
+            kernel.log_bounds(10, bad)

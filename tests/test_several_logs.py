@@ -94,6 +94,29 @@ def test_the_fitness_over_two_logs_is_their_length_weighted_sum() -> None:
     assert not np.allclose(crossed[ok], both[ok], rtol=1e-9)
 
 
+def test_several_logs_run_on_the_row_kernel_as_the_reference_runs_them() -> None:
+    # The fitness over two logs on the row kernel (each state restarting at the second
+    # log's first sample) equals the reference realisations' (each log from rest).
+    from edm_sym.engines import kernel
+
+    a, b = _log(1, 300), _log(2, 200)
+    ranges = default_ranges(TS, 300 * TS)
+    pop = _population(seed=5, size=32)
+    joined = join_logs([a, b], ["tau", "omega"])
+    scores = []
+    for use_kernel in (True, False):
+        with Evaluator(joined.stack(["omega"]), joined.columns["tau"], TS, ranges, workers=1,
+                       starts=(300,)) as ev:
+            assert ev._local.use_kernel is kernel.NUMBA
+            ev._local.use_kernel = use_kernel
+            scores.append(ev.evaluate(pop.inputs, pop.codes, pop.ps))
+    fast, reference = scores
+    np.testing.assert_array_equal(np.isfinite(fast), np.isfinite(reference))
+    ok = np.isfinite(reference)
+    assert ok.sum() > len(pop) // 2
+    np.testing.assert_allclose(fast[ok], reference[ok], rtol=1e-9)
+
+
 def test_two_logs_give_the_model_of_their_summed_fitness() -> None:
     a, b = _log(1, 400), _log(2, 300)
     cfg = AbstractionConfig(steps=(StepConfig(n_rows=2, n_elements=3,

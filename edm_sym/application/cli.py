@@ -133,10 +133,10 @@ def _add_export_args(p: argparse.ArgumentParser) -> None:
                         "result records (repeatable)")
     p.add_argument("--pdf", action="store_true", help="compile the LaTeX report with latexmk")
     p.add_argument("--data", metavar="DATA", nargs="+",
-                   help="abstraction log(s), for the report's figures (the first) and the summary "
-                        "(per log and over all)")
+                   help="abstraction log(s), for the report (figures per log, the fit per log "
+                        "and over all) and the summary")
     p.add_argument("--eval-data", metavar="DATA", nargs="+",
-                   help="evaluation log(s), for the report (the first) and the summary")
+                   help="evaluation log(s), for the report and the summary, as --data")
     p.add_argument("--lugre", metavar="LUGRE.json", help="LuGre result, for the report's comparison")
     _add_shared(p, "--ts", "sample time of logs without a 't' column")
     p.add_argument("--front-member", type=int, metavar="K",
@@ -417,8 +417,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
     notes: list[str] = []
-    # The report draws the first log of each kind and tables the RMSE on every one; the
-    # summary judges all of them.
+    # The report draws every log and gives the fit on each and over all; the summary
+    # judges all of them.
     written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
                      data=_one_or_all(args.data), eval_data=_one_or_all(args.eval_data),
                      lugre=args.lugre,

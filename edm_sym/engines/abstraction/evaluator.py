@@ -165,8 +165,8 @@ class Evaluator:
         (:meth:`set_reject_poles`).
     starts : sequence of int
         Where further logs begin in the signals: several logs laid end to
-        end, each simulated from rest (with the reference realisations: the
-        row kernel runs one signal).
+        end, each simulated from rest (the row kernel restarts every state at
+        each log's first sample).
     """
 
     #: Batches with fewer individuals to evaluate than this run in this process.

@@ -6,7 +6,8 @@ it computes go into that store (a process's own
 :class:`~edm_sym.engines.abstraction.cache.SlotStore`, or a chunk's view of
 the shared one, :class:`~edm_sym.engines.abstraction.prefixes.ChunkPrefixes`).
 With numba the row kernel (:mod:`edm_sym.engines.kernel`) runs the rows in
-batches; without it the reference realisations run, row after row.
+batches; without it the reference realisations run, row after row. Either
+way several logs laid end to end (``ctx.starts``) run each from rest.
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ class WorkerView(Protocol):
 
     def prefix_store(self) -> SlotStore:
         """This process's prefix store."""
+
+    def bounds(self) -> np.ndarray:
+        """The row kernel's log bounds (each log's first sample, then the length)."""
 
 
 def simulate_table(worker: WorkerView, table: np.ndarray,
@@ -161,14 +165,15 @@ def simulate_into(worker: WorkerView, table: np.ndarray, store: np.ndarray, dest
             elements += n - found
             if storing:
                 produced.update(new)
-        _run_batch(pool, batch, n, store, dest, sources, used)
+        _run_batch(pool, batch, n, store, dest, sources, used, worker.bounds())
         todo = later
     return elements
 
 
 def _run_batch(pool: SlotStore | ChunkPrefixes, batch: list, n: int, store: np.ndarray,
-               dest: np.ndarray, sources: np.ndarray, used: set[bytes]) -> None:
-    """Run a batch of rows in the kernel; record their prefixes.
+               dest: np.ndarray, sources: np.ndarray, used: set[bytes], bounds: np.ndarray
+               ) -> None:
+    """Run a batch of rows in the kernel (each log from rest: ``bounds``); record their prefixes.
 
     The prefixes rows start from (``used``) keep their slots during the batch.
     """
@@ -181,7 +186,7 @@ def _run_batch(pool: SlotStore | ChunkPrefixes, batch: list, n: int, store: np.n
         at += len(b[3])
     kernel.run_rows([b[2] for b in batch], [b[5] for b in batch], store,
                     np.array([dest[b[0]] for b in batch], dtype=np.int64), pool.rows, row_slots,
-                    sources=sources)
+                    sources=sources, bounds=bounds)
     for key, slot in zip(keys, slots, strict=True):
         pool.commit(key, slot)
     for _, line, _, _, _, _, keep in batch:

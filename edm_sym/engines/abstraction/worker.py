@@ -101,6 +101,10 @@ class SimContext:
     #: Where further logs begin in the signals (several logs: each simulated from rest).
     starts: tuple[int, ...] = ()
 
+    def bounds(self) -> np.ndarray:
+        """The row kernel's log bounds: each log's first sample, then the length."""
+        return kernel.log_bounds(self.inputs.shape[1], self.starts)
+
     def decoder(self) -> dict[int, tuple[type[Element], ParamRange | None]]:
         """Element class and range by element code."""
         return {c: (cls, self.ranges[cls.name] if cls.param is not None else None)
@@ -220,7 +224,8 @@ class ChunkResult:
 
 @dataclass(frozen=True)
 class Segmented:
-    """A stage with state run over several logs laid end to end, each from rest."""
+    """A stage with state run over several logs laid end to end, each from rest
+    (the reference realisations; the row kernel restarts its states itself)."""
 
     stage: Any
     starts: tuple[int, ...]
@@ -244,7 +249,8 @@ class Worker:
     input directly (the paper's position-dependent friction; its class
     declares ``from_sin_cos``) then costs two multiply-adds instead of a sine
     per sample. ``use_kernel``: simulate with the numba row kernel (default
-    when numba is installed), else with the reference realisations.
+    when numba is installed), else with the reference realisations. Several
+    logs laid end to end (``ctx.starts``) run either way, each from rest.
     """
 
     ctx: SimContext
@@ -263,6 +269,13 @@ class Worker:
     work: np.ndarray | None = field(default=None)
     pool_pid: int = field(default=0)
     prefix_rows: np.ndarray | None = field(default=None)
+    log_bounds: np.ndarray | None = field(default=None)
+
+    def bounds(self) -> np.ndarray:
+        """The row kernel's log bounds of this run's signals (computed once)."""
+        if self.log_bounds is None:
+            self.log_bounds = self.ctx.bounds()
+        return self.log_bounds
 
     def sin_cos(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """sin and cos of input ``k`` (computed once)."""
@@ -344,10 +357,8 @@ def worker_for(token: str, blob: bytes | None = None, ctx: SimContext | None = N
             if blob is None:
                 return None
             ctx = pickle.loads(blob)  # noqa: S301 (bytes pickled by the evaluator)
-        # The row kernel runs one signal from rest; several logs run the realisations, each
-        # log from rest (Segmented).
-        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows,
-                     use_kernel=kernel.NUMBA and not ctx.starts)
+        # Several logs: the row kernel restarts every state at each log's first sample.
+        hit = Worker(ctx, ctx.decoder(), rows, prefix_rows=prefix_rows)
         _WORKERS[token] = hit
         while len(_WORKERS) > 4:
             _WORKERS.popitem(last=False)

@@ -16,7 +16,10 @@ same order (direct form II transposed as ``scipy.signal.lfilter`` runs it,
 numpy's NaN rules for limits and signs), and the transcendental functions
 are the C library's (:mod:`edm_sym.core.elements.libm`), as in the reference
 simulator, so the kernel agrees with it to rounding (tested to 1e-12; bit for
-bit on the machines tried).
+bit on the machines tried). Several logs laid end to end run in one pass,
+every state restarting from rest at each log's first sample
+(:func:`~edm_sym.engines.kernel.program.log_bounds`), as the reference
+simulator's ``starts`` does.
 
 numba is optional (``pip install edm_sym[fast]``). Without it :data:`NUMBA` is
 False and the genetic algorithm runs the reference realisations instead; the
@@ -37,6 +40,7 @@ from edm_sym.engines.kernel.program import (
     Program,
     compile_row,
     compile_steps,
+    log_bounds,
     run_program,
     run_rows,
     simulate_rows,
@@ -44,7 +48,8 @@ from edm_sym.engines.kernel.program import (
 from edm_sym.engines.kernel.trace import TraceOps, encode, gene_encoder
 
 __all__ = ["NUMBA", "Program", "TraceOps", "compile_row", "compile_steps", "dot", "encode",
-           "gene_encoder", "numba", "run_program", "run_rows", "score", "simulate_rows"]
+           "gene_encoder", "log_bounds", "numba", "run_program", "run_rows", "score",
+           "simulate_rows"]
 
 #: CPU seconds the first compilation took on the development machine (docs only).
 COMPILE_SECONDS_HINT = 9

@@ -8,6 +8,12 @@ or a stored prefix: no separate copy), with its integers ``i1``, ``i2`` (a lengt
 Each instruction is one tight loop over the signal, which a signal of 20 000
 samples runs from the L2 cache.
 
+The signal may be several logs laid end to end (``bounds``: the first sample
+of each log, then the signal's length): an instruction with state (a filter,
+a delay, a relay) starts from rest at each log's first sample, so no state
+crosses from one log into the next; within a log its operations are those
+of one log alone, in the same order. Static instructions ignore the bounds.
+
 A filter is a recurrence: each sample waits for the previous one (an add, a
 multiply and a subtract, about nine cycles), so one row's filter runs at the
 latency of that chain, not at the machine's throughput. A ``GROUP`` line runs
@@ -63,87 +69,94 @@ GROUP = 14
 
 
 @_jit
-def _lfilter1(v, x, b0, b1, a1):  # noqa: ANN001, ANN202
-    # Direct form II transposed, operation for operation as lfilter runs it.
-    z = 0.0
-    for k in range(v.shape[0]):
-        u = x[k]
-        y = z + b0 * u
-        z = u * b1 - y * a1
-        v[k] = y
+def _lfilter1(v, x, b0, b1, a1, bounds):  # noqa: ANN001, ANN202
+    # Direct form II transposed, operation for operation as lfilter runs it, each log
+    # from rest.
+    for j in range(bounds.shape[0] - 1):
+        z = 0.0
+        for k in range(bounds[j], bounds[j + 1]):
+            u = x[k]
+            y = z + b0 * u
+            z = u * b1 - y * a1
+            v[k] = y
 
 
 @_jit
-def _lfilter2(v, x, c, coef):  # noqa: ANN001, ANN202
+def _lfilter2(v, x, c, coef, bounds):  # noqa: ANN001, ANN202
     # Second order (the notch), as the general loop of _apply with the state in registers.
     b0, b1, b2, a1, a2 = coef[c], coef[c + 1], coef[c + 2], coef[c + 3], coef[c + 4]
-    z0 = z1 = 0.0
-    for k in range(v.shape[0]):
-        u = x[k]
-        y = z0 + b0 * u
-        z0 = z1 + u * b1 - y * a1
-        z1 = u * b2 - y * a2
-        v[k] = y
+    for j in range(bounds.shape[0] - 1):
+        z0 = z1 = 0.0
+        for k in range(bounds[j], bounds[j + 1]):
+            u = x[k]
+            y = z0 + b0 * u
+            z0 = z1 + u * b1 - y * a1
+            z1 = u * b2 - y * a2
+            v[k] = y
 
 
 @_jit
-def _lfilter2_x2(v0, v1, x0, x1, c0, c1, coef):  # noqa: ANN001, ANN202
+def _lfilter2_x2(v0, v1, x0, x1, c0, c1, coef, bounds):  # noqa: ANN001, ANN202
     b00, b10, b20, a10, a20 = coef[c0], coef[c0 + 1], coef[c0 + 2], coef[c0 + 3], coef[c0 + 4]
     b01, b11, b21, a11, a21 = coef[c1], coef[c1 + 1], coef[c1 + 2], coef[c1 + 3], coef[c1 + 4]
-    z00 = z10 = z01 = z11 = 0.0
-    for k in range(v0.shape[0]):
-        u = x0[k]
-        y = z00 + b00 * u
-        z00 = z10 + u * b10 - y * a10
-        z10 = u * b20 - y * a20
-        v0[k] = y
-        u = x1[k]
-        y = z01 + b01 * u
-        z01 = z11 + u * b11 - y * a11
-        z11 = u * b21 - y * a21
-        v1[k] = y
+    for j in range(bounds.shape[0] - 1):
+        z00 = z10 = z01 = z11 = 0.0
+        for k in range(bounds[j], bounds[j + 1]):
+            u = x0[k]
+            y = z00 + b00 * u
+            z00 = z10 + u * b10 - y * a10
+            z10 = u * b20 - y * a20
+            v0[k] = y
+            u = x1[k]
+            y = z01 + b01 * u
+            z01 = z11 + u * b11 - y * a11
+            z11 = u * b21 - y * a21
+            v1[k] = y
 
 
 @_jit
-def _lfilter1_x2(v0, v1, x0, x1, c0, c1, coef):  # noqa: ANN001, ANN202
+def _lfilter1_x2(v0, v1, x0, x1, c0, c1, coef, bounds):  # noqa: ANN001, ANN202
     b00, b10, a10 = coef[c0], coef[c0 + 1], coef[c0 + 2]
     b01, b11, a11 = coef[c1], coef[c1 + 1], coef[c1 + 2]
-    z0 = z1 = 0.0
-    for k in range(v0.shape[0]):
-        u = x0[k]
-        y = z0 + b00 * u
-        z0 = u * b10 - y * a10
-        v0[k] = y
-        u = x1[k]
-        y = z1 + b01 * u
-        z1 = u * b11 - y * a11
-        v1[k] = y
+    for j in range(bounds.shape[0] - 1):
+        z0 = z1 = 0.0
+        for k in range(bounds[j], bounds[j + 1]):
+            u = x0[k]
+            y = z0 + b00 * u
+            z0 = u * b10 - y * a10
+            v0[k] = y
+            u = x1[k]
+            y = z1 + b01 * u
+            z1 = u * b11 - y * a11
+            v1[k] = y
 
 
 @_jit
-def _lfilter1_x4(v0, v1, v2, v3, x0, x1, x2, x3, c0, c1, c2, c3, coef):  # noqa: ANN001, ANN202
+def _lfilter1_x4(v0, v1, v2, v3, x0, x1, x2, x3, c0, c1, c2, c3, coef,  # noqa: ANN001, ANN202
+                 bounds):
     b00, b10, a10 = coef[c0], coef[c0 + 1], coef[c0 + 2]
     b01, b11, a11 = coef[c1], coef[c1 + 1], coef[c1 + 2]
     b02, b12, a12 = coef[c2], coef[c2 + 1], coef[c2 + 2]
     b03, b13, a13 = coef[c3], coef[c3 + 1], coef[c3 + 2]
-    z0 = z1 = z2 = z3 = 0.0
-    for k in range(v0.shape[0]):
-        u = x0[k]
-        y = z0 + b00 * u
-        z0 = u * b10 - y * a10
-        v0[k] = y
-        u = x1[k]
-        y = z1 + b01 * u
-        z1 = u * b11 - y * a11
-        v1[k] = y
-        u = x2[k]
-        y = z2 + b02 * u
-        z2 = u * b12 - y * a12
-        v2[k] = y
-        u = x3[k]
-        y = z3 + b03 * u
-        z3 = u * b13 - y * a13
-        v3[k] = y
+    for j in range(bounds.shape[0] - 1):
+        z0 = z1 = z2 = z3 = 0.0
+        for k in range(bounds[j], bounds[j + 1]):
+            u = x0[k]
+            y = z0 + b00 * u
+            z0 = u * b10 - y * a10
+            v0[k] = y
+            u = x1[k]
+            y = z1 + b01 * u
+            z1 = u * b11 - y * a11
+            v1[k] = y
+            u = x2[k]
+            y = z2 + b02 * u
+            z2 = u * b12 - y * a12
+            v2[k] = y
+            u = x3[k]
+            y = z3 + b03 * u
+            z3 = u * b13 - y * a13
+            v3[k] = y
 
 
 @_jit
@@ -162,7 +175,7 @@ def _input(code, s, store, dest, sources, inter):  # noqa: ANN001, ANN202
 
 
 @_jit
-def _group(code, s, m, order, coef, store, dest, sources, inter):  # noqa: ANN001, ANN202
+def _group(code, s, m, order, coef, store, dest, sources, inter, bounds):  # noqa: ANN001, ANN202
     # The filters of order 1 or 2 of lines s .. s + m - 1 (distinct rows), several at a time.
     j = 0
     if order == 2:
@@ -171,12 +184,12 @@ def _group(code, s, m, order, coef, store, dest, sources, inter):  # noqa: ANN00
             _lfilter2_x2(_row(code, a, store, dest), _row(code, b, store, dest),
                          _input(code, a, store, dest, sources, inter),
                          _input(code, b, store, dest, sources, inter),
-                         int(code[a, 3]), int(code[b, 3]), coef)
+                         int(code[a, 3]), int(code[b, 3]), coef, bounds)
             j += 2
         if j < m:
             a = s + j
             _lfilter2(_row(code, a, store, dest), _input(code, a, store, dest, sources, inter),
-                      int(code[a, 3]), coef)
+                      int(code[a, 3]), coef, bounds)
         return
     while j + 4 <= m:
         a, b, c, d = s + j, s + j + 1, s + j + 2, s + j + 3
@@ -186,25 +199,27 @@ def _group(code, s, m, order, coef, store, dest, sources, inter):  # noqa: ANN00
                      _input(code, b, store, dest, sources, inter),
                      _input(code, c, store, dest, sources, inter),
                      _input(code, d, store, dest, sources, inter),
-                     int(code[a, 3]), int(code[b, 3]), int(code[c, 3]), int(code[d, 3]), coef)
+                     int(code[a, 3]), int(code[b, 3]), int(code[c, 3]), int(code[d, 3]), coef,
+                     bounds)
         j += 4
     if j + 2 <= m:
         a, b = s + j, s + j + 1
         _lfilter1_x2(_row(code, a, store, dest), _row(code, b, store, dest),
                      _input(code, a, store, dest, sources, inter),
                      _input(code, b, store, dest, sources, inter),
-                     int(code[a, 3]), int(code[b, 3]), coef)
+                     int(code[a, 3]), int(code[b, 3]), coef, bounds)
         j += 2
     if j < m:
         a = s + j
         c = int(code[a, 3])
         _lfilter1(_row(code, a, store, dest), _input(code, a, store, dest, sources, inter),
-                  coef[c], coef[c + 1], coef[c + 2])
+                  coef[c], coef[c + 1], coef[c + 2], bounds)
 
 
 @_jit
-def _apply(op, i1, i2, r1, r2, coef, v, x, inter):  # noqa: ANN001, ANN202, C901, PLR0912
-    # One instruction over the whole signal: v from x (x is v: in place).
+def _apply(op, i1, i2, r1, r2, coef, v, x, inter, bounds):  # noqa: ANN001, ANN202, C901, PLR0912
+    # One instruction over the whole signal: v from x (x is v: in place); an instruction
+    # with state starts from rest at each log's first sample (bounds).
     N = v.shape[0]  # noqa: N806
     if op == MUL:
         for k in range(N):
@@ -224,51 +239,61 @@ def _apply(op, i1, i2, r1, r2, coef, v, x, inter):  # noqa: ANN001, ANN202, C901
     elif op == LFILTER:
         n, c = i1, i2
         if n == 1:
-            _lfilter1(v, x, coef[c], coef[c + 1], coef[c + 2])
+            _lfilter1(v, x, coef[c], coef[c + 1], coef[c + 2], bounds)
             return
         if n == 2:
-            _lfilter2(v, x, c, coef)
+            _lfilter2(v, x, c, coef, bounds)
             return
         z = np.zeros(n)
-        for k in range(N):
-            u = x[k]
-            y = z[0] + coef[c] * u
-            for i in range(n - 1):
-                z[i] = z[i + 1] + u * coef[c + 1 + i] - y * coef[c + n + 1 + i]
-            z[n - 1] = u * coef[c + n] - y * coef[c + 2 * n]
-            v[k] = y
+        for j in range(bounds.shape[0] - 1):
+            z[:] = 0.0
+            for k in range(bounds[j], bounds[j + 1]):
+                u = x[k]
+                y = z[0] + coef[c] * u
+                for i in range(n - 1):
+                    z[i] = z[i + 1] + u * coef[c + 1 + i] - y * coef[c + n + 1 + i]
+                z[n - 1] = u * coef[c + n] - y * coef[c + 2 * n]
+                v[k] = y
     elif op == FIR:
         # A pure FIR (the derivative) as the reference computes it: no a terms.
         n, c = i1, i2
         if n == 1:
             b0, b1 = coef[c], coef[c + 1]
-            zf = 0.0
-            for k in range(N):
-                u = x[k]
-                v[k] = zf + b0 * u
-                zf = u * b1
+            for j in range(bounds.shape[0] - 1):
+                zf = 0.0
+                for k in range(bounds[j], bounds[j + 1]):
+                    u = x[k]
+                    v[k] = zf + b0 * u
+                    zf = u * b1
             return
         zs = np.zeros(n)
-        for k in range(N):
-            u = x[k]
-            y = zs[0] + coef[c] * u
-            for i in range(n - 1):
-                zs[i] = zs[i + 1] + u * coef[c + 1 + i]
-            zs[n - 1] = u * coef[c + n]
-            v[k] = y
+        for j in range(bounds.shape[0] - 1):
+            zs[:] = 0.0
+            for k in range(bounds[j], bounds[j + 1]):
+                u = x[k]
+                y = zs[0] + coef[c] * u
+                for i in range(n - 1):
+                    zs[i] = zs[i + 1] + u * coef[c + 1 + i]
+                zs[n - 1] = u * coef[c + n]
+                v[k] = y
     elif op == DELAY:
         n = i1
-        if n < N:  # backwards: in place, each input is read before it is overwritten
-            for k in range(N - 1, n - 1, -1):
-                v[k] = x[k - n]
-        for k in range(min(n, N)):
-            v[k] = 0.0
+        for j in range(bounds.shape[0] - 1):
+            a, b = bounds[j], bounds[j + 1]
+            # Backwards: in place, each input is read before it is overwritten; a log reads
+            # only its own samples, so the logs may go in any order.
+            if n < b - a:
+                for k in range(b - 1, a + n - 1, -1):
+                    v[k] = x[k - n]
+            for k in range(a, min(a + n, b)):
+                v[k] = 0.0
     elif op == RELAY:
-        h = 0.0
-        for k in range(N):
-            u = x[k]
-            h = 1.0 if u >= r1 else (-1.0 if u <= -r1 else h)
-            v[k] = h
+        for j in range(bounds.shape[0] - 1):
+            h = 0.0
+            for k in range(bounds[j], bounds[j + 1]):
+                u = x[k]
+                h = 1.0 if u >= r1 else (-1.0 if u <= -r1 else h)
+                v[k] = h
     elif op == STORE:
         dst = inter[i1]
         for k in range(N):
@@ -294,25 +319,27 @@ def _apply(op, i1, i2, r1, r2, coef, v, x, inter):  # noqa: ANN001, ANN202, C901
 
 
 @_jit
-def run_lines(code, coef, store, dest, inter, sources):  # noqa: ANN001, ANN201
+def run_lines(code, coef, store, dest, inter, sources, bounds):  # noqa: ANN001, ANN201
     """Run lines ``[op, row, i1, i2, r1, r2, src]`` on the rows ``store[dest[row]]``, in order.
 
     A line reads its row in place (``src == -1``), or (a row's first line) its
     input: ``sources[src]`` when ``src >= 0``, the stored prefix
     ``inter[-2 - src]`` when ``src <= -2``. STORE copies its row into ``inter[i1]``;
     a GROUP line runs the filters of the ``i1`` lines that follow (all of
-    order ``i2``) together.
+    order ``i2``) together. ``bounds`` (int64): each log's first sample, then
+    the signal's length; ``[0, N]`` for one log.
     """
     s = 0
     while s < code.shape[0]:
         op = int(code[s, 0])
         if op == GROUP:
             m = int(code[s, 2])
-            _group(code, s + 1, m, int(code[s, 3]), coef, store, dest, sources, inter)
+            _group(code, s + 1, m, int(code[s, 3]), coef, store, dest, sources, inter, bounds)
             s += 1 + m
             continue
         _apply(op, int(code[s, 2]), int(code[s, 3]), code[s, 4], code[s, 5], coef,
-               _row(code, s, store, dest), _input(code, s, store, dest, sources, inter), inter)
+               _row(code, s, store, dest), _input(code, s, store, dest, sources, inter), inter,
+               bounds)
         s += 1
 
 

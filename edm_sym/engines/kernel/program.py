@@ -59,8 +59,8 @@ from edm_sym.engines.kernel.trace import encode, gene_encoder
 if NUMBA:  # the C library's functions compiled too (the same bits, faster)
     libm.use_compiled()
 
-__all__ = ["CALLS", "Program", "compile_row", "compile_steps", "run_program", "run_rows",
-           "simulate_rows"]
+__all__ = ["CALLS", "Program", "compile_row", "compile_steps", "log_bounds", "run_program",
+           "run_rows", "simulate_rows"]
 
 
 @dataclass(frozen=True)
@@ -268,6 +268,33 @@ def _schedule(programs: Sequence[Program], row_slots: Sequence[Sequence[int]],
     return parts, coef
 
 
+def log_bounds(n: int, starts: Sequence[int] = ()) -> np.ndarray:
+    """The kernel's ``bounds`` of a signal of ``n`` samples: each log's first sample, then ``n``.
+
+    Parameters
+    ----------
+    n : int
+        The samples of all the logs, laid end to end.
+    starts : sequence of int
+        Where the logs after the first begin (empty: one log).
+
+    Returns
+    -------
+    numpy.ndarray
+        int64, ``[0, *starts, n]``.
+
+    Raises
+    ------
+    ValueError
+        When ``starts`` are not increasing sample indices inside the signal.
+    """
+    edges = [0, *(int(k) for k in starts), int(n)]
+    if starts and any(b <= a for a, b in zip(edges, edges[1:], strict=False)):
+        raise ValueError(f"starts: expected increasing sample indices between 0 and {n} "
+                         f"(exclusive), found {list(starts)!r}")
+    return np.array(edges, dtype=np.int64)
+
+
 _NO_INTER = np.empty((0, 1))
 _NO_SOURCES = np.empty((1, 1))
 _LOCAL = threading.local()
@@ -292,7 +319,8 @@ def _indices(n: int) -> np.ndarray:
 def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], store: np.ndarray,
              dest: np.ndarray, inter: np.ndarray | None = None,
              row_slots: Sequence[Sequence[int]] | None = None,
-             scratch: np.ndarray | None = None, sources: np.ndarray | None = None) -> None:
+             scratch: np.ndarray | None = None, sources: np.ndarray | None = None,
+             bounds: np.ndarray | None = None) -> None:
     """Run the programs of several rows, each from rest over its whole signal.
 
     Parameters
@@ -318,6 +346,9 @@ def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], st
     sources : numpy.ndarray, optional
         Shape (K, N) float64, C-contiguous: the signals integer starts name
         (neither ``store`` nor ``inter`` may share their memory).
+    bounds : numpy.ndarray, optional
+        Several logs laid end to end (:func:`log_bounds`): every state starts
+        from rest at each log's first sample. Default: one log.
     """
     if not programs:
         return
@@ -334,16 +365,18 @@ def run_rows(programs: Sequence[Program], starts: Sequence[np.ndarray | int], st
         inter = _NO_INTER
     if sources is None:
         sources = _NO_SOURCES
+    if bounds is None:
+        bounds = log_bounds(store.shape[1])
     parts, coef = _schedule(programs, row_slots, first)
     if len(parts) == 1 and isinstance(parts[0], np.ndarray):
-        run_lines(parts[0], coef, store, dest, inter, sources)
+        run_lines(parts[0], coef, store, dest, inter, sources, bounds)
         return
     if scratch is None:
         scratch = _scratch(store.shape[1])
     with np.errstate(all="ignore"):
         for part in parts:
             if isinstance(part, np.ndarray):
-                run_lines(part, coef, store, dest, inter, sources)
+                run_lines(part, coef, store, dest, inter, sources, bounds)
             else:
                 r, i, name, args = part
                 v = store[dest[r]]
@@ -356,7 +389,7 @@ _ONE = np.zeros(1, dtype=np.int64)
 
 def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
                 inter: np.ndarray | None = None, slots: np.ndarray | None = None,
-                scratch: np.ndarray | None = None) -> np.ndarray:
+                scratch: np.ndarray | None = None, starts: Sequence[int] = ()) -> np.ndarray:
     """Run a row's program over the signal ``x`` (shape (N,)), from rest.
 
     Parameters
@@ -374,6 +407,8 @@ def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
         int64; default ``0 .. stores - 1``.
     scratch : numpy.ndarray, optional
         Shape (N,) work array of the numpy steps.
+    starts : sequence of int
+        Where further logs begin in ``x`` (each from rest); empty: one log.
 
     Returns
     -------
@@ -386,7 +421,8 @@ def run_program(program: Program, x: np.ndarray, out: np.ndarray | None = None,
         inter = np.empty((program.stores, x.shape[0]))
     if slots is None:
         slots = np.arange(program.stores, dtype=np.int64)
-    run_rows([program], [x], out.reshape(1, -1), _ONE, inter, [slots], scratch)
+    run_rows([program], [x], out.reshape(1, -1), _ONE, inter, [slots], scratch,
+             bounds=log_bounds(x.shape[0], starts))
     return out
 
 
@@ -405,7 +441,7 @@ def _encoder(element: type, ts: float, a: float | None) -> Any:
 
 
 def simulate_rows(comp: Any, rows: Sequence[Any], inputs: np.ndarray,
-                  out: np.ndarray | None = None) -> np.ndarray:
+                  out: np.ndarray | None = None, starts: Sequence[int] = ()) -> np.ndarray:
     """:func:`edm_sym.engines.simulate.simulate_rows` with the row kernel, rows run together.
 
     Parameters
@@ -418,6 +454,8 @@ def simulate_rows(comp: Any, rows: Sequence[Any], inputs: np.ndarray,
         Shape (n_inputs, N).
     out : numpy.ndarray, optional
         Shape (len(rows), N), where the outputs go (a new array when None).
+    starts : sequence of int
+        Where further logs begin (each from rest, as the reference's ``starts``).
 
     Returns
     -------
@@ -436,5 +474,5 @@ def simulate_rows(comp: Any, rows: Sequence[Any], inputs: np.ndarray,
             steps.append(_encoder(g.element, ts, a)(a))
         programs.append(compile_steps(steps)[0])
     run_rows(programs, [int(row.input) for row in rows], out,
-             np.arange(len(rows), dtype=np.int64), sources=x)
+             np.arange(len(rows), dtype=np.int64), sources=x, bounds=log_bounds(x.shape[-1], starts))
     return out

@@ -5,6 +5,7 @@ figures (``<prefix>_fig_*.pdf``) and, with ``pdf=True``, compiles
 ``<prefix>_report.pdf`` with latexmk. The parts:
 
 * :mod:`edm_sym.outputs.report.runs` -- the compensator (and the LuGre baseline) on the data logs;
+* :mod:`edm_sym.outputs.report.logs` -- each log's contributions and time responses, the fit over all;
 * :mod:`edm_sym.outputs.report.blocks` -- a row's simplified expression as a chain of blocks;
 * :mod:`edm_sym.outputs.report.diagrams` -- the TikZ pictures' layout and labels;
 * :mod:`edm_sym.outputs.report.rows` -- one row's equations, difference equations and physical terms;

@@ -10,7 +10,6 @@ lists of zero or one item, so the template needs nothing but loops.
 
 from __future__ import annotations
 
-import math
 import shlex
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -31,6 +30,14 @@ from edm_sym.outputs.report.flags import (
     negligible_fact,
 )
 from edm_sym.outputs.report.front import front_context
+from edm_sym.outputs.report.logs import (
+    contribution_tables,
+    figure_entry,
+    log_facts,
+    log_kinds,
+    log_rmse,
+    time_figures,
+)
 from edm_sym.outputs.report.rows import (
     KIND_TITLES,
     equation_lines,
@@ -72,8 +79,8 @@ class ReportInputs:
         (:func:`edm_sym.outputs.report.flags.report_classify`; None: the axis's defaults).
     more : sequence of LogRun
         Further logs of either kind after the first (``abstraction`` and
-        ``evaluation`` are the first of each): only the per-log RMSE table
-        shows them.
+        ``evaluation`` are the first of each), numbered among their kind
+        (:func:`edm_sym.outputs.report.logs.number_runs`).
     """
 
     result: Any
@@ -90,6 +97,12 @@ class ReportInputs:
     steady: SteadyState | None = None
     classify: Any = None
     more: Sequence[LogRun] = ()
+
+    @property
+    def logs(self) -> list[LogRun]:
+        """Every log: the abstraction logs, then the evaluation logs, each in the order given."""
+        return [r for first in (self.abstraction, self.evaluation) if first is not None
+                for r in (first, *(m for m in self.more if m.label == first.label))]
 
 
 def package_versions() -> tuple[tuple[str, str], ...]:
@@ -163,59 +176,6 @@ def _chunks(p: EdmLatexPrinter, rows: list[dict[str, str]]) -> list[dict[str, An
     return out
 
 
-def _contribution_tables(p: EdmLatexPrinter, runs: Sequence[LogRun],
-                         figures: Mapping[str, str]) -> list[dict[str, Any]]:
-    out = []
-    for r in runs:
-        c = r.contributions
-        rows = [{"row": p.math(p.signal("y", k + 1)), "rms": p.math(p.number(rms)),
-                 "rmse": p.math(p.number(e)), "drop": p.math(p.number(d))}
-                for k, (rms, e, d) in enumerate(zip(c.rms, c.rmse_cumulative, c.improvement,
-                                                    strict=True))]
-        worse = [k for k, d in enumerate(c.improvement) if d < 0]
-        warn = []
-        if worse:
-            names = ", ".join(p.math(p.signal("y", k + 1)) for k in worse)
-            warn.append(f"Adding {names} makes the fit on this log worse (a negative drop): "
-                        "check the sign and size of "
-                        + ("that row" if len(worse) == 1 else "those rows") + ".")
-        out.append({
-            "log": p.text(r.label), "name": p.mono(r.name), "warnings": warn,
-            "baseline": p.math(p.number(c.rmse_none)), "rows": rows,
-            "figures": [f for f in (_figure(figures, f"contributions_{r.label}",
-                                            f"Row contributions on the {r.label} log "
-                                            f"{p.mono(r.name)}: RMS of each row's output (left) and "
-                                            "the RMSE as the rows are added one by one (right).",
-                                            0.95),
-                                    _figure(figures, f"rows_{r.label}",
-                                            f"Output of each row on the {r.label} log, on a common "
-                                            "scale (signal flow of the element matrix).", 0.95))
-                        if f],
-        })
-    return out
-
-
-def _figure(figures: Mapping[str, str], key: str, caption: str, width: float) -> dict[str, str] | None:
-    if key not in figures:
-        return None
-    return {"file": figures[key], "caption": caption, "label": f"fig:{key.replace('_', '-')}",
-            "width": f"{width:.2f}"}
-
-
-def _time_figures(p: EdmLatexPrinter, runs: Sequence[LogRun], figures: Mapping[str, str],
-                  effort: str) -> list[dict[str, str]]:
-    out = []
-    for r in runs:
-        vs = ", the LuGre model's," if r.lugre is not None else ""
-        for key, what in ((f"time_{r.label}", "over the whole log"),
-                          (f"zoom_{r.label}", "enlarged where the EDM residual is largest")):
-            f = _figure(figures, key, f"Target {effort}, EDM compensation {effort}{vs} and the "
-                        f"residuals on the {r.label} log {p.mono(r.name)}, {what}.", 1.0)
-            if f:
-                out.append(f)
-    return out
-
-
 def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, str],
               has_data: bool, units: AxisUnits) -> dict[str, list[str]]:
     """The friction characteristic's figure and what it shows, as sentences (in ``units``)."""
@@ -239,7 +199,7 @@ def _friction(p: EdmLatexPrinter, st: SteadyState | None, figures: Mapping[str, 
                      "an integral).")
     caption = (f"Steady-state {units.effort} of the velocity rows against constant velocity"
                + (", with the LuGre model's (eq.~14)" if st.lugre is not None else "") + ".")
-    fig = _figure(figures, "friction", caption, 0.95)
+    fig = figure_entry(figures, "friction", caption, 0.95)
     return {"figures": [fig] if fig else [], "notes": notes}
 
 
@@ -349,32 +309,6 @@ def _lugre(p: EdmLatexPrinter, ref: LuGreRef, run: LogRun, u: AxisUnits) -> dict
     }
 
 
-def _log_rmse(p: EdmLatexPrinter, inp: ReportInputs) -> list[dict[str, Any]]:
-    """The RMSE on each log and over all logs of a kind: one table when a kind has several."""
-    if not inp.more:
-        return []
-    runs = [r for r in (inp.abstraction, inp.evaluation) if r is not None]
-    compared = inp.lugre is not None and all(r.lugre is not None for r in [*runs, *inp.more])
-
-    def cells(label: str, name: str, samples: int, edm: float, lugre: float | None) -> dict:
-        return {"log": p.text(label), "name": name, "samples": str(samples),
-                "rmse": p.math(p.number(edm)),
-                "lugre": [p.math(p.number(lugre))] if compared else []}
-
-    rows = []
-    for first in runs:
-        kind = [first, *(r for r in inp.more if r.label == first.label)]
-        for r in kind:
-            rows.append(cells(r.label, p.mono(r.name), len(r.t), r.rmse, r.lugre_rmse))
-        if len(kind) > 1:
-            n = sum(len(r.t) for r in kind)
-            edm = math.sqrt(sum(r.rmse ** 2 * len(r.t) for r in kind) / n)
-            lug = math.sqrt(sum(r.lugre_rmse ** 2 * len(r.t) for r in kind) / n) if compared \
-                else None
-            rows.append(cells(first.label, p.text(f"over all {len(kind)} logs"), n, edm, lug))
-    return [{"lugre_head": [p.text("LuGre")] if compared else [], "rows": rows}]
-
-
 def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
     """The shell commands that regenerate the report and check its numbers."""
     q = shlex.quote
@@ -440,19 +374,15 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
          p.math(r"\Gamma = " + p.number(result.fitness)) + "~" + p.unit(units.force)
          if result.fitness is not None else "not recorded"),
     ]
-    for r in runs:
-        facts.append((f"{r.label.capitalize()} log",
-                      f"{p.mono(r.name)}, {len(r.t)} samples, {p.math(p.number(r.duration))}~s"))
-        if r.sha256:
-            facts.append((f"sha256 of the {r.label} log", p.digest(r.sha256)))
-        facts.append((f"RMSE on the {r.label} log", p.math(p.number(r.rmse)) + "~"
-                      + p.unit(units.force)))
+    facts += log_facts(p, inp.logs, p.unit(units.force))
     if inp.lugre is not None:
         facts.append(("LuGre baseline", p.mono(inp.lugre.name)))
     facts.append(bounds_fact(p, model))
     judged = judge_report_rows(model, runs, inp.classify)  # honest names (edm_sym.outputs.report.flags)
     facts.append(negligible_fact(p, judged, bool(runs)))
-    rows = [row_context(p, model, row, runs, j) for row, j in zip(model.rows, judged, strict=True)]
+    kinds = log_kinds(inp.logs)
+    rms_on = [(k.phrase(p), k.contributions.rms) for k in kinds]
+    rows = [row_context(p, model, row, rms_on, j) for row, j in zip(model.rows, judged, strict=True)]
     overview = [{"number": r["number"], "section": p.ref(f"sec:row{r['number']}"),
                  "input": p.math(p._print(row.input_symbol)),
                  "terms": p.text(", ".join(judged_titles(j, KIND_TITLES))
@@ -473,7 +403,8 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "equation": equation_lines(p, r"\tau_{\mathrm{cmp}}(t)", total),
         "overview": overview,
         "physics": _physics(p, model, result, runs),
-        "log_labels": [p.text(r.label) for r in runs],
+        "log_labels": [p.text(f"{k.label} log" if len(k.runs) == 1
+                              else f"{len(k.runs)} {k.label} logs") for k in kinds],
         "no_data": [] if runs else ["no data log was given (edm-export --data LOG)"],
         "matrix": matrix_diagram(model, EdmLatexPrinter({"digits": 3})),
         "matrix_size": p.math(f"{mat.n_elements} \\times {mat.n_rows}"),
@@ -481,13 +412,14 @@ def report_context(inp: ReportInputs) -> dict[str, Any]:
         "friction": _friction(p, inp.steady, fig, bool(runs), units),
         "param_chunks": _chunks(p, _params(model)),
         "no_params": [] if model.params else ["every element of the matrix is parameter-free"],
-        "contributions": _contribution_tables(p, runs, fig),
-        "fitness": [f for f in [_figure(fig, "fitness", "Best fitness per generation of each "
+        "contributions": contribution_tables(p, inp.logs, fig),
+        "fitness": [f for f in [figure_entry(fig, "fitness", "Best fitness per generation of each "
                                         "hierarchical step (weighted RMSE, eq.~8).", 1.0)] if f],
         "steps": _steps(p, result),
         "no_steps": [] if result.steps else ["the result records no hierarchical steps"],
-        "time": _time_figures(p, runs, fig, units.effort),
-        "log_rmse": _log_rmse(p, inp),
+        "time": time_figures(p, inp.logs, fig, units.effort),
+        "log_rmse": log_rmse(p, inp.logs, inp.lugre is not None
+                             and all(r.lugre is not None for r in inp.logs)),
         "lugre": lugre,
         "fixed": fixed,
         "fixed_refused": fixed_refused,

@@ -20,7 +20,6 @@ from edm_sym.engines.symbolic.model import RowModel, SymbolicModel, X
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import chain_diagram, chain_printer
 from edm_sym.outputs.report.flags import row_flags
-from edm_sym.outputs.report.runs import LogRun
 
 #: Readable names of the physical term kinds (edm_sym.engines.symbolic.classify.KINDS).
 KIND_TITLES = {
@@ -235,10 +234,13 @@ def _elements_text(p: EdmLatexPrinter, row: RowModel) -> str:
 
 
 def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
-                runs: Sequence[LogRun], judged: Any = None) -> dict[str, Any]:
+                rms_on: Sequence[tuple[str, Sequence[float]]], judged: Any = None
+                ) -> dict[str, Any]:
     """The template context of one row (see the module docstring).
 
-    ``judged`` (a :class:`~edm_sym.engines.symbolic.significance.JudgedRow`) names the row
+    ``rms_on`` gives, per kind of log, where (finished LaTeX: ``the abstraction
+    log``) and each row's RMS there. ``judged`` (a
+    :class:`~edm_sym.engines.symbolic.significance.JudgedRow`) names the row
     honestly: only its judged terms, and its flags.
     """
     terms = row.terms if judged is None else tuple(jt.term for jt in judged.terms)
@@ -264,6 +266,6 @@ def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
         "term_lists": [[_term(p, t) for t in terms]] if terms else [],
         "no_terms": [] if terms else no_terms,
         "flags": [] if judged is None else row_flags(p, judged),
-        "rms": [{"log": p.text(r.label), "value": rms_text(p, r.contributions.rms[row.index])}
-                for r in runs],
+        "rms": [{"log": where, "value": rms_text(p, values[row.index])}
+                for where, values in rms_on],
     }

@@ -68,6 +68,8 @@ class LogRun:
         Shape (n_inputs, N): the compensator's inputs on this log, in the result's order.
     observer_bandwidth : float or None
         The log's scalar ``observer_bandwidth`` [rad/s] (docs/describe.md#honest-names).
+    number, of : int
+        The log's place among the report's logs of its kind (1-based) and their count.
     """
 
     label: str
@@ -84,6 +86,13 @@ class LogRun:
     lugre_rmse: float | None = None
     inputs: np.ndarray | None = None
     observer_bandwidth: float | None = None
+    number: int = 1
+    of: int = 1
+
+    @property
+    def key(self) -> str:
+        """The log's part of its figures' names: the kind, then its number after the first."""
+        return self.label if self.number == 1 else f"{self.label}{self.number}"
 
     @property
     def residual(self) -> np.ndarray:
@@ -94,8 +103,6 @@ class LogRun:
     def duration(self) -> float:
         """Length of the log, ``N Ts`` [s]."""
         return len(self.t) * self.ts
-
-
 
 
 def load_log(path: str | Path, result: Any, *, ts: float | None = None,

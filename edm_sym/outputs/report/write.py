@@ -13,6 +13,7 @@ from edm_sym.outputs.report.context import ReportInputs, package_versions, repor
 from edm_sym.outputs.report.flags import report_classify
 from edm_sym.outputs.report.front import FIGURE as FRONT
 from edm_sym.outputs.report.front import front_figure
+from edm_sym.outputs.report.logs import number_runs
 from edm_sym.outputs.report.runs import LogRun, SteadyState, load_log, load_lugre_ref, run_log, steady_state
 
 #: The template of the report (in the templates folder).
@@ -43,7 +44,7 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
     ----------
     result : EdmResult
     runs : list of LogRun
-        The compensator on the abstraction and (or) evaluation logs.
+        The compensator on every abstraction and evaluation log (each drawn).
     out_dir : pathlib.Path
     prefix : str
     steady : SteadyState, optional
@@ -68,18 +69,18 @@ def draw_figures(result: Any, runs: list[LogRun], out_dir: Path, prefix: str,
     for r in runs:
         labels = [f"$y_{{{k + 1}}}$" for k in range(len(r.rows))]
         c = r.contributions
-        out[f"contributions_{r.label}"] = fg.contributions(
-            labels, c.rms, c.rmse_cumulative, path(f"contributions_{r.label}"),
+        out[f"contributions_{r.key}"] = fg.contributions(
+            labels, c.rms, c.rmse_cumulative, path(f"contributions_{r.key}"),
             baseline=c.rmse_none, units=units)
-        out[f"rows_{r.label}"] = fg.row_outputs(r.t, r.rows, path(f"rows_{r.label}"),
-                                                labels=labels)
+        out[f"rows_{r.key}"] = fg.row_outputs(r.t, r.rows, path(f"rows_{r.key}"),
+                                              labels=labels)
         others = [("LuGre (conventional)", r.lugre)] if r.lugre is not None else []
-        out[f"time_{r.label}"] = fg.time_series(r.t, r.target, r.total, path(f"time_{r.label}"),
-                                                title=f"{r.label} log", others=others,
-                                                units=units)
+        title = f"{r.label} log" + ("" if r.of == 1 else f" {r.number} of {r.of}: {r.name}")
+        out[f"time_{r.key}"] = fg.time_series(r.t, r.target, r.total, path(f"time_{r.key}"),
+                                              title=title, others=others, units=units)
         window = fg.zoom_window(r.t, r.residual)
-        out[f"zoom_{r.label}"] = fg.time_series(
-            r.t, r.target, r.total, path(f"zoom_{r.label}"), others=others, window=window,
+        out[f"zoom_{r.key}"] = fg.time_series(
+            r.t, r.target, r.total, path(f"zoom_{r.key}"), others=others, window=window,
             title=f"{window[0]:.3g} s to {window[1]:.3g} s", units=units)
     return out
 
@@ -119,8 +120,9 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
         ``edm_sym.decode(result)`` when the caller has it already.
     data : path-like or list of them, optional
         The abstraction log: RMSE, row contributions, time responses. With
-        several logs the first is drawn and a table gives the RMSE on each
-        log (each simulated from rest) and over all of them.
+        several logs each is simulated from rest and gets its own
+        contributions and time responses, and the fit is given on each and
+        over all of them.
     eval_data : path-like or list of them, optional
         An evaluation log (or several): the same on new data.
     lugre : path-like, optional
@@ -153,17 +155,15 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     validate_prefix(prefix)
     out = Path(out_dir)
     ref = load_lugre_ref(lugre) if lugre is not None else None
-    runs: dict[str, LogRun] = {}
-    more: list[LogRun] = []  # the logs after the first of each kind: the per-log table only
+    every: list[LogRun] = []  # each log simulated from rest on its own
     v_max = 0.0
     for label, given in (("abstraction", data), ("evaluation", eval_data)):
         paths = [] if given is None else [given] if isinstance(given, (str, Path)) else list(given)
-        for k, path in enumerate(paths):
-            run = run_log(result, load_log(path, result, ts=ts, lugre=ref), label=label, lugre=ref)
-            if k == 0:
-                runs[label] = run
-            else:
-                more.append(run)
+        every += [run_log(result, load_log(path, result, ts=ts, lugre=ref), label=label,
+                          lugre=ref) for path in paths]
+    every = number_runs(every)
+    runs = {r.label: r for r in every if r.number == 1}  # the first of each kind
+    more = [r for r in every if r.number > 1]
     # Decoded and judged as `edm describe` does on the same log (the last one), so both
     # name the rows alike.
     classify = report_classify(result, list(runs.values()))
@@ -172,7 +172,7 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
 
         model = decode(result, classify=classify) if classify is not None else decode(result)
     roles = [row.role for row in model.rows]
-    for run in runs.values():
+    for run in every:
         for j, role in enumerate(roles):
             if role == "velocity":
                 signal = run.inputs[result.compensator.matrix.rows[j].input]
@@ -182,12 +182,12 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     # Render before writing anything, so a failure leaves no file behind.
     inputs = ReportInputs(result, model, source.name, source.sha256, prefix,
                           runs.get("abstraction"), runs.get("evaluation"), ref,
-                          {k: figure_name(prefix, k) for k in _figure_keys(result, runs, steady)},
+                          {k: figure_name(prefix, k) for k in _figure_keys(result, every, steady)},
                           package_versions(), ts, steady, classify, tuple(more))
     text = render_report(inputs)
     tex_name = f"{prefix}_report.tex"
     written = write_files(out, {tex_name: text})
-    drawn = draw_figures(result, list(runs.values()), out, prefix, steady)
+    drawn = draw_figures(result, every, out, prefix, steady)
     if set(drawn) != set(inputs.figures):  # the context names exactly the drawn figures
         raise RuntimeError(f"report figures: drew {sorted(drawn)}, the report names "
                            f"{sorted(inputs.figures)}")
@@ -200,10 +200,10 @@ def write_report(result: Any, out_dir: str | Path, *, prefix: str = "edm_comp", 
     return written
 
 
-def _figure_keys(result: Any, runs: dict[str, LogRun], steady: SteadyState | None) -> list[str]:
+def _figure_keys(result: Any, runs: list[LogRun], steady: SteadyState | None) -> list[str]:
     keys = ["friction"] if steady is not None and steady.rows else []
     keys += ["fitness"] if result.steps else []
     keys += [FRONT] if getattr(result, "parsimony", None) else []
-    for label in runs:
-        keys += [f"{k}_{label}" for k in ("contributions", "rows", "time", "zoom")]
+    for r in runs:
+        keys += [f"{k}_{r.key}" for k in ("contributions", "rows", "time", "zoom")]
     return keys
