@@ -7,9 +7,10 @@ training log, the elites are the best by that score. :class:`Fidelities`
 holds the two evaluators (the whole log's, and one of the low-fidelity part,
 made anew when a step's weighting moves the windows); :class:`MultiSteps`
 runs a step's first population, its generations and its restarts as
-:class:`~edm_sym.engines.abstraction.run` does with one evaluator, drawing
+:mod:`~edm_sym.engines.abstraction.run` does with one evaluator, drawing
 the same random numbers in the same order. The local search tunes the best
-individual on the whole training log.
+individual on the low-fidelity part; the tuned copy is scored on the whole
+training log and joins the population only when it is better there.
 
 :func:`evaluate_fitted` is the gain-fitted evaluation both fidelities use.
 """
@@ -203,21 +204,23 @@ class MultiSteps:
         prog = before.after(ga, best)
         if ga.local_search and prog.since_improvement and (
                 prog.done or prog.since_improvement % ga.local_search == 0):
-            # Stagnation: the best individual tuned on the whole training log; the result takes
-            # the place of the worst by low fidelity, so the original stays.
+            # Stagnation: the best individual tuned on the low-fidelity part, the tuned copy
+            # scored on the whole training log; where it is better there, it takes the place
+            # of the worst by low fidelity, so the original stays.
             k = int(np.argmin(new_fit))
-            tuned, tfit, used = tune_parameters(self.fid.full, new_pop.take([k]),
-                                                float(new_fit[k]),
+            tuned, tlow, used = tune_parameters(self.fid.low, new_pop.take([k]),
+                                                float(new_low[k]),
                                                 max_evaluations=ga.local_search_evaluations)
             extra += used
-            if tfit < best:
-                worst = e + int(np.argmax(new_low[e:]))
-                new_pop.inputs[worst], new_pop.codes[worst], new_pop.ps[worst] = (
-                    tuned.inputs[0], tuned.codes[0], tuned.ps[0])
-                new_fit[worst] = tfit
-                new_low[worst] = self.fid.low.evaluate(tuned.inputs, tuned.codes, tuned.ps)[0]
-                best = tfit
-                prog = before.after(ga, best)
+            if tlow < new_low[k]:
+                tfit = float(self.fid.full.evaluate(tuned.inputs, tuned.codes, tuned.ps)[0])
+                if tfit < best:
+                    worst = e + int(np.argmax(new_low[e:]))
+                    new_pop.inputs[worst], new_pop.codes[worst], new_pop.ps[worst] = (
+                        tuned.inputs[0], tuned.codes[0], tuned.ps[0])
+                    new_fit[worst], new_low[worst] = tfit, tlow
+                    best = tfit
+                    prog = before.after(ga, best)
         restarts = cur.restarts
         if prog.done and restarts < ga.restarts:
             restarts += 1
