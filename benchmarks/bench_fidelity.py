@@ -158,7 +158,8 @@ def main(argv: list[str] | None = None) -> None:
             table.append(row)
             peak = max(row["peak_rss"]) / 2**30 if row["peak_rss"] else float("nan")
             print(f"seed {seed} {samples:>7} {fidelity:>5} ({row['mode']}): wall {row['wall']:7.1f} s "
-                  f"(x{row['wall_ratio']:.2f}; search {row['search_seconds']:.1f} s), CPU {row['cpu']:7.1f} s (x{row['cpu_ratio']:.2f}), "
+                  f"(x{row['wall_ratio']:.2f}; search {row['search_seconds']:.1f} s), "
+                  f"CPU {row['cpu']:7.1f} s (x{row['cpu_ratio']:.2f}), "
                   f"{row['scored'] / row['search_seconds']:6.1f} scored/s, full-log share "
                   f"{row['full_log'] / max(1, row['scored']):.3f}, peak RSS {peak:.2f} GiB, "
                   f"held-out RMSE {row['held_out_rmse']:.4g}"

@@ -700,7 +700,7 @@ class _SearchJob:
         if self.fidelity == "multi":
             # The whole log's evaluator scores a few promoted individuals (or the local
             # search's batch) at once: a quarter of the cache, at least room for two such
-            # batches; the windows' evaluator takes the rest (docs/abstraction.md#memory-bound).
+            # batches; the windows' evaluator takes the rest (docs/abstraction.md#multi-fidelity-evaluation).
             full_batch = max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1,
                                             1 + s.n_elements) for s in cfg.steps)
             evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
