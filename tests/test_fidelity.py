@@ -145,8 +145,13 @@ def test_windows_start_at_the_log_and_spread_over_the_fitted_samples() -> None:
     # Held-out samples (Lambda 0) are never a window's start; windows lie on the fitted ones.
     lam = np.ones(n)
     lam[:5000] = 0.0
+    lam[-300:] = 0.5
+    lam[-100:] = 0.0
     plan = plan_windows(lam, n, 1e-3, s)
-    assert plan.index[plan.scored].min() == 5000
+    assert plan.index[plan.scored].min() == 5000 and plan.index.max() == n - 101
+    w = plan.weights(lam)
+    scale = len(plan.index) / np.count_nonzero(plan.scored)
+    assert np.array_equal(w, np.where(plan.scored, lam[plan.index] * scale, 0.0))
 
 
 def test_elites_are_ranked_by_whole_log_and_the_rest_by_low_fidelity() -> None:

@@ -150,8 +150,8 @@ class WindowPlan:
         """Lambda on the low-fidelity signal: the whole log's on the scored samples, 0 on
         the warm-ups, scaled by ``len / scored`` so eq. 8 (a mean over every sample)
         estimates the whole log's."""
-        lam = np.broadcast_to(np.asarray(full, dtype=float), (int(self.index.max()) + 1,))
-        out = np.where(self.scored, lam[self.index], 0.0)
+        lam = np.asarray(full, dtype=float)
+        out = np.where(self.scored, lam[self.index] if lam.ndim else lam, 0.0)
         return out * (len(self.index) / max(1, int(np.count_nonzero(self.scored))))
 
 
