@@ -698,9 +698,9 @@ class _SearchJob:
         cache = int(cfg.cache_mb * 2**20)
         fid = None
         if self.fidelity == "multi":
-            # The whole log's evaluator scores a few promoted individuals (or the local
-            # search's batch) at once: a quarter of the cache, at least room for two such
-            # batches; the windows' evaluator takes the rest (docs/abstraction.md#multi-fidelity-evaluation).
+            # The whole log's evaluator scores a few promoted individuals at once: a quarter
+            # of the cache, at least room for two such batches; the windows' evaluator, whose
+            # rows are short, half (docs/abstraction.md#multi-fidelity-evaluation).
             full_batch = max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1,
                                             1 + s.n_elements) for s in cfg.steps)
             evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
@@ -708,7 +708,7 @@ class _SearchJob:
                                   client=self.client, starts=self.starts)
             fid = Fidelities(evaluator, x, y, ts, self.ranges, cfg.multi_fidelity,
                              executor=self.executor, workers=workers,
-                             cache_bytes=cache - cache // 4, max_batch_rows=batch,
+                             cache_bytes=cache // 2, max_batch_rows=batch,
                              client=self.client)
         else:
             evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
