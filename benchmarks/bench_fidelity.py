@@ -16,16 +16,18 @@ its ratio to the full-fidelity run of the same seed and length.
     python benchmarks/bench_fidelity.py [--seeds 1,2,3] [--workers 2]
         [--runs 20000:full,80000:full,80000:multi,320000:full,320000:multi]
         [--preset auger] [--generations G] [--time-limit S]
-        [--keep DIR] [--out bench_fidelity.json]
+        [--keep DIR] [--out bench_fidelity.json] [--reuse EARLIER.json]
 
 ``--runs`` lists ``SAMPLES:FIDELITY`` pairs, run in that order for every
 seed (``auto`` is allowed); the ratios are against the first 20 000-sample
-run. ``--generations G`` caps every step at G generations (one block, no
-patience): a cheaper mode that measures the cost per generation, not a
-search to its end; say so beside its figures. The goal (issue 41): the
-320 000-sample multi-fidelity run within 3x the 20 000-sample time, its
-held-out RMSE within 5 % of the full-fidelity run, median over 3 seeds, and
-at most 1 GiB peak memory per worker.
+run. ``--reuse`` takes earlier runs (another sitting's ``--out``) as done:
+they are not run again and serve as references. ``--generations G`` caps
+every step at G generations (one block, no patience): a cheaper mode that
+measures the cost per generation, not a search to its end; say so beside
+its figures. The goal (issue 41): the 320 000-sample multi-fidelity run
+within 3x the 20 000-sample time, its held-out RMSE within 5 % of the
+full-fidelity run, median over 3 seeds, and at most 1 GiB peak memory per
+worker.
 """
 
 from __future__ import annotations
@@ -127,6 +129,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--time-limit", type=float, default=None)
     ap.add_argument("--keep", default=None, help="keep the logs and results in this directory")
     ap.add_argument("--out", default=None, help="write every run's figures to this JSON file")
+    ap.add_argument("--reuse", default=None,
+                    help="a JSON file of earlier runs (--out): runs found there are not run again, "
+                         "and serve as references of the ratios")
     args = ap.parse_args(argv)
     if args.child:
         child(json.loads(args.child))
@@ -139,9 +144,12 @@ def main(argv: list[str] | None = None) -> None:
           + (f", --generations {args.generations}" if args.generations else "")
           + (f", --time-limit {args.time_limit:g}" if args.time_limit else "")
           + f"; load average {os.getloadavg()[0]:.2f}", flush=True)
-    table: list[dict] = []
+    table: list[dict] = json.loads(Path(args.reuse).read_text("utf-8")) if args.reuse else []
     for seed in seeds:
         for samples, fidelity in runs:
+            if any(r["seed"] == seed and r["samples"] == samples and r["fidelity"] == fidelity
+                   for r in table):
+                continue
             log = work / f"{args.preset}-{samples}-s{seed}.csv"
             if not log.exists():
                 repeated_log(args.preset, samples, seed, log)
