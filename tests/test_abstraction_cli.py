@@ -126,6 +126,9 @@ def test_time_limit_exits_0_with_the_best_so_far(
     (["--workers", "0"], "--workers: expected an integer >= 1"),
     (["--searches", "0"], "--searches: expected an integer from 1 to 64, found integer 0"),
     (["--config", "{searches}"], "cfg.toml: searches: expected an integer from 1 to 64, found string"),
+    (["--config", "{fidelity}"],
+     "cfg.toml: fidelity: expected one of 'auto', 'full', 'multi', found string 'fast'"),
+    (["--config", "{multi}"], "cfg.toml: multi_fidelity.promote: expected an integer >= 1, found 0"),
     (["--seed", "-4"], "--seed: expected an integer >= 0"),
     # Nothing listens on the discard port: refused within the 10 s connect timeout.
     (["--scheduler", "tcp://127.0.0.1:9"],
@@ -135,7 +138,8 @@ def test_bad_input_exits_2_with_one_line(
     friction_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture, args: list, expect: str
 ) -> None:
     texts = {"bad": "[ga]\npopulaton = 3\n", "type": "[ga]\npopulation = '64'\n",
-             "toml": "[ga\n", "searches": "searches = '2'\n"}
+             "toml": "[ga\n", "searches": "searches = '2'\n", "fidelity": "fidelity = 'fast'\n",
+             "multi": "[multi_fidelity]\npromote = 0\n"}
     fixed = []
     for a in args:
         if a.startswith("{"):

@@ -13,6 +13,7 @@ speed design.
 from __future__ import annotations
 
 from edm_sym.engines.abstraction.evaluator import Evaluator
+from edm_sym.engines.abstraction.fidelity import FidelitySettings
 from edm_sym.engines.abstraction.holdout import ValidationSettings
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings
 from edm_sym.engines.abstraction.run import GenerationInfo, abstract
@@ -30,6 +31,7 @@ from edm_sym.engines.abstraction.weighting import Weighting
 __all__ = [
     "AbstractionConfig",
     "Evaluator",
+    "FidelitySettings",
     "GaSettings",
     "GenerationInfo",
     "InitialRow",

@@ -48,6 +48,9 @@ class StepState:
     history: list[float]
     evaluations: int
     restarts: int = 0
+    #: With multi-fidelity evaluation: each individual's low-fidelity eq. 8 (``fitness``
+    #: is then its eq. 8 on the whole training log, ``inf`` where it was not scored there).
+    low: np.ndarray | None = None
 
 
 @dataclass
@@ -108,6 +111,8 @@ def dumps(state: RunState) -> str:
             "population": _pop_json(cur.population), "fitness": cur.fitness.tolist(),
             "history": cur.history, "evaluations": cur.evaluations,
             "restarts": cur.restarts,
+            # Multi-fidelity only: a run of full fidelity writes the checkpoint it always did.
+            **({"low": cur.low.tolist()} if cur.low is not None else {}),
         },
     }
     doc["sha256"] = _digest(doc)
@@ -238,7 +243,8 @@ def load_checkpoint(path: str | Path, fingerprint: str,
             population=_pop_from(c["population"]),
             fitness=np.array(c["fitness"], dtype=float),
             history=[float(h) for h in c["history"]], evaluations=int(c["evaluations"]),
-            restarts=int(c.get("restarts", 0)))
+            restarts=int(c.get("restarts", 0)),
+            low=np.array(c["low"], dtype=float) if c.get("low") is not None else None)
         return RunState(doc["fingerprint"], doc["rng_state"], finished, current,
                         dict(identity or doc.get("identity") or {}))
     except (KeyError, TypeError, ValueError) as exc:

@@ -167,6 +167,14 @@ class Evaluator:
         Where further logs begin in the signals: several logs laid end to
         end, each simulated from rest (the row kernel restarts every state at
         each log's first sample).
+    spans : sequence of (float, float), optional
+        Per input the range the tangent-pole check reads (``reject_poles``);
+        default the range each input takes in ``inputs``. An evaluator of a
+        part of the log is given the whole log's.
+    full_log : bool
+        Whether ``inputs`` is the whole training log (counted in
+        :attr:`EvalStats.full_log`); False for a low-fidelity part
+        (:mod:`~edm_sym.engines.abstraction.fidelity`).
     """
 
     #: Batches with fewer individuals to evaluate than this run in this process.
@@ -179,7 +187,8 @@ class Evaluator:
                  ranges: Mapping[str, ParamRange], *, executor: Executor | None = None,
                  workers: int | None = None, cache_bytes: int = 256 * 2**20,
                  max_batch_rows: int = 1024, client: Any = None, reject_poles: bool = False,
-                 starts: Sequence[int] = ()):
+                 starts: Sequence[int] = (), spans: Sequence[tuple[float, float]] | None = None,
+                 full_log: bool = True):
         self.inputs = np.ascontiguousarray(inputs, dtype=float)
         self.ranges = dict(ranges)
         self.ts = float(ts)
@@ -187,6 +196,9 @@ class Evaluator:
             finite = np.where(np.isfinite(self.inputs), self.inputs, np.nan)
             self._span = [(float(np.nanmin(r)), float(np.nanmax(r))) if np.isfinite(r).any()
                           else (math.nan, math.nan) for r in finite]
+        if spans is not None:
+            self._span = [(float(lo), float(hi)) for lo, hi in spans]
+        self.full_log = bool(full_log)
         self.reject_poles = bool(reject_poles)
         self._poles: dict[bytes, bool] = {}
         self.target = np.ascontiguousarray(target, dtype=float)
@@ -312,6 +324,11 @@ class Evaluator:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+    @property
+    def spans(self) -> list[tuple[float, float]]:
+        """Per input the range the tangent-pole check reads."""
+        return list(self._span)
 
     # -- weighting ----------------------------------------------------------------
     @property
@@ -466,6 +483,9 @@ class Evaluator:
                 out[k], scales[k], fitted[k] = hit[0], hit[1], hit[3]
             else:
                 need.append(k)
+        self.stats.scored += len(need)
+        if self.full_log:
+            self.stats.full_log += len(need)
         row_outputs: list | None = [] if rows else None
         send = list(range(p)) if rows else need
         if send:
@@ -511,6 +531,9 @@ class Evaluator:
             made = sum(1 for f in fitted if f is not None and not math.isnan(f[0]))
             self.stats.individuals += made
             self.stats.row_requests += made * m
+            self.stats.scored += made
+            if self.full_log:
+                self.stats.full_log += made
         self.stats.eval_seconds += time.perf_counter() - t0
         return Evaluation(out, row_outputs, scales if want_scales else None,
                           fitted if gains is not None else None)

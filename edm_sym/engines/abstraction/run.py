@@ -47,10 +47,11 @@ from edm_sym.engines.abstraction.checkpoint import (
     save_checkpoint,
 )
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
+from edm_sym.engines.abstraction.fidelity import effective
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
-from edm_sym.engines.abstraction.gain_fit import GAIN, scale_places
 from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_holdout
 from edm_sym.engines.abstraction.local_search import tune_parameters
+from edm_sym.engines.abstraction.multi import Fidelities, MultiSteps, evaluate_fitted
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.searches import (
     checkpoint_files,
@@ -219,9 +220,12 @@ class _Runner:
                  evaluator: Evaluator, state: RunState, rng: np.random.Generator,
                  checkpoint: Path | None, time_limit: float | None,
                  callback: Callable[[GenerationInfo], bool | None] | None,
-                 mask: np.ndarray | None = None, periodic: int | None = None,
-                 starts: Sequence[int] = ()):
+                 mask: np.ndarray | None = None, fidelities: Fidelities | None = None,
+                 periodic: int | None = None, starts: Sequence[int] = ()):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
+        # Multi-fidelity evaluation (docs/abstraction.md#multi-fidelity-evaluation); None: full.
+        self.fid = fidelities
+        self.multi = MultiSteps(fidelities, rng) if fidelities is not None else None
         self.mask, self.periodic, self.starts = mask, periodic, tuple(starts)
         self._lam: np.ndarray | float = 1.0
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
@@ -258,7 +262,7 @@ class _Runner:
                                        cur.restarts) if not cur.done else 0
             left += sum(_fewest_generations(s.ga, 0, 0, 0) for s in steps[cur.step + 1:])
             info = GenerationInfo(cur.step + 1, cur.generation, best, cur.evaluations, elapsed,
-                                  replace(self.evaluator.stats),
+                                  self.stats(),
                                   cur.population.matrix(int(np.argmin(cur.fitness)),
                                                         self.inputs),
                                   steps=len(steps), shape=(step.n_elements, step.n_rows),
@@ -267,6 +271,10 @@ class _Runner:
                 raise _Stop("stopped")
         if self.time_limit is not None and elapsed >= self.time_limit:
             raise _Stop("time_limit")
+
+    def stats(self) -> EvalStats:
+        """A copy of the evaluators' counters so far."""
+        return self.fid.stats if self.fid is not None else replace(self.evaluator.stats)
 
     # -- steps ------------------------------------------------------------------
     def run(self) -> None:
@@ -279,9 +287,12 @@ class _Runner:
                 raise ConfigError(f"{self.cfg.source}: step[{k}].weighting",
                                   "expected a positive weight for some sample of the data, "
                                   "found all zero")
-            self.evaluator.set_weights(lam)
             self._lam = lam
-            self.evaluator.set_reject_poles(step.ga.reject_poles)
+            if self.fid is not None:
+                self.fid.set_step(lam, step.ga.reject_poles)
+            else:
+                self.evaluator.set_weights(lam)
+                self.evaluator.set_reject_poles(step.ga.reject_poles)
             ops = Operators(step.ga, self.x.shape[0])
             cur = self.state.current
             if cur is None or cur.step != k:
@@ -320,11 +331,15 @@ class _Runner:
             if m0 < m and ga.harmonic_seeds and self.periodic is not None:
                 self._seed_harmonics(pop, seed, step, count, ops)
         # Individual 0 is the seed as it is: the gain fit improves copies of it later.
-        fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
+        low = None
+        if self.multi is not None:
+            fit, low, extra = self.multi.first(pop, ops, keep_first=seed is not None)
+        else:
+            fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
         best = float(np.min(fit))
         return StepState(step=k, generation=0, blocks=0, block_start_best=best, ref_best=best,
                          since_improvement=0, done=False, population=pop, fitness=fit,
-                         history=[best], evaluations=p + extra)
+                         history=[best], evaluations=p + extra, low=low)
 
     def _seed_harmonics(self, pop: Population, seed: Population, step: StepConfig, count: int,
                         ops: Operators) -> None:
@@ -347,35 +362,11 @@ class _Runner:
     def _evaluate(self, pop: Population, ops: Operators, keep_first: bool = False
                   ) -> tuple[np.ndarray, int]:
         """Fitness of ``pop``, improved in place by the gain fit; also the extra evaluations."""
-        if not ops.ga.gain_fit:
-            return self.evaluator.evaluate(pop.inputs, pop.codes, pop.ps), 0
-        gain = GAIN in ops.allowed
-        places = scale_places(pop.codes, gain)
-        # The lanes make and evaluate the candidates where they fit them: one batch per
-        # generation; only the genes of the better ones are written here.
-        res = self.evaluator.evaluation(pop.inputs, pop.codes, pop.ps, free=places[0] >= 0,
-                                        gain_allowed=gain)
-        fit, scales, fitted = res.fitness, list(res.scales), res.fitted
-        if keep_first:
-            scales[0] = None
-        made, better = 0, []
-        for k, (f, _) in enumerate(fitted):
-            if scales[k] is not None and not math.isnan(f):
-                made += 1
-                if f < fit[k]:
-                    better.append(k)
-        for k in better:
-            f, genes = fitted[k]
-            j, i = genes[:, 0].astype(np.intp), genes[:, 1].astype(np.intp)
-            pop.codes[k, j, i] = genes[:, 2].astype(np.int64)
-            pop.ps[k, j, i] = genes[:, 3]
-            fit[k] = f
-        if better:
-            self.evaluator.remember(pop.inputs[better], pop.codes[better], pop.ps[better],
-                                    fit[better])
-        return fit, made
+        return evaluate_fitted(self.evaluator, pop, ops, keep_first)
 
     def _generation(self, cur: StepState, step: StepConfig, ops: Operators) -> StepState:
+        if self.multi is not None:
+            return self.multi.generation(cur, step, ops)
         ga = step.ga
         pop, fit = cur.population, cur.fitness
         keys = self.evaluator.individual_keys(pop.inputs, pop.codes, pop.ps)
@@ -633,9 +624,11 @@ def abstract(
         check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), x, y, ts, starts)
                                          for s in seeds])
     client, own_client = _dask_client(scheduler)
+    # Multi-fidelity evaluation on a long training log (docs/abstraction.md#multi-fidelity-evaluation).
+    mode = effective(cfg.fidelity, hold.n_train)
     job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                      human=human, hold=hold, executor=executor, client=client, n=n, starts=starts,
-                     periodic=angle_input(_roles(data, inputs), axis))
+                     fidelity=mode, periodic=angle_input(_roles(data, inputs), axis))
     try:
         outcomes = run_searches(job, seeds, files, resume, workers=workers, time_limit=time_limit,
                                 callback=callback)
@@ -659,6 +652,10 @@ def abstract(
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": int(seed), "package_version": __version__,
                                   "data_sha256": data.sha256, "stop_reason": reason}
+    if mode == "multi":
+        # Only when used: a run of full fidelity writes the result.json it always did.
+        provenance["fidelity"] = {"mode": "multi", "config": cfg.fidelity,
+                                  **cfg.multi_fidelity.to_json()}
     if count > 1:
         provenance["searches"] = [
             {"search": k, "seed": seeds[k], "stop_reason": reasons[k],
@@ -695,6 +692,8 @@ class _SearchJob:
     n: int = 0
     #: Where further logs begin in ``x`` (several logs, each simulated from rest).
     starts: tuple[int, ...] = ()
+    #: ``"full"`` or ``"multi"``: the fidelity the search runs (``fidelity.effective``).
+    fidelity: str = "full"
     #: The input a ripple is a function of (:func:`seeding.angle_input`), or None.
     periodic: int | None = None
 
@@ -723,14 +722,31 @@ class _SearchJob:
         else:
             state = RunState(fingerprint, rng.bit_generator.state, identity=identity)
         batch = max(s.ga.population * s.n_rows for s in cfg.steps)
-        evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
-                              cache_bytes=int(cfg.cache_mb * 2**20), max_batch_rows=batch,
-                              client=self.client, starts=self.starts)
+        cache = int(cfg.cache_mb * 2**20)
+        fid = None
+        if self.fidelity == "multi":
+            # The whole log's evaluator scores a few promoted individuals at once: a quarter
+            # of the cache, at least room for two such batches; the windows' evaluator, whose
+            # rows are short, half (docs/abstraction.md#multi-fidelity-evaluation).
+            full_batch = max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1,
+                                            1 + s.n_elements) for s in cfg.steps)
+            evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
+                                  cache_bytes=cache // 4, max_batch_rows=full_batch,
+                                  client=self.client, starts=self.starts)
+            fid = Fidelities(evaluator, x, y, ts, self.ranges, cfg.multi_fidelity,
+                             executor=self.executor, workers=workers,
+                             cache_bytes=cache // 2, max_batch_rows=batch,
+                             client=self.client)
+        else:
+            evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
+                                  cache_bytes=cache, max_batch_rows=batch,
+                                  client=self.client, starts=self.starts)
         evaluator.start()
         runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
                          checkpoint=checkpoint, time_limit=time_limit, callback=callback,
-                         mask=self.mask, periodic=self.periodic, starts=self.starts)
+                         mask=self.mask, fidelities=fid, periodic=self.periodic,
+                         starts=self.starts)
         reason = "completed"
         try:
             # One BLAS thread in this process's lane too (see worker.worker_init).
@@ -742,10 +758,14 @@ class _SearchJob:
         except KeyboardInterrupt:
             reason = "interrupted"
             evaluator.abort()
+            if fid is not None:
+                fid.abort()
             runner.save()
             if not runner.records():
                 raise
         finally:
+            if fid is not None:
+                fid.close()
             evaluator.close()
         steps = []
         for r in runner.records():

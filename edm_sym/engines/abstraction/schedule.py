@@ -24,6 +24,11 @@ from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.fileio import read_toml
 from edm_sym.core.formats import parse_names
 from edm_sym.core.units import AXES
+from edm_sym.engines.abstraction.fidelity import (
+    FidelitySettings,
+    parse_fidelity,
+    parse_multi_fidelity,
+)
 from edm_sym.engines.abstraction.holdout import ValidationSettings, parse_validation
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, parse_parsimony
 from edm_sym.engines.abstraction.weighting import Weighting, parse_weighting
@@ -259,6 +264,14 @@ class AbstractionConfig:
     data : tuple of str
         The logs (``data = ["a.csv", "b.csv"]``, paths relative to the config
         file): abstracted together when the command line names none.
+    fidelity : str
+        ``"full"``: every individual scored on every training sample (Algorithm
+        1); ``"multi"``: ranked on windows of the log, the few that may enter
+        the elite scored on all of it; ``"auto"`` (default): ``"multi"`` above
+        :data:`~edm_sym.engines.abstraction.fidelity.AUTO_SAMPLES` training
+        samples, else ``"full"`` (docs/abstraction.md#multi-fidelity-evaluation).
+    multi_fidelity : FidelitySettings
+        The windows and the promotion rule of ``"multi"`` (``[multi_fidelity]``).
     """
 
     steps: tuple[StepConfig, ...] = ()
@@ -273,8 +286,14 @@ class AbstractionConfig:
     searches: int = 1
     column_names: tuple[str, ...] | None = None
     data: tuple[str, ...] = ()
+    fidelity: str = "auto"
+    multi_fidelity: FidelitySettings = field(default_factory=FidelitySettings)
 
     def __post_init__(self) -> None:
+        parse_fidelity(f"{self.source}: fidelity", self.fidelity)
+        if not isinstance(self.multi_fidelity, FidelitySettings):
+            raise ConfigError(f"{self.source}: multi_fidelity", "expected FidelitySettings, found "
+                                                                f"{_found(self.multi_fidelity)}")
         if (isinstance(self.searches, bool) or not isinstance(self.searches, int)
                 or not 1 <= self.searches <= MAX_SEARCHES):
             raise ConfigError(f"{self.source}: searches", f"expected an integer from 1 to "
@@ -334,6 +353,10 @@ class AbstractionConfig:
                         for r in self.initial],
             # Not the parsimony settings: they act after the search, a checkpoint needs none.
             "validation": self.validation.to_json(),
+            # Only when set: the fingerprints of runs that do not set them stay as they were.
+            **({"fidelity": self.fidelity} if self.fidelity != "auto" else {}),
+            **({"multi_fidelity": self.multi_fidelity.to_json()}
+               if self.multi_fidelity != FidelitySettings() else {}),
         }
 
     def digest(self) -> str:
@@ -441,7 +464,8 @@ def _ga_settings(where: str, table: Mapping[str, Any], base: GaSettings) -> GaSe
 
 
 _TOP_KEYS = ("cache_mb", "ga", "ranges", "initial", "step", "validation",
-             "parsimony", "columns", "axis", "searches", "column_names", "data")
+             "parsimony", "columns", "axis", "searches", "column_names", "data",
+             "fidelity", "multi_fidelity")
 _STEP_KEYS = ("n_rows", "n_elements", "weighting", *_GA_FIELDS)
 
 
@@ -529,9 +553,11 @@ def parse_config(doc: Mapping[str, Any], source: str = "config.toml") -> Abstrac
         logs = [logs]
     if not isinstance(logs, list) or not all(isinstance(d, str) and d.strip() for d in logs):
         raise ConfigError(f"{f}data", f"expected a list of log files, found {_found(logs)}")
+    fidelity = parse_fidelity(f"{f}fidelity", doc.get("fidelity", "auto"))
+    multi = parse_multi_fidelity(f"{f}multi_fidelity", doc.get("multi_fidelity", {}))
     return AbstractionConfig(tuple(steps), ranges, initial, cache_mb, source, validation,
                              parsimony, columns, doc.get("axis"), doc.get("searches", 1),
-                             names, tuple(logs))
+                             names, tuple(logs), fidelity, multi)
 
 
 def _parse_ranges(f: str, doc: Any) -> dict[str, dict[str, Any]]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 
 @dataclass
@@ -29,6 +29,12 @@ class EvalStats:
     over its lanes, the time each lane sat finished while the last one still
     worked (batches whose lanes all share this machine's clock: this process
     and the lanes with shared stores).
+
+    ``scored`` counts the individuals whose eq. 8 was computed (a remembered
+    one is not, a gain-fit candidate is), ``full_log`` those of them scored
+    on the whole training log: all of them with ``fidelity = "full"``, the
+    promoted ones with multi-fidelity evaluation
+    (docs/abstraction.md#multi-fidelity-evaluation).
     """
 
     individuals: int = 0
@@ -45,6 +51,27 @@ class EvalStats:
     idle_seconds: float = 0.0
     tasks: int = 0
     peak_rss: dict = field(default_factory=dict)
+    scored: int = 0
+    full_log: int = 0
+
+    @staticmethod
+    def merged(parts: list[EvalStats]) -> EvalStats:
+        """The counters of several evaluators of one run added up (peak memory: the
+        largest per process)."""
+        out = EvalStats()
+        for part in parts:
+            for f in fields(EvalStats):
+                if f.name == "peak_rss":
+                    for pid, rss in part.peak_rss.items():
+                        out.peak_rss[pid] = max(out.peak_rss.get(pid, 0), rss)
+                else:
+                    setattr(out, f.name, getattr(out, f.name) + getattr(part, f.name))
+        return out
+
+    @property
+    def full_log_share(self) -> float:
+        """Share of the individuals scored that were scored on the whole training log."""
+        return self.full_log / self.scored if self.scored else 0.0
 
     @property
     def cache_hits(self) -> int:
