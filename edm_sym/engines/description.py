@@ -135,7 +135,7 @@ class Description:
                 params = ", ".join(f"{k.replace('_', ' ')} {v:.4g}" + (f" {unit}" if unit != "1"
                                                                            else "")
                                    for k, (v, unit) in jt.term.parameters.items())
-                lines.append(f"  -> {jt.term.kind}" + (f": {params}" if params else ""))
+                lines.append(f"  -> {jt.term.kind.value}" + (f": {params}" if params else ""))
                 lines += [f"     ! {f.code}: {f.message}" for f in jt.flags]
             # Without data the header says so once; the per-row flag stays in the JSON.
             lines += [f"  ! {f.code}: {f.message}" for f in r.flags if f.code != "unmeasured"]
@@ -146,7 +146,7 @@ def _names(r: RowDescription) -> str:
     codes = {f.code for f in r.flags}
     if "negligible" in codes and "joint" not in codes and not r.terms:
         return "negligible"
-    kinds = [jt.term.kind for jt in r.terms]
+    kinds = [jt.term.kind.value for jt in r.terms]
     text = ", ".join(dict.fromkeys(kinds)) or "nothing"
     others = sorted(codes - {"negligible", "unmeasured"})
     return text + (f"  [{', '.join(others)}]" if others else "")

@@ -272,7 +272,7 @@ def _physics(p: EdmLatexPrinter, model: SymbolicModel, result: Any,
                            for k, (v, u) in t.parameters.items() if k != "harmonics")
         rows = ", ".join(rf"{j + 1}: {p.math(p.number(round(100 * sh, 1)))}\,\%"
                          for j, sh in enumerate(t.rows) if abs(sh) >= 0.1)
-        laws.append({"kind": p.text(KIND_TITLES.get(t.kind.value, t.kind.value)), "params": params,
+        laws.append({"kind": p.text(KIND_TITLES.get(t.kind, t.kind.value)), "params": params,
                      "share": p.math(p.number(round(100 * t.share, 3))) + r"\,\%", "rows": rows})
     notes = [p.text(f"not named: {k.value}: {why}") for k, why in phys.left_out]
     notes.append(p.text(f"the laws explain {100 * phys.explained:.4g} % of what the model does "
