@@ -70,3 +70,39 @@ def test_every_module_sits_in_a_layer_folder_and_has_a_layer() -> None:
     found = {f"edm_sym.{folder}.{m.name}" for folder in ("core", "engines", "outputs", "application")
              for m in pkgutil.iter_modules([str(Path(edm_sym.__file__).parent / folder)])}
     assert sorted(found - named) == [], "pyproject.toml [tool.importlinter]: give these a layer"
+
+
+def test_no_module_outside_the_elements_branches_on_an_element_kind_or_name() -> None:
+    # docs/architecture.md: consumers dispatch on the realisation's type or ask an element's
+    # traits (is_static, is_delay, is_identity, multiplies_output, ...); no module outside
+    # core/elements compares an element's or a stage's `kind` or `name` with a string naming
+    # a stage kind ("static", "linear", "delay", "relay") or an element ("through", ...).
+    import ast
+
+    from edm_sym.core.elements import all_elements
+    from edm_sym.core.elements.realisation import Realisation
+
+    words = {el.name for el in all_elements()}
+    words |= {cls.kind for cls in Realisation.__subclasses__()}
+    assert {"static", "linear", "delay", "relay", "through", "tan_phase"} <= words
+
+    def strings(node: ast.AST) -> set[str]:
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            return {node.value}
+        if isinstance(node, ast.Tuple | ast.List | ast.Set):
+            return set().union(*(strings(e) for e in node.elts))
+        return set()
+
+    root = REPO / "edm_sym"
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        if (root / "core" / "elements") in path.parents:
+            continue
+        for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+            if not isinstance(node, ast.Compare):
+                continue
+            sides = [node.left, *node.comparators]
+            named = any(isinstance(s, ast.Attribute) and s.attr in ("kind", "name") for s in sides)
+            if named and any(strings(s) & words for s in sides):
+                found.append(f"{path.relative_to(REPO)}:{node.lineno}: {ast.unparse(node)}")
+    assert found == [], "ask the element's traits (core/elements/base.py) instead:\n" + "\n".join(found)
