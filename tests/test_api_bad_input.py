@@ -285,3 +285,76 @@ def test_a_power_range_where_the_element_is_not_finite_is_refused(tmp_path: Path
     (tmp_path / "c.toml").write_text(f"[ranges.power]\nlow = {low}\nhigh = {high}\n")
     with pytest.raises(ConfigError, match="c.toml: ranges.power: range: expected the exponent"):
         load_config(tmp_path / "c.toml").resolve_ranges(1e-3, 20.0)
+
+
+# -- a Python caller is told about its parameters, a command's user about its options --------
+
+@pytest.mark.parametrize("options,message", [
+    ({"prefix": "9x"}, "prefix: expected a C identifier, found '9x'"),
+    ({"real": "half"}, "real: expected one of float, double, q31, q15, found 'half'"),
+])
+def test_export_names_the_parameter_not_the_command_line_option(result, tmp_path: Path, options,
+                                                                message) -> None:
+    with pytest.raises(ValueError) as info:
+        edm_sym.export(result, "c", tmp_path / "out", **options)
+    assert str(info.value) == message and "--" not in str(info.value)
+    with pytest.raises(ValueError, match=r"^target: expected one of c, python, latex, test, all"):
+        edm_sym.export(result, "pascal", tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_fixed_point_build_names_the_parameter_that_gives_an_input_range(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from edm_sym.application.cli import export_main
+    from edm_sym.core.errors import as_options
+
+    m = edm_sym.make_matrix(["omega"], [("omega", [("sign", 0), ("gain", 0.55)])])
+    provenance = {"seed": None, "package_version": "test", "data_sha256": None}
+    bare = edm_sym.EdmResult(edm_sym.Compensator(m, 1e-3, {}), "tau_ext", provenance=provenance)
+    with pytest.raises(ValueError) as info:  # no range recorded: the Python caller's words
+        edm_sym.export(bare, "c", tmp_path / "py", real="q31")
+    said = str(info.value)
+    assert 'give one with input_range={"omega": (LO, HI)}' in said and "--" not in said
+    # The command says the same in its options' words.
+    assert as_options(said).endswith("give one with --input-range omega=LO:HI")
+    path = edm_sym.save_result(bare, tmp_path / "r.json")
+    capsys.readouterr()
+    assert export_main([str(path), "--target", "c", "--real", "q31", "-o", str(tmp_path / "c")]) == 2
+    assert capsys.readouterr().err.strip().endswith("give one with --input-range omega=LO:HI")
+
+
+def test_describe_names_the_axis_parameter(result) -> None:
+    with pytest.raises(DataFormatError) as info:
+        edm_sym.describe(result, axis="sideways")
+    assert info.value.where == "axis"
+
+
+@pytest.mark.parametrize("message,printed", [
+    ("prefix: expected a C identifier, found '9x'", "--prefix: expected a C identifier, found '9x'"),
+    ('x: use real="float" or real="double"', "x: use --real float or --real double"),
+    ("x: narrow the input's range (input_range)", "x: narrow the input's range (--input-range)"),
+    # Not a parameter, or not where a parameter is named: left as it is.
+    ("result.json: prefix: x", "result.json: prefix: x"), ("inputs: omega: y", "inputs: omega: y"),
+    ("a ClassifyOptions.for_axis(axis) call", "a ClassifyOptions.for_axis(axis) call"),
+])
+def test_a_command_prints_the_option_that_gives_a_parameter(message, printed) -> None:
+    from edm_sym.core.errors import as_options
+
+    assert as_options(message) == printed
+
+
+@pytest.mark.parametrize("name", ["decode", "describe", "export"])
+def test_the_package_face_has_the_signature_of_what_it_calls(name) -> None:
+    # edm_sym imports its implementations on first call only, so it repeats their signatures.
+    import inspect
+
+    from edm_sym.application.exporting import export
+    from edm_sym.engines.description import describe
+    from edm_sym.engines.symbolic import decode
+
+    face = inspect.signature(getattr(edm_sym, name)).parameters
+    impl = inspect.signature({"decode": decode, "describe": describe, "export": export}[name]
+                             ).parameters
+    assert [(p.name, p.kind, p.default) for p in face.values()] == [
+        (p.name, p.kind, p.default) for p in impl.values()]
+    assert all(p.kind is not p.VAR_KEYWORD for p in face.values())

@@ -130,21 +130,15 @@ def run_cli(args: argparse.Namespace) -> int:
 
     # Ctrl-C and SIGTERM (both a KeyboardInterrupt: cli._interruptible) end the search;
     # abstract() returns the best so far and keeps the checkpoint, and it is written below.
-    try:
-        with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
-            result = abstract(data, target=target, inputs=inputs, config=config,
-                              seed=args.seed, time_limit=args.time_limit,
-                              callback=reporter.abstraction,
-                              checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                              validate=validate, select=getattr(args, "select", None), axis=axis,
-                              scheduler=getattr(args, "scheduler", None),
-                              validation_share=share, searches=getattr(args, "searches", None))
-    except ConfigError as exc:
-        option = {"scheduler": "--scheduler", "validation_share": "--validation-share",
-                  "searches": "--searches"}
-        if exc.where in option:
-            raise ConfigError(option[exc.where], exc.problem) from None
-        raise
+    # An error naming a parameter (scheduler, searches, ...) is printed naming its option.
+    with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
+        result = abstract(data, target=target, inputs=inputs, config=config,
+                          seed=args.seed, time_limit=args.time_limit,
+                          callback=reporter.abstraction,
+                          checkpoint=ckpt, resume=args.resume, workers=args.workers,
+                          validate=validate, select=getattr(args, "select", None), axis=axis,
+                          scheduler=getattr(args, "scheduler", None),
+                          validation_share=share, searches=getattr(args, "searches", None))
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})

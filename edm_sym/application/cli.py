@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
+from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError, as_options
 from edm_sym.core.fileio import check_outputs
 
 
@@ -190,7 +190,6 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_describe(args: argparse.Namespace) -> int:
-    from edm_sym.core.errors import DataFormatError
     from edm_sym.engines.description import describe
     from edm_sym.engines.symbolic.significance import SignificanceOptions
 
@@ -207,15 +206,10 @@ def _cmd_describe(args: argparse.Namespace) -> int:
                  for spec in specs if spec is not None]
     descs = []
     for spec in specs:  # several logs: each described on its own, from rest
-        try:
-            descs.append(describe(args.result, data=spec, ts=args.ts,
-                                  options=SignificanceOptions(threshold=args.threshold / 100),
-                                  axis=args.axis, columns=_columns(args), resample=args.resample,
-                                  observer_bandwidth=args.observer_bandwidth))
-        except DataFormatError as exc:
-            if exc.where != "observer_bandwidth":
-                raise
-            raise DataFormatError("--observer-bandwidth", exc.problem) from None
+        descs.append(describe(args.result, data=spec, ts=args.ts,
+                              options=SignificanceOptions(threshold=args.threshold / 100),
+                              axis=args.axis, columns=_columns(args), resample=args.resample,
+                              observer_bandwidth=args.observer_bandwidth))
     if len(descs) == 1:
         print(json.dumps(descs[0].to_json(), indent=2, allow_nan=False) if args.json
               else descs[0].table())
@@ -409,23 +403,22 @@ def _cmd_export(args: argparse.Namespace) -> int:
         from edm_sym.core.result import front_member
 
         result = front_member(result, args.front_member)
-    from edm_sym.application.exporting import export
+    from edm_sym.application.exporting import export_files
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
     inputs = [args.result, *(args.data or []), *(args.eval_data or []), args.lugre]
     check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
                   option="-o" if args.out_dir else "output folder")
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
-    notes: list[str] = []
     # The report draws the first log of each kind and tables the RMSE on every one; the
     # summary judges all of them.
-    written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=_one_or_all(args.data), eval_data=_one_or_all(args.eval_data),
-                     lugre=args.lugre,
-                     ts=args.ts, input_range=dict(args.input_range or ()), notes=notes)
-    for path in written:
+    written = export_files(result, args.target, out, prefix=args.prefix, real=args.real,
+                           pdf=args.pdf, data=_one_or_all(args.data),
+                           eval_data=_one_or_all(args.eval_data), lugre=args.lugre, ts=args.ts,
+                           input_range=dict(args.input_range or ()))
+    for path in written.files:
         print(path)
-    for line in notes:
+    for line in written.notes:
         print(line)
     _export_summary(result, args, log)
     return 0
@@ -711,7 +704,8 @@ def _raise_interrupt(signum: int, frame: object) -> None:
 
 def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
-        print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+        print(f"{parser.prog}: warning: {as_options(' '.join(str(message).split()))}",
+              file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.showwarning = one_line
@@ -750,12 +744,13 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         if not isinstance(exc, EdmError) and not _raised_by_edm_sym(exc):
             return _failed(parser.prog, exc)  # a library's own check: input edm_sym let through
         if isinstance(exc, ToolMissingError):
-            print(f"{parser.prog}: {exc}", file=sys.stderr)
+            print(f"{parser.prog}: {as_options(str(exc))}", file=sys.stderr)
             return EXIT_FAILED
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
-        # ValueError here comes from validation inside the library: bad input.
-        line = " ".join(str(exc).split())
+        # ValueError here comes from validation inside the library: bad input. The library
+        # names its parameters; the command names the options that give them.
+        line = as_options(" ".join(str(exc).split()))
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

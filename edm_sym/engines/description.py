@@ -425,7 +425,7 @@ def describe(
         try:
             axis_units(axis)
         except ValueError as exc:
-            raise DataFormatError("--axis", str(exc)) from None
+            raise DataFormatError("axis", str(exc)) from None
         result = replace(result, axis=axis)
     notes = []
     log = None

@@ -172,8 +172,8 @@ def check_accuracy(d: FixedDesign, comp: Any, x: np.ndarray, *, on: str = "the e
         raise FixedPointError(
             f"{where}: the {d.word.name} build misses the double simulator by {dev:.3g} on "
             f"{on}, more than {_goal_text(acc.goal, rms)} of the RMS ({acc.goal:.3g}); {why}; use "
-            f"{'--real q31' if d.word.name == 'q15' else '--real float'} or narrow the input "
-            "ranges (--input-range)")
+            f"real=\"{'q31' if d.word.name == 'q15' else 'float'}\" or narrow the input "
+            "ranges (input_range)")
     return acc
 
 
