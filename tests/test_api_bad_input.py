@@ -18,6 +18,7 @@ import edm_sym
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError, DataFormatError, ResultFormatError
 from edm_sym.engines.abstraction import abstract, load_config
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.lugre import identify_lugre
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
@@ -94,14 +95,14 @@ def test_abstract_refuses_a_value_that_is_not_finite(small, change, where, probl
     # A NaN input was dropped by the search without a word; an infinite target gave fitness inf.
     with pytest.raises(DataFormatError) as info:
         abstract(DataLog(_with(small, *change), 1e-3, "mem"), target="tau_ext",
-                 inputs=["omega", "alpha"], config=TINY, workers=1)
+                 inputs=["omega", "alpha"], config=TINY, parallel=Parallel(workers=1))
     assert (info.value.where, info.value.problem) == (where, problem)
 
 
 def test_abstract_refuses_a_constant_target(small) -> None:
     with pytest.raises(DataFormatError, match="expected a varying target .* 0 on all 400 rows"):
         abstract(DataLog({**small, "tau_ext": np.zeros(400)}, 1e-3), target="tau_ext",
-                 inputs=["omega"], config=TINY, workers=1)
+                 inputs=["omega"], config=TINY, parallel=Parallel(workers=1))
 
 
 @pytest.mark.parametrize("kwargs,match", [
@@ -109,11 +110,13 @@ def test_abstract_refuses_a_constant_target(small) -> None:
     ({"time_limit": float("nan")}, "time_limit: expected a number of seconds >= 0, found nan"),
     ({"time_limit": "3"}, "time_limit: expected a number of seconds >= 0, found '3'"),
     ({"config": "abstraction.toml"}, "config: expected an AbstractionConfig"),
+    ({"parallel": 2}, r"parallel: expected a Parallel\(workers=..., executor=..., scheduler=...\), "
+                      "found int"),
 ])
 def test_abstract_refuses_arguments_of_the_wrong_kind(small, kwargs, match) -> None:
     with pytest.raises(ConfigError, match=match):
         abstract(DataLog(small, 1e-3), target="tau_ext", inputs=["omega"],
-                 **{"config": TINY, "workers": 1, **kwargs})
+                 **{"config": TINY, "parallel": Parallel(workers=1), **kwargs})
     with pytest.raises(DataFormatError, match="data: expected a DataLog"):
         abstract(small, target="tau_ext", inputs=["omega"], config=TINY)
 
@@ -358,3 +361,15 @@ def test_the_package_face_has_the_signature_of_what_it_calls(name) -> None:
     assert [(p.name, p.kind, p.default) for p in face.values()] == [
         (p.name, p.kind, p.default) for p in impl.values()]
     assert all(p.kind is not p.VAR_KEYWORD for p in face.values())
+
+
+@pytest.mark.parametrize("settings,where,problem", [
+    ({"workers": 0}, "workers", "expected an integer >= 1, found 0"),
+    ({"workers": True}, "workers", "expected an integer >= 1, found True"),
+    ({"workers": 1.5}, "workers", "expected an integer >= 1, found 1.5"),
+    ({"executor": "pool"}, "executor", "expected a concurrent.futures.Executor, found str"),
+])
+def test_parallel_settings_are_refused_when_made(settings, where, problem) -> None:
+    with pytest.raises(ConfigError) as info:
+        Parallel(**settings)
+    assert (info.value.where, info.value.problem) == (where, problem)

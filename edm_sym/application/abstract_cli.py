@@ -55,6 +55,7 @@ def run_cli(args: argparse.Namespace) -> int:
     """
     from edm_sym.core.result import save_result
     from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
+    from edm_sym.engines.abstraction.parallel import Parallel
     from edm_sym.engines.abstraction.run import abstract
     from edm_sym.engines.abstraction.schedule import default_config, load_config
     from edm_sym.engines.abstraction.searches import checkpoint_files
@@ -135,10 +136,11 @@ def run_cli(args: argparse.Namespace) -> int:
         result = abstract(data, target=target, inputs=inputs, config=config,
                           seed=args.seed, time_limit=args.time_limit,
                           callback=reporter.abstraction,
-                          checkpoint=ckpt, resume=args.resume, workers=args.workers,
+                          checkpoint=ckpt, resume=args.resume,
                           validate=validate, select=getattr(args, "select", None), axis=axis,
-                          scheduler=getattr(args, "scheduler", None),
-                          validation_share=share, searches=getattr(args, "searches", None))
+                          validation_share=share, searches=getattr(args, "searches", None),
+                          parallel=Parallel(workers=args.workers,
+                                            scheduler=getattr(args, "scheduler", None)))
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})
