@@ -240,9 +240,29 @@ def build_parser() -> argparse.ArgumentParser:
     _add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
+    # One line per subcommand, in the order of `edm --help`; each adds its own options.
     _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
+    _add_abstract_args(sub.add_parser(
+        "abstract", help="run the hierarchical EDM abstraction (GA) on a log"))
+    _add_describe_args(sub.add_parser(
+        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
+    _add_simulate_args(sub.add_parser(
+        "simulate", help="run the reference simulator of a model on a log"))
+    _add_plant_args(sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion"))
+    _add_pipeline_args(sub.add_parser(
+        "pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file"))
+    _add_observe_args(sub.add_parser(
+        "observe", help="build the reaction-torque-observer view of a measured log"))
+    _add_lugre_args(sub.add_parser(
+        "lugre", help="identify the LuGre baseline model on one or more logs"))
+    _add_doctor_args(sub.add_parser(
+        "doctor", help="list the optional tools (compilers, QEMU, LaTeX) and numba (the GA's row "
+                       "kernel) found or missing"))
+    return parser
 
-    p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
+
+def _add_abstract_args(p: argparse.ArgumentParser) -> None:
+    """``edm abstract``: the log(s), columns, config, search and held-out options."""
     p.add_argument("data", metavar="DATA", nargs="*",
                    help=DATA_HELP + "; several logs are fitted together, each from rest (default: "
                         "the config's data list)")
@@ -296,10 +316,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
-    _add_describe_args(sub.add_parser(
-        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
 
-    p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
+def _add_simulate_args(p: argparse.ArgumentParser) -> None:
+    """``edm simulate``: a model and the logs to run it on."""
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
     p.add_argument("data", metavar="DATA", nargs="+",
                    help=DATA_HELP + "; several logs are each simulated from rest")
@@ -312,7 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_simulate)
 
-    p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
+
+def _add_plant_args(p: argparse.ArgumentParser) -> None:
+    """``edm plant``: the simulated servo axis and its excitation."""
     p.add_argument("--preset", required=True, metavar="NAME",
                    help="the plant: a preset of docs/plant.md (auger, ballscrew, lugre, ...) or "
                         "family-N, draw N of the family of plants with known truth")
@@ -322,7 +343,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_shared(p, "--seed", "noise seed (default 0)")
     p.set_defaults(func=_cmd_plant)
 
-    p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
+
+def _add_pipeline_args(p: argparse.ArgumentParser) -> None:
+    """``edm pipeline``: the pipeline file."""
     p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
@@ -331,7 +354,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_shared(p, "--axis", "the axis, over the file's [data] axis (default: the file's, else rotary)")
     p.set_defaults(func=_cmd_pipeline)
 
-    p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
+
+def _add_observe_args(p: argparse.ArgumentParser) -> None:
+    """``edm observe``: a measured log and the observer's settings."""
     p.add_argument("data", metavar="DATA", help=DATA_HELP)
     p.add_argument("--position", metavar="COL",
                    help="the measured position column (or --role COL=position)")
@@ -349,7 +374,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_observe)
 
-    p = sub.add_parser("lugre", help="identify the LuGre baseline model on one or more logs")
+
+def _add_lugre_args(p: argparse.ArgumentParser) -> None:
+    """``edm lugre``: the logs and the identification's settings."""
     p.add_argument("data", metavar="DATA", nargs="+",
                    help=DATA_HELP + "; several logs are each simulated from rest and fitted together")
     p.add_argument("--target", metavar="COL",
@@ -369,13 +396,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
 
-    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) and numba "
-                                      "(the GA's row kernel) found or missing")
+
+def _add_doctor_args(p: argparse.ArgumentParser) -> None:
+    """``edm doctor``: a table, or JSON with ``--json``."""
     p.add_argument("--json", action="store_true",
                    help="print a JSON list of {kind, name, apt, purpose, found, location, version, "
                         "pip, status} instead")
     p.set_defaults(func=_cmd_doctor)
-    return parser
 
 
 def _cmd_doctor(args: argparse.Namespace) -> int:
@@ -693,6 +720,7 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
 
 #: Exit statuses of every command (docs/cli.md#exit-status).
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
 
 #: Where a bug is reported (exit 1 says so).
 REPORT_BUG = "this is a bug of edm_sym: please report it with the output of EDM_DEBUG=1"
