@@ -106,3 +106,22 @@ def test_no_module_outside_the_elements_branches_on_an_element_kind_or_name() ->
             if named and any(strings(s) & words for s in sides):
                 found.append(f"{path.relative_to(REPO)}:{node.lineno}: {ast.unparse(node)}")
     assert found == [], "ask the element's traits (core/elements/base.py) instead:\n" + "\n".join(found)
+
+
+def test_no_function_runs_past_about_100_lines_without_saying_why() -> None:
+    # STYLE.md: a long function is split into named steps, or its docstring says why
+    # ("... on purpose: ..."). Counted without the docstring: numpydoc sections are not code.
+    import ast
+
+    found = []
+    for path in sorted((REPO / "edm_sym").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+            if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            doc = ast.get_docstring(node) or ""
+            body = node.body[1:] if doc else node.body
+            lines = body[-1].end_lineno - body[0].lineno + 1 if body else 0
+            if lines > 100 and "on purpose" not in doc:
+                found.append(f"{path.relative_to(REPO)}:{node.lineno} {node.name}: {lines} lines")
+    assert found == [], "split these into named steps, or say why in the docstring:\n" + \
+        "\n".join(found)

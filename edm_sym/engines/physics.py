@@ -566,6 +566,11 @@ def model_physics(
 ) -> Physics:
     """Name the laws a model holds by driving it with probe motions.
 
+    One long function on purpose: every law's test reads the one least-squares
+    fit of the probes (coefficients, standard errors, row shares) through the
+    closures ``share``, ``rel`` and ``consider``; apart, they would pass a dozen
+    arrays each.
+
     Parameters
     ----------
     comp : Compensator

@@ -403,6 +403,9 @@ def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
 def report_context(inp: ReportInputs) -> dict[str, Any]:
     """The validated context of ``templates/report.tex.j2``.
 
+    Long on purpose: one literal of the template's context, key by key, in the
+    order the report reads; each value comes from a named helper.
+
     Parameters
     ----------
     inp : ReportInputs
