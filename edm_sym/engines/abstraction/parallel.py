@@ -2,8 +2,9 @@
 
 Processes on this machine (``workers``), any ``concurrent.futures.Executor``
 (``executor``) or a dask cluster (``scheduler``); none of them changes a
-result (docs/abstraction.md#the-knobs). :meth:`Parallel.connected` opens the
-dask client a scheduler's address names, for the length of a run.
+result (docs/abstraction.md#speed-design, "The knobs").
+:meth:`Parallel.connected` opens the dask client a scheduler's address
+names, for the length of a run.
 """
 
 from __future__ import annotations
