@@ -48,7 +48,7 @@ from edm_sym.core.data import DataLog
 from edm_sym.core.elements import default_ranges
 from edm_sym.core.matrix import Compensator
 from edm_sym.core.result import EdmResult
-from edm_sym.engines.abstraction import Evaluator, GenerationInfo, abstract
+from edm_sym.engines.abstraction import Evaluator, GenerationInfo, Parallel, abstract
 from edm_sym.engines.abstraction.ga import Operators
 from edm_sym.engines.abstraction.schedule import GaSettings
 from edm_sym.engines.kernel import NUMBA
@@ -227,7 +227,7 @@ def bench_ga(log: DataLog, workers: int) -> None:
     store: dict = {}
     t0 = time.perf_counter()
     res = abstract(log, target="tau_ext", inputs=["theta", "omega", "alpha"], seed=0,
-                   workers=workers, callback=_keep(store))
+                   parallel=Parallel(workers=workers), callback=_keep(store))
     wall = time.perf_counter() - t0
     rmse = fitness(log.columns["tau_ext"] - simulate(res, log).total)
     _print_run("GA, default schedule, Coulomb + viscous log", res, wall, store.get("stats"))
@@ -264,7 +264,7 @@ def _auger():  # noqa: ANN202
             load_config(Path(__file__).resolve().parent.parent / "examples/auger/abstraction.toml"))
 
 
-def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
+def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003  (the Parallel settings)
     """The auger schedule's first ``generations`` generations; the figures at the last one."""
     log, cfg = _auger()
     seen: dict = {"count": 0}
@@ -275,7 +275,7 @@ def _auger_run(generations: int, **kwargs) -> dict:  # noqa: ANN003
         return seen["count"] >= generations
 
     abstract(log, target="tau_ext", inputs=AUGER_INPUTS, config=cfg, seed=1, callback=stop,
-             **kwargs)
+             parallel=Parallel(**kwargs))
     info = seen["info"]
     st = info.stats
     main_rss = int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
@@ -495,7 +495,7 @@ def _auger_searches(evaluations: int, searches: int, seed: int = 1, **kwargs) ->
                 and min(i.stats.individuals for i in last.values()) >= evaluations)
 
     abstract(log, target="tau_ext", inputs=AUGER_INPUTS, config=cfg, seed=seed, callback=stop,
-             searches=searches, **kwargs)
+             searches=searches, parallel=Parallel(**kwargs))
     done = sum(i.stats.individuals for i in last.values())
     wall = max(i.elapsed for i in last.values())
     peak: dict = {}
@@ -592,7 +592,8 @@ def bench_plant(time_limit: float, workers: int) -> None:
     store: dict = {}
     t0 = time.perf_counter()
     res = abstract(logs["abstraction"], target="tau_ext", inputs=inputs, seed=0,
-                   time_limit=time_limit, workers=workers, callback=_keep(store))
+                   time_limit=time_limit, parallel=Parallel(workers=workers),
+                   callback=_keep(store))
     wall = time.perf_counter() - t0
     _print_run(f"default schedule on auger (time limit {time_limit:g} s)", res, wall,
                store.get("stats"))

@@ -72,7 +72,7 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
     below ``threshold`` (its other figures are then those of that moment).
     """
     from edm_sym.core.matrix import Compensator
-    from edm_sym.engines.abstraction import abstract, load_config
+    from edm_sym.engines.abstraction import Parallel, abstract, load_config
     from edm_sym.engines.simulate import simulate
 
     abst, evl = _logs()
@@ -101,7 +101,7 @@ def run_seed(config: str, seed: int, lugre: float, threshold: float, workers: in
 
     c0, w0, k0 = time.process_time(), time.perf_counter(), _children_cpu()
     res = abstract(abst, target=TARGET, inputs=INPUTS, config=cfg, seed=seed,
-                   workers=workers, callback=callback, searches=searches)
+                   parallel=Parallel(workers=workers), callback=callback, searches=searches)
     # With several workers or searches, the processes the run forked and joined count too.
     cpu = time.process_time() - c0 - track["cpu"] + _children_cpu() - k0
     wall = time.perf_counter() - w0

@@ -17,6 +17,7 @@ never imports scikit-learn.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,8 +32,13 @@ if TYPE_CHECKING:
     from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row, make_matrix
     from edm_sym.core.result import EdmResult, load_result, save_result
     from edm_sym.core.version import __version__
+    from edm_sym.engines.description import Description
     from edm_sym.engines.simulate import Simulation, simulate
     from edm_sym.engines.sources import load_data
+    from edm_sym.engines.symbolic.classify import ClassifyOptions
+    from edm_sym.engines.symbolic.model import SymbolicModel
+    from edm_sym.engines.symbolic.significance import SignificanceOptions
+    from edm_sym.engines.symbolic.simplify import SimplifyOptions
 
 __all__ = [
     "ColumnRoles",
@@ -60,15 +66,30 @@ __all__ = [
 ]
 
 
-def decode(result: EdmResult | Compensator, **options: Any) -> Any:
+# The three functions below only import their implementation on first call, so they
+# repeat its signature (tests/test_api_bad_input.py checks that the two agree).
+
+
+def decode(
+    result: EdmResult | Compensator,
+    *,
+    roles: Mapping[str, str | None] | None = None,
+    simplify: SimplifyOptions | None = None,
+    classify: ClassifyOptions | bool | None = None,
+    systems: bool = True,
+    axis: str | None = None,
+) -> SymbolicModel:
     """Decode a result into its symbolic model (sympy and python-control per row).
 
     Parameters
     ----------
     result : EdmResult or Compensator
         The model to decode.
-    **options
-        Passed to :func:`edm_sym.engines.symbolic.decode`.
+    roles, simplify, classify, systems, axis
+        The input roles over the recorded ones, the simplification passes, the
+        classifier's thresholds (False: no physical terms), whether to build the
+        python-control systems, the axis's units; see
+        :func:`edm_sym.engines.symbolic.decode`.
 
     Returns
     -------
@@ -76,10 +97,22 @@ def decode(result: EdmResult | Compensator, **options: Any) -> Any:
     """
     from edm_sym.engines.symbolic import decode as _decode  # sympy is imported only here
 
-    return _decode(result, **options)
+    return _decode(result, roles=roles, simplify=simplify, classify=classify, systems=systems,
+                   axis=axis)
 
 
-def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -> Any:
+def describe(
+    result: EdmResult | str | Path,
+    data: DataLog | str | Path | None = None,
+    *,
+    ts: float | None = None,
+    options: SignificanceOptions | None = None,
+    roles: Mapping[str, str | None] | None = None,
+    axis: str | None = None,
+    columns: ColumnRoles | None = None,
+    resample: bool = False,
+    observer_bandwidth: float | None = None,
+) -> Description:
     """What a model found, row by row: physical terms, contribution, flags (``edm describe``).
 
     Parameters
@@ -89,9 +122,11 @@ def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -
     data : DataLog, path-like or str, optional
         The log the contributions are measured on; default: the data the
         result records (``report_inputs.data``), else none.
-    **options
-        ``ts``, ``options`` (a ``SignificanceOptions``), ``roles``; see
-        :func:`edm_sym.engines.description.describe`.
+    ts, options, roles, axis, columns, resample, observer_bandwidth
+        A sample time for a log without a time column, the thresholds (a
+        ``SignificanceOptions``), input roles, the axis, the log's column
+        roles, resampling a log onto the result's grid, the observer's
+        bandwidth; see :func:`edm_sym.engines.description.describe`.
 
     Returns
     -------
@@ -100,23 +135,37 @@ def describe(result: EdmResult | str | Path, data: Any = None, **options: Any) -
     """
     from edm_sym.engines.description import describe as _describe  # sympy is imported only here
 
-    return _describe(result, data, **options)
+    return _describe(result, data, ts=ts, options=options, roles=roles, axis=axis,
+                     columns=columns, resample=resample, observer_bandwidth=observer_bandwidth)
 
 
-def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) -> list[Path]:
+def export(
+    result: EdmResult,
+    target: str,
+    out_dir: str | Path,
+    *,
+    prefix: str = "edm_comp",
+    real: str = "double",
+    pdf: bool = False,
+    data: Any = None,
+    eval_data: Any = None,
+    lugre: Any = None,
+    ts: float | None = None,
+    input_range: Mapping[str, tuple[float, float]] | None = None,
+) -> list[Path]:
     """Render a result as C, Python, LaTeX or all of them into ``out_dir``.
 
     Parameters
     ----------
     result : EdmResult
         The model to export.
-    target : {"c", "python", "latex", "all"}
+    target : {"c", "python", "latex", "test", "all"}
         What to write.
     out_dir : path-like
         The output folder.
-    **options
-        ``prefix``, ``real`` and the report's options; see
-        :func:`edm_sym.application.exporting.export`.
+    prefix, real, pdf, data, eval_data, lugre, ts, input_range
+        The file and symbol prefix, the C real type (or a fixed-point build),
+        and the report's options; see :func:`edm_sym.application.exporting.export`.
 
     Returns
     -------
@@ -125,7 +174,8 @@ def export(result: EdmResult, target: str, out_dir: str | Path, **options: Any) 
     """
     from edm_sym.application.exporting import export as _export  # jinja2 is imported only here
 
-    return _export(result, target, out_dir, **options)
+    return _export(result, target, out_dir, prefix=prefix, real=real, pdf=pdf, data=data,
+                   eval_data=eval_data, lugre=lugre, ts=ts, input_range=input_range)
 
 
 def _model_latex(model: Any) -> str:

@@ -17,6 +17,7 @@ from edm_sym.core.matrix import Compensator, Gene
 from edm_sym.core.result import dumps, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import GenerationInfo, abstract, parse_config
 from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.simulate import fitness, simulate, simulate_row
 
 
@@ -56,7 +57,7 @@ STEP_4X2 = {"step": [{"n_rows": 2, "n_elements": 4}]}
 
 def test_ga_recovers_coulomb_and_viscous_friction() -> None:
     data, floor = friction_log(5.0)
-    res = run(data, STEP_4X2, seed=0, workers=1)
+    res = run(data, STEP_4X2, seed=0, parallel=Parallel(workers=1))
     rmse = fitness(data.columns["tau_ext"] - simulate(res, data).total)
     assert rmse <= 1.05 * floor, f"rmse {rmse} vs noise floor {floor}"
     c, b, d = steady_state_friction(res)
@@ -69,7 +70,7 @@ def test_ga_recovers_coulomb_and_viscous_friction() -> None:
 @pytest.mark.parametrize("seed", range(1, 9))
 def test_recovery_is_reliable_across_seeds(seed: int) -> None:
     data, floor = friction_log(5.0, seed=seed)
-    res = run(data, STEP_4X2, seed=seed, workers=1)
+    res = run(data, STEP_4X2, seed=seed, parallel=Parallel(workers=1))
     assert fitness(data.columns["tau_ext"] - simulate(res, data).total) <= 1.05 * floor
     c, b, _ = steady_state_friction(res)
     assert abs(c / COULOMB - 1) <= 0.02 and abs(b / VISCOUS - 1) <= 0.02
@@ -79,7 +80,7 @@ def test_recovery_is_reliable_across_seeds(seed: int) -> None:
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_default_schedule_recovers_friction_on_a_20_s_log(seed: int) -> None:
     data, floor = friction_log(20.0, seed=seed)
-    res = abstract(data, target="tau_ext", inputs=["omega", "alpha"], seed=seed, workers=1)
+    res = abstract(data, target="tau_ext", inputs=["omega", "alpha"], seed=seed, parallel=Parallel(workers=1))
     assert [s.matrix.shape for s in res.steps] == ["4x2", "4x3", "4x4", "4x5"]
     rmse = fitness(data.columns["tau_ext"] - simulate(res, data).total)
     assert rmse <= 1.05 * floor
@@ -93,18 +94,18 @@ def test_default_schedule_recovers_friction_on_a_20_s_log(seed: int) -> None:
 # -- determinism -----------------------------------------------------------------
 
 def test_same_seed_gives_byte_identical_results_with_any_worker_count(friction_data: DataLog) -> None:
-    one = dumps(run(friction_data, SMALL, seed=5, workers=1))
-    assert dumps(run(friction_data, SMALL, seed=5, workers=1)) == one
-    assert dumps(run(friction_data, SMALL, seed=5, workers=2)) == one
-    assert dumps(run(friction_data, SMALL, seed=6, workers=1)) != one
+    one = dumps(run(friction_data, SMALL, seed=5, parallel=Parallel(workers=1)))
+    assert dumps(run(friction_data, SMALL, seed=5, parallel=Parallel(workers=1))) == one
+    assert dumps(run(friction_data, SMALL, seed=5, parallel=Parallel(workers=2))) == one
+    assert dumps(run(friction_data, SMALL, seed=6, parallel=Parallel(workers=1))) != one
 
 
 def test_a_thread_pool_executor_gives_the_same_result(friction_data: DataLog) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
-    one = dumps(run(friction_data, SMALL, seed=5, workers=1))
+    one = dumps(run(friction_data, SMALL, seed=5, parallel=Parallel(workers=1)))
     with ThreadPoolExecutor(2) as ex:
-        assert dumps(run(friction_data, SMALL, seed=5, executor=ex)) == one
+        assert dumps(run(friction_data, SMALL, seed=5, parallel=Parallel(executor=ex))) == one
         assert not ex._shutdown  # a caller's executor is left running
 
 
@@ -112,7 +113,7 @@ def test_a_thread_pool_executor_gives_the_same_result(friction_data: DataLog) ->
 def test_resume_after_a_stop_gives_the_uninterrupted_result(
     friction_data: DataLog, tmp_path: Path, stop_after: int
 ) -> None:
-    want = dumps(run(friction_data, SMALL, seed=2, workers=1))
+    want = dumps(run(friction_data, SMALL, seed=2, parallel=Parallel(workers=1)))
     ckpt = tmp_path / "r.json.checkpoint"
     seen: list[GenerationInfo] = []
 
@@ -120,10 +121,10 @@ def test_resume_after_a_stop_gives_the_uninterrupted_result(
         seen.append(info)
         return len(seen) >= stop_after
 
-    part = run(friction_data, SMALL, seed=2, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(friction_data, SMALL, seed=2, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "stopped"
     assert ckpt.exists()
-    again = run(friction_data, SMALL, seed=2, workers=2, checkpoint=ckpt, resume=True)
+    again = run(friction_data, SMALL, seed=2, parallel=Parallel(workers=2), checkpoint=ckpt, resume=True)
     assert dumps(again) == want
     assert not ckpt.exists()  # a completed run removes its checkpoint
 
@@ -141,8 +142,9 @@ def test_a_stop_at_a_random_generation_resumes_to_the_same_bytes(
         count[0] += 1
         return count[0] >= stop_after
 
-    run(friction_data, SMALL, seed=9, workers=1, checkpoint=ckpt, callback=hook)
-    assert dumps(run(friction_data, SMALL, seed=9, workers=1, checkpoint=ckpt, resume=True)) == want
+    run(friction_data, SMALL, seed=9, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
+    assert dumps(run(friction_data, SMALL, seed=9, parallel=Parallel(workers=1), checkpoint=ckpt,
+                     resume=True)) == want
 
 
 _CACHE: dict = {}
@@ -150,12 +152,12 @@ _CACHE: dict = {}
 
 def _uninterrupted(friction_data: DataLog) -> str:
     if "r" not in _CACHE:
-        _CACHE["r"] = dumps(run(friction_data, SMALL, seed=9, workers=1))
+        _CACHE["r"] = dumps(run(friction_data, SMALL, seed=9, parallel=Parallel(workers=1)))
     return _CACHE["r"]
 
 
 def test_an_interrupt_returns_the_best_so_far_and_resumes(friction_data: DataLog, tmp_path: Path) -> None:
-    want = dumps(run(friction_data, SMALL, seed=4, workers=1))
+    want = dumps(run(friction_data, SMALL, seed=4, parallel=Parallel(workers=1)))
     ckpt = tmp_path / "c"
     count = [0]
 
@@ -164,10 +166,10 @@ def test_an_interrupt_returns_the_best_so_far_and_resumes(friction_data: DataLog
         if count[0] == 5:
             raise KeyboardInterrupt
 
-    part = run(friction_data, SMALL, seed=4, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(friction_data, SMALL, seed=4, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "interrupted"
     assert part.steps[-1].generations == 4
-    again = run(friction_data, SMALL, seed=4, workers=1, checkpoint=ckpt, resume=True)
+    again = run(friction_data, SMALL, seed=4, parallel=Parallel(workers=1), checkpoint=ckpt, resume=True)
     assert dumps(again) == want
 
 
@@ -193,7 +195,7 @@ def test_the_checkpoint_is_written_every_few_seconds_and_whenever_a_run_stops(
         seen.append(info)
         return len(seen) >= 9  # in the second step
 
-    run(friction_data, SMALL, seed=3, workers=1, checkpoint=ckpt, callback=hook)
+    run(friction_data, SMALL, seed=3, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     # The first state, the first step's end, the stop (not the 9 generations between).
     assert written == [0, -1, seen[-1].generation] and seen[-1].generation == 1
     doc = json.loads(ckpt.read_text())
@@ -205,9 +207,10 @@ def test_a_checkpoint_of_another_run_is_refused(friction_data: DataLog, tmp_path
     from edm_sym.core.errors import ConfigError
 
     ckpt = tmp_path / "c"
-    run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt, callback=lambda info: True)
+    run(friction_data, SMALL, seed=1, parallel=Parallel(workers=1), checkpoint=ckpt,
+        callback=lambda info: True)
     with pytest.raises(ConfigError, match=r"found one of another seed \(1; this run: 2\)"):
-        run(friction_data, SMALL, seed=2, workers=1, checkpoint=ckpt, resume=True)
+        run(friction_data, SMALL, seed=2, parallel=Parallel(workers=1), checkpoint=ckpt, resume=True)
 
 
 @pytest.mark.parametrize("damage", ["rng_state", "codes", "fitness", "step", "ps"])
@@ -219,7 +222,7 @@ def test_a_damaged_checkpoint_is_refused_before_the_run(friction_data: DataLog, 
 
     ckpt = tmp_path / "c"
     seen: list[GenerationInfo] = []
-    run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt,
+    run(friction_data, SMALL, seed=1, parallel=Parallel(workers=1), checkpoint=ckpt,
         callback=lambda info: seen.append(info) or len(seen) >= 3)
     doc = json.loads(ckpt.read_text())
     cur = doc["current"]
@@ -235,14 +238,14 @@ def test_a_damaged_checkpoint_is_refused_before_the_run(friction_data: DataLog, 
         cur["population"]["ps"][0][0][0] = -1.0
     ckpt.write_text(json.dumps(doc, sort_keys=True))
     with pytest.raises(ConfigError, match="damaged or edited") as err:
-        run(friction_data, SMALL, seed=1, workers=1, checkpoint=ckpt, resume=True)
+        run(friction_data, SMALL, seed=1, parallel=Parallel(workers=1), checkpoint=ckpt, resume=True)
     assert err.value.where == f"{ckpt}: sha256"
 
 
 def test_time_limit_ends_at_a_generation_boundary_with_a_valid_result(
     friction_data: DataLog, tmp_path: Path
 ) -> None:
-    res = run(friction_data, SMALL, seed=0, workers=1, time_limit=1e-9)
+    res = run(friction_data, SMALL, seed=0, parallel=Parallel(workers=1), time_limit=1e-9)
     assert res.provenance["stop_reason"] == "time_limit"
     assert len(res.steps) == 1 and res.steps[0].generations == 0
     back = load_result(save_result(res, tmp_path / "r.json"))
@@ -255,7 +258,7 @@ def test_the_best_never_gets_worse_and_steps_inherit(friction_data: DataLog) -> 
     doc = {"ga": {"population": 24, "generations": 15, "continue": "no"},
            "step": [{"n_rows": 1, "n_elements": 3}, {"n_rows": 2, "n_elements": 4},
                     {"n_rows": 3, "n_elements": 4}]}
-    res = run(friction_data, doc, seed=3, workers=1)
+    res = run(friction_data, doc, seed=3, parallel=Parallel(workers=1))
     for s in res.steps:
         assert all(b <= a for a, b in zip(s.history, s.history[1:], strict=False))
         assert s.history[-1] == min(s.history)
@@ -282,7 +285,7 @@ def test_a_step_starts_from_the_previous_best_as_it_is(friction_data: DataLog) -
 
     Operators.random_population = spy
     try:
-        res = run(friction_data, doc, seed=1, workers=1)
+        res = run(friction_data, doc, seed=1, parallel=Parallel(workers=1))
     finally:
         Operators.random_population = orig
     first = seen[1].matrix(0, ["omega", "alpha"])  # the second step's seed individual
@@ -311,7 +314,7 @@ def test_a_human_model_seeds_the_first_step(friction_data: DataLog) -> None:
            "initial": {"rows": [{"input": "omega", "elements": [["sign"], ["gain", 1.0]]},
                                 {"input": "omega", "elements": [["gain", 0.01]]}]},
            "step": [{"n_rows": 2, "n_elements": 4}]}
-    res = run(friction_data, doc, seed=0, workers=1)
+    res = run(friction_data, doc, seed=0, parallel=Parallel(workers=1))
     keep = fitted(res, len(friction_data))
     data_floor = fitness((friction_data.columns["tau_ext"] - np.sign(friction_data.columns["omega"])
                           - 0.01 * friction_data.columns["omega"])[keep])
@@ -322,7 +325,7 @@ def test_a_restricted_element_set_is_respected(friction_data: DataLog) -> None:
     names = ["through", "gain", "sign", "lpf"]
     doc = {"ga": {"population": 16, "generations": 5, "continue": "no", "elements": names},
            "step": [{"n_rows": 2, "n_elements": 3}]}
-    res = run(friction_data, doc, seed=0, workers=1)
+    res = run(friction_data, doc, seed=0, parallel=Parallel(workers=1))
     allowed = {BY_NAME[n].code for n in names}
     for s in res.steps:
         assert {g.code for r in s.matrix.rows for g in r.genes} <= allowed
@@ -333,7 +336,7 @@ def test_windows_weighting_ignores_the_masked_part(friction_data: DataLog) -> No
     doc = {"ga": {"population": 16, "generations": 3, "continue": "no"},
            "step": [{"n_rows": 2, "n_elements": 3,
                      "weighting": {"windows": [[0.0, 0.5, 1.0]]}}]}
-    res = run(friction_data, doc, seed=0, workers=1)
+    res = run(friction_data, doc, seed=0, parallel=Parallel(workers=1))
     sim = simulate(res, friction_data).total
     lam = (friction_data.columns["t"] < 0.5).astype(float)
     # The fitness is eq. 8 over the samples the GA fits (20 % are held out in blocks).
@@ -349,7 +352,7 @@ def test_windows_weighting_ignores_the_masked_part(friction_data: DataLog) -> No
 
 def test_the_result_records_steps_provenance_and_ranges(friction_data: DataLog, tmp_path: Path) -> None:
     doc = {**SMALL, "ranges": {"gain": {"low": -3.0, "high": 3.0}}}
-    res = run(friction_data, doc, seed=7, workers=1)
+    res = run(friction_data, doc, seed=7, parallel=Parallel(workers=1))
     path = save_result(res, tmp_path / "r.json")
     back = load_result(path)
     raw = json.loads(path.read_text())
@@ -371,7 +374,7 @@ def test_the_result_records_steps_provenance_and_ranges(friction_data: DataLog, 
     # pruning it is the last step's best.
     par = back.parsimony
     assert matrix_to_json(back.matrix) == par["front"][par["selected"] - 1]["matrix"]
-    plain = run(friction_data, {**doc, "parsimony": {"prune": False}}, seed=7, workers=1)
+    plain = run(friction_data, {**doc, "parsimony": {"prune": False}}, seed=7, parallel=Parallel(workers=1))
     assert plain.matrix == res.steps[-1].matrix and not plain.parsimony
 
 
@@ -381,7 +384,7 @@ def test_the_progress_bar_shows_step_generation_best_and_rate(
     from edm_sym.application.progress import ProgressReporter
 
     with ProgressReporter("test", bar=True) as reporter:
-        run(friction_data, SMALL, seed=0, workers=1, callback=reporter.abstraction)
+        run(friction_data, SMALL, seed=0, parallel=Parallel(workers=1), callback=reporter.abstraction)
     err = capsys.readouterr().err
     assert "step 2/2 (3x3)" in err and "best" in err and "eval/s" in err and "gen 6" in err
 
@@ -392,7 +395,7 @@ def test_the_engine_prints_nothing_and_reports_the_generations_left(
 ) -> None:
     seen = []
     doc = {**SMALL, "ga": {**SMALL["ga"], "restarts": restarts}}
-    run(friction_data, doc, seed=0, workers=1, callback=seen.append)
+    run(friction_data, doc, seed=0, parallel=Parallel(workers=1), callback=seen.append)
     assert capsys.readouterr() == ("", "")
     # continue = "no", 6 generations per step, each restart 6 more (its generations count
     # on): the fewest generations left count down to 0 over both steps.

@@ -17,6 +17,7 @@ from edm_sym.application.abstract_cli import checkpoint_path, start_line
 from edm_sym.application.cli import main
 from edm_sym.core.data import write_csv
 from edm_sym.core.result import load_result
+from edm_sym.engines.abstraction.parallel import Parallel
 
 QUICK = """
 [ga]
@@ -172,7 +173,7 @@ def _stopped_run(friction_csv: Path, cfg: Path, out: Path, *, searches: int = 1)
     from edm_sym.engines.sources import load_data
 
     abstract(load_data(friction_csv), target="tau_ext", inputs=["omega", "alpha"],
-             config=load_config(cfg), seed=3, workers=1, checkpoint=checkpoint_path(out),
+             config=load_config(cfg), seed=3, parallel=Parallel(workers=1), checkpoint=checkpoint_path(out),
              callback=lambda info: True, searches=searches)
     if searches > 1:  # the stop came before the second search began: it has the first's
         first = checkpoint_path(out).with_name(f"{out.name}.checkpoint.search0")

@@ -22,6 +22,7 @@ from edm_sym.engines.abstraction import (
     load_config,
     parse_config,
 )
+from edm_sym.engines.abstraction.parallel import Parallel
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = sorted((ROOT / "examples" / "configs").glob("*.toml"))
@@ -198,7 +199,7 @@ def test_human_model_values_outside_their_range_are_refused() -> None:
            "step": [{"n_rows": 1}]}
     with pytest.raises(ConfigError, match=r"initial.rows\[0\].elements\[0\].*widen"):
         abstract(_tiny_log(), target="tau", inputs=["omega"], config=parse_config(doc, "c"),
-                 workers=1)
+                 parallel=Parallel(workers=1))
 
 
 def test_human_model_inputs_must_be_run_inputs() -> None:
@@ -206,14 +207,14 @@ def test_human_model_inputs_must_be_run_inputs() -> None:
            "step": [{"n_rows": 1}]}
     with pytest.raises(ConfigError, match=r"initial.rows\[0\].input"):
         abstract(_tiny_log(), target="tau", inputs=["omega"], config=parse_config(doc, "c"),
-                 workers=1)
+                 parallel=Parallel(workers=1))
 
 
 def test_a_weighting_that_is_zero_on_the_whole_log_is_refused() -> None:
     doc = {"step": [{"n_rows": 1, "weighting": {"windows": [[5.0, 6.0, 1.0]]}}]}
     with pytest.raises(ConfigError, match=r"step\[0\].weighting"):
         abstract(_tiny_log(), target="tau", inputs=["omega"], config=parse_config(doc, "c"),
-                 workers=1)
+                 parallel=Parallel(workers=1))
 
 
 def test_options_are_validated_on_construction() -> None:

@@ -6,6 +6,7 @@ import pytest
 from helpers import SMALL, friction_log, run
 
 from edm_sym.core.result import dumps
+from edm_sym.engines.abstraction.parallel import Parallel
 
 distributed = pytest.importorskip("distributed")
 
@@ -26,7 +27,7 @@ def _workers_sharing_the_stores(client) -> int:  # noqa: ANN001
 
 def test_a_dask_cluster_gives_the_same_result_as_one_process() -> None:
     log, _ = friction_log(2.0)
-    want = dumps(run(log, SMALL, seed=8, workers=1))
+    want = dumps(run(log, SMALL, seed=8, parallel=Parallel(workers=1)))
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
@@ -39,12 +40,12 @@ def test_a_dask_cluster_gives_the_same_result_as_one_process() -> None:
                 seen.append(_workers_with_the_run(client))
                 seen.append(_workers_sharing_the_stores(client))
 
-        res = run(log, SMALL, seed=8, scheduler=client, callback=look)
+        res = run(log, SMALL, seed=8, parallel=Parallel(scheduler=client), callback=look)
         assert dumps(res) == want
         assert seen == [2, 2] and _workers_with_the_run(client) == 0
         # Any executor (unpinned lanes): the same bytes again.
-        res = run(log, SMALL, seed=8, executor=client.get_executor(), workers=2)
+        res = run(log, SMALL, seed=8, parallel=Parallel(executor=client.get_executor(), workers=2))
         assert dumps(res) == want
         # The scheduler's address, as `edm abstract --scheduler ADDRESS` gives it.
-        res = run(log, SMALL, seed=8, scheduler=cluster.scheduler_address)
+        res = run(log, SMALL, seed=8, parallel=Parallel(scheduler=cluster.scheduler_address))
         assert dumps(res) == want

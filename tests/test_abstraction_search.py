@@ -17,6 +17,7 @@ from edm_sym.engines.abstraction import run as run_module
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Population
 from edm_sym.engines.abstraction.local_search import free_parameters, tune_parameters
+from edm_sym.engines.abstraction.parallel import Parallel
 
 
 def run(data: DataLog, doc: dict, **kw) -> object:
@@ -131,10 +132,11 @@ def test_a_step_stagnating_calls_the_local_search_unless_it_is_off(
 
     monkeypatch.setattr(run_module, "tune_parameters", spy)
     doc = {**SMALL, "ga": {**SMALL["ga"], "local_search": 2}}
-    run(friction_data, doc, seed=1, workers=1)
+    run(friction_data, doc, seed=1, parallel=Parallel(workers=1))
     assert calls
     calls.clear()
-    run(friction_data, {**SMALL, "ga": {**SMALL["ga"], "local_search": 0}}, seed=1, workers=1)
+    run(friction_data, {**SMALL, "ga": {**SMALL["ga"], "local_search": 0}}, seed=1,
+        parallel=Parallel(workers=1))
     assert not calls
 
 
@@ -148,8 +150,8 @@ def _with(doc: dict, **ga) -> dict:
 
 
 def test_restarts_continue_a_stagnating_step_and_never_lose_the_best(friction_data: DataLog) -> None:
-    plain = run(friction_data, _with(RESTART, restarts=0), seed=3, workers=1)
-    again = run(friction_data, _with(RESTART, restarts=2), seed=3, workers=1)
+    plain = run(friction_data, _with(RESTART, restarts=0), seed=3, parallel=Parallel(workers=1))
+    again = run(friction_data, _with(RESTART, restarts=2), seed=3, parallel=Parallel(workers=1))
     for a, b in zip(plain.steps, again.steps, strict=True):
         assert b.generations > a.generations
         assert all(np.diff(b.history) <= 0)  # the elites survive a restart
@@ -158,15 +160,15 @@ def test_restarts_continue_a_stagnating_step_and_never_lose_the_best(friction_da
 
 def test_restarts_are_deterministic_with_any_worker_count(friction_data: DataLog) -> None:
     doc = _with(RESTART, restarts=1)
-    one = dumps(run(friction_data, doc, seed=4, workers=1))
-    assert dumps(run(friction_data, doc, seed=4, workers=2)) == one
+    one = dumps(run(friction_data, doc, seed=4, parallel=Parallel(workers=1)))
+    assert dumps(run(friction_data, doc, seed=4, parallel=Parallel(workers=2))) == one
 
 
 @pytest.mark.parametrize("stop_after", [5, 9, 14])
 def test_a_run_with_restarts_resumes_to_the_same_bytes(
         friction_data: DataLog, tmp_path: Path, stop_after: int) -> None:
     doc = _with(RESTART, restarts=1)
-    want = dumps(run(friction_data, doc, seed=2, workers=1))
+    want = dumps(run(friction_data, doc, seed=2, parallel=Parallel(workers=1)))
     ckpt = tmp_path / "c"
     count = [0]
 
@@ -174,8 +176,9 @@ def test_a_run_with_restarts_resumes_to_the_same_bytes(
         count[0] += 1
         return count[0] >= stop_after
 
-    run(friction_data, doc, seed=2, workers=1, checkpoint=ckpt, callback=hook)
-    assert dumps(run(friction_data, doc, seed=2, workers=1, checkpoint=ckpt, resume=True)) == want
+    run(friction_data, doc, seed=2, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
+    assert dumps(run(friction_data, doc, seed=2, parallel=Parallel(workers=1), checkpoint=ckpt,
+                     resume=True)) == want
 
 
 @pytest.mark.parametrize(("key", "value"), [("restarts", -1), ("local_search", -1),

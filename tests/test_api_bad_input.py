@@ -18,6 +18,7 @@ import edm_sym
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError, DataFormatError, ResultFormatError
 from edm_sym.engines.abstraction import abstract, load_config
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.lugre import identify_lugre
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "auger" / "result.json"
@@ -94,14 +95,14 @@ def test_abstract_refuses_a_value_that_is_not_finite(small, change, where, probl
     # A NaN input was dropped by the search without a word; an infinite target gave fitness inf.
     with pytest.raises(DataFormatError) as info:
         abstract(DataLog(_with(small, *change), 1e-3, "mem"), target="tau_ext",
-                 inputs=["omega", "alpha"], config=TINY, workers=1)
+                 inputs=["omega", "alpha"], config=TINY, parallel=Parallel(workers=1))
     assert (info.value.where, info.value.problem) == (where, problem)
 
 
 def test_abstract_refuses_a_constant_target(small) -> None:
     with pytest.raises(DataFormatError, match="expected a varying target .* 0 on all 400 rows"):
         abstract(DataLog({**small, "tau_ext": np.zeros(400)}, 1e-3), target="tau_ext",
-                 inputs=["omega"], config=TINY, workers=1)
+                 inputs=["omega"], config=TINY, parallel=Parallel(workers=1))
 
 
 @pytest.mark.parametrize("kwargs,match", [
@@ -109,11 +110,13 @@ def test_abstract_refuses_a_constant_target(small) -> None:
     ({"time_limit": float("nan")}, "time_limit: expected a number of seconds >= 0, found nan"),
     ({"time_limit": "3"}, "time_limit: expected a number of seconds >= 0, found '3'"),
     ({"config": "abstraction.toml"}, "config: expected an AbstractionConfig"),
+    ({"parallel": 2}, r"parallel: expected a Parallel\(workers=..., executor=..., scheduler=...\), "
+                      "found int"),
 ])
 def test_abstract_refuses_arguments_of_the_wrong_kind(small, kwargs, match) -> None:
     with pytest.raises(ConfigError, match=match):
         abstract(DataLog(small, 1e-3), target="tau_ext", inputs=["omega"],
-                 **{"config": TINY, "workers": 1, **kwargs})
+                 **{"config": TINY, "parallel": Parallel(workers=1), **kwargs})
     with pytest.raises(DataFormatError, match="data: expected a DataLog"):
         abstract(small, target="tau_ext", inputs=["omega"], config=TINY)
 
@@ -285,3 +288,88 @@ def test_a_power_range_where_the_element_is_not_finite_is_refused(tmp_path: Path
     (tmp_path / "c.toml").write_text(f"[ranges.power]\nlow = {low}\nhigh = {high}\n")
     with pytest.raises(ConfigError, match="c.toml: ranges.power: range: expected the exponent"):
         load_config(tmp_path / "c.toml").resolve_ranges(1e-3, 20.0)
+
+
+# -- a Python caller is told about its parameters, a command's user about its options --------
+
+@pytest.mark.parametrize("options,message", [
+    ({"prefix": "9x"}, "prefix: expected a C identifier, found '9x'"),
+    ({"real": "half"}, "real: expected one of float, double, q31, q15, found 'half'"),
+])
+def test_export_names_the_parameter_not_the_command_line_option(result, tmp_path: Path, options,
+                                                                message) -> None:
+    with pytest.raises(ValueError) as info:
+        edm_sym.export(result, "c", tmp_path / "out", **options)
+    assert str(info.value) == message and "--" not in str(info.value)
+    with pytest.raises(ValueError, match=r"^target: expected one of c, python, latex, test, all"):
+        edm_sym.export(result, "pascal", tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_fixed_point_build_names_the_parameter_that_gives_an_input_range(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from edm_sym.application.cli import export_main
+    from edm_sym.core.errors import as_options
+
+    m = edm_sym.make_matrix(["omega"], [("omega", [("sign", 0), ("gain", 0.55)])])
+    provenance = {"seed": None, "package_version": "test", "data_sha256": None}
+    bare = edm_sym.EdmResult(edm_sym.Compensator(m, 1e-3, {}), "tau_ext", provenance=provenance)
+    with pytest.raises(ValueError) as info:  # no range recorded: the Python caller's words
+        edm_sym.export(bare, "c", tmp_path / "py", real="q31")
+    said = str(info.value)
+    assert 'give one with input_range={"omega": (LO, HI)}' in said and "--" not in said
+    # The command says the same in its options' words.
+    assert as_options(said).endswith("give one with --input-range omega=LO:HI")
+    path = edm_sym.save_result(bare, tmp_path / "r.json")
+    capsys.readouterr()
+    assert export_main([str(path), "--target", "c", "--real", "q31", "-o", str(tmp_path / "c")]) == 2
+    assert capsys.readouterr().err.strip().endswith("give one with --input-range omega=LO:HI")
+
+
+def test_describe_names_the_axis_parameter(result) -> None:
+    with pytest.raises(DataFormatError) as info:
+        edm_sym.describe(result, axis="sideways")
+    assert info.value.where == "axis"
+
+
+@pytest.mark.parametrize("message,printed", [
+    ("prefix: expected a C identifier, found '9x'", "--prefix: expected a C identifier, found '9x'"),
+    ('x: use real="float" or real="double"', "x: use --real float or --real double"),
+    ("x: narrow the input's range (input_range)", "x: narrow the input's range (--input-range)"),
+    # Not a parameter, or not where a parameter is named: left as it is.
+    ("result.json: prefix: x", "result.json: prefix: x"), ("inputs: omega: y", "inputs: omega: y"),
+    ("a ClassifyOptions.for_axis(axis) call", "a ClassifyOptions.for_axis(axis) call"),
+])
+def test_a_command_prints_the_option_that_gives_a_parameter(message, printed) -> None:
+    from edm_sym.core.errors import as_options
+
+    assert as_options(message) == printed
+
+
+@pytest.mark.parametrize("name", ["decode", "describe", "export"])
+def test_the_package_face_has_the_signature_of_what_it_calls(name) -> None:
+    # edm_sym imports its implementations on first call only, so it repeats their signatures.
+    import inspect
+
+    from edm_sym.application.exporting import export
+    from edm_sym.engines.description import describe
+    from edm_sym.engines.symbolic import decode
+
+    face = inspect.signature(getattr(edm_sym, name)).parameters
+    impl = inspect.signature({"decode": decode, "describe": describe, "export": export}[name]
+                             ).parameters
+    assert [(p.name, p.kind, p.default) for p in face.values()] == [
+        (p.name, p.kind, p.default) for p in impl.values()]
+    assert all(p.kind is not p.VAR_KEYWORD for p in face.values())
+
+
+@pytest.mark.parametrize("settings,where,problem", [
+    ({"workers": 0}, "workers", "expected an integer >= 1, found 0"),
+    ({"workers": True}, "workers", "expected an integer >= 1, found True"),
+    ({"workers": 1.5}, "workers", "expected an integer >= 1, found 1.5"),
+    ({"executor": "pool"}, "executor", "expected a concurrent.futures.Executor, found str"),
+])
+def test_parallel_settings_are_refused_when_made(settings, where, problem) -> None:
+    with pytest.raises(ConfigError) as info:
+        Parallel(**settings)
+    assert (info.value.where, info.value.problem) == (where, problem)

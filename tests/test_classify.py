@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -11,6 +12,7 @@ from conftest import TS, smooth_signal
 
 from edm_sym.core.elements import default_ranges, element
 from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.simulate import simulate
 from edm_sym.engines.symbolic import (
     LTI,
@@ -266,7 +268,17 @@ def test_role_defaults_and_validation() -> None:
 
 def test_every_kind_is_known(coulomb_viscous: Compensator) -> None:
     for row in decode(coulomb_viscous).rows:
-        assert all(t.kind in KINDS for t in row.terms)
+        assert all(isinstance(t.kind, TermKind) and t.kind in KINDS for t in row.terms)
+
+
+def test_a_term_kind_is_an_enum_that_reads_as_its_name_in_text_and_json() -> None:
+    # A string given is made a TermKind; files and messages keep the plain name.
+    term = PhysicalTerm("viscous", {"coefficient": (0.5, "N m s/rad")})
+    assert term.kind is TermKind.VISCOUS
+    assert json.dumps({term.kind: term.kind}) == '{"viscous": "viscous"}'
+    assert f"{term.kind}" == str(term.kind) == "viscous" and term.kind == "viscous"
+    with pytest.raises(ValueError, match="'friction' is not a valid TermKind"):
+        PhysicalTerm("friction")
 
 
 # -- rows the genetic algorithm found on the auger plant ----------------------------

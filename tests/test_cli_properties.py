@@ -36,6 +36,7 @@ from hypothesis import strategies as st
 from edm_sym.application.cli import export_main, main
 from edm_sym.core.data import load_data, write_csv
 from edm_sym.core.result import load_result
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.lugre import load_lugre
 
 REPO = Path(__file__).resolve().parents[1]
@@ -153,8 +154,8 @@ def _checkpoint_text() -> str:
         (folder / "tiny.toml").write_text(VALID["tiny.toml"])
         ckpt = folder / "r.json.checkpoint"
         abstract(load_data(folder / "log.csv"), target="tau_ext", inputs=["omega"],
-                 config=load_config(folder / "tiny.toml"), seed=0, workers=1, checkpoint=ckpt,
-                 callback=lambda info: True)
+                 config=load_config(folder / "tiny.toml"), seed=0, parallel=Parallel(workers=1),
+                 checkpoint=ckpt, callback=lambda info: True)
         return ckpt.read_text()
 
 

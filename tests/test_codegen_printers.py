@@ -62,9 +62,9 @@ def test_integers_print_as_reals() -> None:
 
 
 def test_options_are_validated() -> None:
-    with pytest.raises(ValueError, match=r"^--real: expected one of float, double, found 'half'$"):
+    with pytest.raises(ValueError, match=r"^real: expected one of float, double, found 'half'$"):
         EdmC99Printer({"real": "half"})
-    with pytest.raises(ValueError, match=r"^--prefix: expected a C identifier, found '9x'$"):
+    with pytest.raises(ValueError, match=r"^prefix: expected a C identifier, found '9x'$"):
         EdmC99Printer({"prefix": "9x"})
 
 

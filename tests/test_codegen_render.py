@@ -107,10 +107,10 @@ def test_latex_target_is_the_report(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    ({"prefix": "9x"}, "--prefix: expected a C identifier, found '9x'"),
-    ({"prefix": "my-comp"}, "--prefix: expected a C identifier, found 'my-comp'"),
-    ({"prefix": "static"}, "--prefix: expected a C identifier, found 'static'"),
-    ({"real": "half"}, "--real: expected one of float, double, q31, q15, found 'half'"),
+    ({"prefix": "9x"}, "prefix: expected a C identifier, found '9x'"),
+    ({"prefix": "my-comp"}, "prefix: expected a C identifier, found 'my-comp'"),
+    ({"prefix": "static"}, "prefix: expected a C identifier, found 'static'"),
+    ({"real": "half"}, "real: expected one of float, double, q31, q15, found 'half'"),
 ])
 def test_bad_options_are_one_line_value_errors(kwargs: dict, message: str, tmp_path: Path) -> None:
     with pytest.raises(ValueError) as info:
@@ -120,7 +120,7 @@ def test_bad_options_are_one_line_value_errors(kwargs: dict, message: str, tmp_p
 
 
 def test_bad_target(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match=r"^--target: expected one of c, python, latex, test, all"):
+    with pytest.raises(ValueError, match=r"^target: expected one of c, python, latex, test, all"):
         export(EXAMPLE, "rust", tmp_path)
 
 

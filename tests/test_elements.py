@@ -233,6 +233,31 @@ def test_state_size_matches_realisation(el: type[Element]) -> None:
         assert el.state_size(a, TS) == 0
 
 
+@pytest.mark.parametrize("el", ELEMENTS, ids=lambda e: e.name)
+def test_traits_say_what_the_element_computes(el: type[Element], signal: np.ndarray) -> None:
+    # The traits other modules ask instead of a kind or a name (docs/architecture.md).
+    from edm_sym.core.elements.realisation import DelayLine, LinearFilter, Relay, StaticMap
+
+    a = value(el, 0.3)
+    r = el.realise(a, TS)
+    kinds = {"is_static": StaticMap, "is_filter": LinearFilter, "is_delay": DelayLine,
+             "is_relay": Relay}
+    assert [t for t, cls in kinds.items() if getattr(el, t)] == [
+        t for t, cls in kinds.items() if isinstance(r, cls)]
+    y = el.simulate(signal, a, TS)
+    if el.is_identity:
+        np.testing.assert_array_equal(y, signal)
+    if el.multiplies_output:  # a factor on a is a factor on the output
+        np.testing.assert_allclose(el.simulate(signal, 1.5 * a, TS), 1.5 * y, rtol=1e-9,
+                                   atol=1e-12 * float(np.max(np.abs(y))))
+    if el.scales_output:
+        assert el.multiplies_output
+    if el.tangent_argument is not None:  # tan of the argument, away from its poles
+        x = np.linspace(-0.3, 0.3, 101)
+        want = np.tan(el.tangent_argument(x, a)) * (a if el.scales_output else 1.0)
+        np.testing.assert_allclose(el.simulate(x, a, TS), want, rtol=1e-9)
+
+
 def test_batch_axis_matches_single(signal: np.ndarray) -> None:
     x = np.vstack([signal, 2 * signal, -signal])
     for el in ELEMENTS:

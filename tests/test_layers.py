@@ -37,16 +37,15 @@ def test_no_module_imports_the_package_face() -> None:
     assert importers == [], f"these modules import edm_sym itself: {importers}"
 
 
-def test_the_abstraction_modules_import_one_another_without_a_cycle() -> None:
-    # Type-checking imports count too: a module whose types come from one that imports it
-    # is read in a loop all the same.
+def test_no_two_modules_import_each_other() -> None:
+    # Over the whole package. Type-checking imports count too: a module whose types come
+    # from one that imports it is read in a loop all the same; so do imports inside functions.
     import grimp
 
     graph = grimp.build_graph("edm_sym", exclude_type_checking_imports=False)
-    package = "edm_sym.engines.abstraction"
-    modules = sorted(m for m in graph.modules if m.startswith(package + "."))
+    modules = sorted(m for m in graph.modules if m.startswith("edm_sym."))
     cycles = [(a, b) for a in modules for b in sorted(graph.find_modules_directly_imported_by(a))
-              if b.startswith(package + ".") and graph.chain_exists(importer=b, imported=a)]
+              if b.startswith("edm_sym.") and b != a and graph.chain_exists(importer=b, imported=a)]
     assert cycles == [], f"these modules import each other, directly or not: {cycles}"
 
 
@@ -71,3 +70,58 @@ def test_every_module_sits_in_a_layer_folder_and_has_a_layer() -> None:
     found = {f"edm_sym.{folder}.{m.name}" for folder in ("core", "engines", "outputs", "application")
              for m in pkgutil.iter_modules([str(Path(edm_sym.__file__).parent / folder)])}
     assert sorted(found - named) == [], "pyproject.toml [tool.importlinter]: give these a layer"
+
+
+def test_no_module_outside_the_elements_branches_on_an_element_kind_or_name() -> None:
+    # docs/architecture.md: consumers dispatch on the realisation's type or ask an element's
+    # traits (is_static, is_delay, is_identity, multiplies_output, ...); no module outside
+    # core/elements compares an element's or a stage's `kind` or `name` with a string naming
+    # a stage kind ("static", "linear", "delay", "relay") or an element ("through", ...).
+    import ast
+
+    from edm_sym.core.elements import all_elements
+    from edm_sym.core.elements.realisation import Realisation
+
+    words = {el.name for el in all_elements()}
+    words |= {cls.kind for cls in Realisation.__subclasses__()}
+    assert {"static", "linear", "delay", "relay", "through", "tan_phase"} <= words
+
+    def strings(node: ast.AST) -> set[str]:
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            return {node.value}
+        if isinstance(node, ast.Tuple | ast.List | ast.Set):
+            return set().union(*(strings(e) for e in node.elts))
+        return set()
+
+    root = REPO / "edm_sym"
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        if (root / "core" / "elements") in path.parents:
+            continue
+        for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+            if not isinstance(node, ast.Compare):
+                continue
+            sides = [node.left, *node.comparators]
+            named = any(isinstance(s, ast.Attribute) and s.attr in ("kind", "name") for s in sides)
+            if named and any(strings(s) & words for s in sides):
+                found.append(f"{path.relative_to(REPO)}:{node.lineno}: {ast.unparse(node)}")
+    assert found == [], "ask the element's traits (core/elements/base.py) instead:\n" + "\n".join(found)
+
+
+def test_no_function_runs_past_about_100_lines_without_saying_why() -> None:
+    # STYLE.md: a long function is split into named steps, or its docstring says why
+    # ("... on purpose: ..."). Counted without the docstring: numpydoc sections are not code.
+    import ast
+
+    found = []
+    for path in sorted((REPO / "edm_sym").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+            if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            doc = ast.get_docstring(node) or ""
+            body = node.body[1:] if doc else node.body
+            lines = body[-1].end_lineno - body[0].lineno + 1 if body else 0
+            if lines > 100 and "on purpose" not in doc:
+                found.append(f"{path.relative_to(REPO)}:{node.lineno} {node.name}: {lines} lines")
+    assert found == [], "split these into named steps, or say why in the docstring:\n" + \
+        "\n".join(found)

@@ -17,6 +17,7 @@ from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.core.result import front_member, load_result, matrix_to_json, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
 from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, parse_parsimony, select
 from edm_sym.engines.abstraction.prune import Member, apply_parsimony, complexity, pareto, prune
 from edm_sym.engines.abstraction.weighting import Weighting
@@ -146,8 +147,8 @@ TINY = {"ga": {"population": 16, "generations": 4, "continue": "no"},
 def test_abstract_exports_the_selected_member_and_is_deterministic(friction_data: DataLog,
                                                                    tmp_path: Path) -> None:
     def run(**kw: object) -> object:
-        return abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
-                        config=parse_config(TINY, "t.toml"), **kw)
+        return abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3,
+                        parallel=Parallel(workers=1), config=parse_config(TINY, "t.toml"), **kw)
 
     res = run()
     par = res.parsimony
@@ -241,7 +242,7 @@ def test_cli_bad_parsimony_options_exit_2_with_one_line(
 def test_the_report_shows_the_front_as_a_table_and_a_plot(friction_data: DataLog, tmp_path: Path) -> None:
     from edm_sym.outputs.report import write_report
 
-    res = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3, workers=1,
+    res = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=3, parallel=Parallel(workers=1),
                    config=parse_config(TINY, "t.toml"))
     par = res.parsimony
     for k in (par["selected"], 1):
@@ -265,14 +266,16 @@ def test_a_checkpoint_resumes_under_another_selection(friction_data: DataLog, tm
 
     ckpt = tmp_path / "r.json.checkpoint"
     cfg = parse_config(TINY, "t.toml")
-    stopped = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1, config=cfg,
-                       checkpoint=ckpt, callback=lambda info: info.step == 2)
+    stopped = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4,
+                       parallel=Parallel(workers=1), config=cfg, checkpoint=ckpt,
+                       callback=lambda info: info.step == 2)
     assert stopped.provenance["stop_reason"] == "stopped" and ckpt.exists()
     other = parse_config({**TINY, "parsimony": {"tolerance": 0.5}}, "t.toml")
-    resumed = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
-                       config=other, checkpoint=ckpt, resume=True, select="best")
-    fresh = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4, workers=1,
-                     config=other, select="best")
+    resumed = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4,
+                       parallel=Parallel(workers=1), config=other, checkpoint=ckpt, resume=True,
+                       select="best")
+    fresh = abstract(friction_data, target="tau_ext", inputs=list(INPUTS), seed=4,
+                     parallel=Parallel(workers=1), config=other, select="best")
     assert dumps(resumed) == dumps(fresh)
     assert not ckpt.exists()
 

@@ -12,6 +12,7 @@ from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError
 from edm_sym.core.result import dumps, load_result, save_result
 from edm_sym.engines.abstraction import GenerationInfo
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.searches import search_seeds
 
 TWO = {**SMALL, "searches": 2}
@@ -19,7 +20,7 @@ TWO = {**SMALL, "searches": 2}
 
 @pytest.fixture(scope="module")
 def two_one_worker(friction_data: DataLog) -> str:
-    return dumps(run(friction_data, TWO, seed=5, workers=1))
+    return dumps(run(friction_data, TWO, seed=5, parallel=Parallel(workers=1)))
 
 
 def test_search_0_has_the_runs_seed_and_the_others_distinct_safe_integers() -> None:
@@ -34,21 +35,21 @@ def test_search_0_has_the_runs_seed_and_the_others_distinct_safe_integers() -> N
 
 def test_two_searches_give_the_same_bytes_with_one_worker_and_two(friction_data: DataLog,
                                                                   two_one_worker: str) -> None:
-    assert dumps(run(friction_data, TWO, seed=5, workers=2)) == two_one_worker
+    assert dumps(run(friction_data, TWO, seed=5, parallel=Parallel(workers=2))) == two_one_worker
 
 
 def test_searches_one_after_another_on_an_executor_give_the_same_bytes(
     friction_data: DataLog, two_one_worker: str
 ) -> None:
     with ThreadPoolExecutor(2) as ex:
-        assert dumps(run(friction_data, TWO, seed=5, executor=ex)) == two_one_worker
+        assert dumps(run(friction_data, TWO, seed=5, parallel=Parallel(executor=ex))) == two_one_worker
 
 
 def test_search_0_is_the_one_search_run_and_the_model_comes_from_the_pooled_candidates(
     friction_data: DataLog, tmp_path: Path
 ) -> None:
-    one = run(friction_data, SMALL, seed=5, workers=1)
-    res = run(friction_data, TWO, seed=5, workers=2)
+    one = run(friction_data, SMALL, seed=5, parallel=Parallel(workers=1))
+    res = run(friction_data, TWO, seed=5, parallel=Parallel(workers=2))
     found = res.provenance["searches"]
     assert [s["seed"] for s in found] == search_seeds(5, 2)
     # Search 0 is exactly the run with one search: more searches never lose its model.
@@ -85,7 +86,7 @@ def test_each_search_reports_and_a_callback_stop_ends_them_all(friction_data: Da
         seen.append(info)
         return sum(1 for i in seen if i.search == 1) >= 3
 
-    res = run(friction_data, TWO, seed=5, workers=2, callback=hook)
+    res = run(friction_data, TWO, seed=5, parallel=Parallel(workers=2), callback=hook)
     assert {i.search for i in seen} == {0, 1}
     assert all(i.searches == 2 for i in seen)
     assert res.provenance["stop_reason"] == "stopped"
@@ -102,14 +103,14 @@ def test_a_stopped_run_of_two_searches_resumes_to_the_uninterrupted_bytes(
         count[0] += 1
         return count[0] >= 6
 
-    part = run(friction_data, TWO, seed=5, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(friction_data, TWO, seed=5, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "stopped"
     # One after another on one worker: search 0 stopped, search 1 never began.
     assert [s["stop_reason"] for s in part.provenance["searches"]] == ["stopped", "stopped"]
     assert part.provenance["searches"][1]["step_fitness"] == []
     files = [tmp_path / f"r.json.checkpoint.search{k}" for k in range(2)]
     assert files[0].exists() and not ckpt.exists()
-    again = run(friction_data, TWO, seed=5, workers=2, checkpoint=ckpt, resume=True)
+    again = run(friction_data, TWO, seed=5, parallel=Parallel(workers=2), checkpoint=ckpt, resume=True)
     assert dumps(again) == two_one_worker
     assert not any(f.exists() for f in files)
 
@@ -123,10 +124,10 @@ def test_a_stopped_run_of_two_searches_resumes_to_the_uninterrupted_bytes(
 def test_a_bad_number_of_searches_is_refused_naming_the_key(friction_data: DataLog, value: object,
                                                            expect: str) -> None:
     with pytest.raises(ConfigError) as err:
-        run(friction_data, {**SMALL, "searches": value}, seed=1, workers=1)
+        run(friction_data, {**SMALL, "searches": value}, seed=1, parallel=Parallel(workers=1))
     assert err.value.where == "test.toml: searches" and expect in err.value.problem
     with pytest.raises(ConfigError) as err:
-        run(friction_data, SMALL, seed=1, workers=1, searches=value)
+        run(friction_data, SMALL, seed=1, parallel=Parallel(workers=1), searches=value)
     assert err.value.where == "searches"
 
 
@@ -138,7 +139,7 @@ def test_searches_on_a_dask_cluster_run_one_worker_each_and_give_the_same_bytes(
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         seen: list[GenerationInfo] = []
-        res = run(friction_data, TWO, seed=5, scheduler=client, callback=seen.append)
+        res = run(friction_data, TWO, seed=5, parallel=Parallel(scheduler=client), callback=seen.append)
         assert dumps(res) == two_one_worker
         # Each search was a task of its own: both report, from the workers' processes.
         assert {i.search for i in seen} == {0, 1}
@@ -146,7 +147,8 @@ def test_searches_on_a_dask_cluster_run_one_worker_each_and_give_the_same_bytes(
         # report, within about 0.5 s): each would run 400 generations.
         long = {**TWO, "ga": {**TWO["ga"], "generations": 400, "patience": 0},
                 "step": TWO["step"][:1]}
-        stopped = run(friction_data, long, seed=5, scheduler=client, callback=lambda info: True)
+        stopped = run(friction_data, long, seed=5, parallel=Parallel(scheduler=client),
+                      callback=lambda info: True)
         assert [s["stop_reason"] for s in stopped.provenance["searches"]] == ["stopped"] * 2
         assert all(s.generations < 400 for s in stopped.steps)
 
@@ -155,7 +157,7 @@ def test_with_the_last_step_rule_the_search_of_the_lowest_last_step_fitness_is_t
     friction_data: DataLog
 ) -> None:
     doc = {**TWO, "parsimony": {"start": "last-step"}}
-    res = run(friction_data, doc, seed=5, workers=2)
+    res = run(friction_data, doc, seed=5, parallel=Parallel(workers=2))
     found = res.provenance["searches"]
     last = [s["step_fitness"][-1] for s in found]
     (chosen,) = [s for s in found if s["chosen"]]
@@ -170,5 +172,5 @@ def test_an_error_in_a_search_ends_the_run_with_that_error(friction_data: DataLo
     doc = {**TWO, "step": [{"n_rows": 2, "n_elements": 3,
                             "weighting": {"windows": [[900.0, 901.0, 1.0]], "otherwise": 0.0}}]}
     with pytest.raises(ConfigError) as err:
-        run(friction_data, doc, seed=5, workers=workers)
+        run(friction_data, doc, seed=5, parallel=Parallel(workers=workers))
     assert "weighting" in err.value.where and "all zero" in err.value.problem

@@ -16,6 +16,7 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.engines.abstraction import AbstractionConfig, GaSettings, StepConfig, abstract
 from edm_sym.engines.abstraction.evaluator import Evaluator
 from edm_sym.engines.abstraction.ga import Operators
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.schedule import default_ranges
 from edm_sym.engines.simulate import simulate_row
 
@@ -121,7 +122,7 @@ def test_two_logs_give_the_model_of_their_summed_fitness() -> None:
     a, b = _log(1, 400), _log(2, 300)
     cfg = AbstractionConfig(steps=(StepConfig(n_rows=2, n_elements=3,
                                               ga=GaSettings(population=16, generations=3)),))
-    res = abstract([a, b], target="tau", inputs=["omega"], config=cfg, seed=2, workers=1)
+    res = abstract([a, b], target="tau", inputs=["omega"], config=cfg, seed=2, parallel=Parallel(workers=1))
     # The exported model's training score, recomputed log by log from rest.
     comp = res.compensator
     held = res.validation["held_out"]
@@ -143,7 +144,7 @@ def test_two_logs_give_the_model_of_their_summed_fitness() -> None:
     assert [lg["file"] for lg in res.logs] == ["log1.csv", "log2.csv"]
     assert [lg["rows"] for lg in res.logs] == [400, 300]
     # The same seed, the same result; the order of the logs is part of the data.
-    again = abstract([a, b], target="tau", inputs=["omega"], config=cfg, seed=2, workers=1)
+    again = abstract([a, b], target="tau", inputs=["omega"], config=cfg, seed=2, parallel=Parallel(workers=1))
     assert again.compensator.matrix == comp.matrix
 
 

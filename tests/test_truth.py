@@ -25,6 +25,7 @@ from pathlib import Path
 import pytest
 
 from edm_sym.application.cli import main
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.plant import PRESETS
 
 TRUTH_PRESETS = ("bearing", "stribeck", "inertia", "ripple3")
@@ -165,7 +166,7 @@ def test_describe_judges_on_the_held_out_rows_of_the_fitted_log(tmp_path: Path) 
     log = DataLog({"t": t, "omega": omega, "tau_ext": tau}, ts, "friction", "f" * 64)
     cfg = parse_config({"ga": {"population": 16, "generations": 4, "continue": "no"},
                         "step": [{"n_rows": 2, "n_elements": 2}]}, "t.toml")
-    res = abstract(log, target="tau_ext", inputs=["omega"], config=cfg, seed=1, workers=1)
+    res = abstract(log, target="tau_ext", inputs=["omega"], config=cfg, seed=1, parallel=Parallel(workers=1))
     path = tmp_path / "r.json"
     save_result(res, path)
     held = res.validation["held_out"]["blocks"]

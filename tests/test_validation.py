@@ -18,6 +18,7 @@ from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.core.result import dumps, load_result, matrix_to_json, parse_result, save_result
 from edm_sym.engines.abstraction import abstract, parse_config
 from edm_sym.engines.abstraction.holdout import ValidationSettings, parse_validation
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.simulate import plain_loop
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,7 +31,7 @@ TINY = {"ga": {"population": 16, "generations": 4, "continue": "no", "restarts":
 
 def run(data: DataLog, doc: dict = TINY, **kw) -> object:
     kw.setdefault("seed", 2)
-    kw.setdefault("workers", 1)
+    kw.setdefault("parallel", Parallel(workers=1))
     return abstract(data, target="tau_ext", inputs=["omega", "alpha"],
                     config=parse_config(doc, "test.toml"), **kw)
 

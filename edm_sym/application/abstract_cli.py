@@ -14,7 +14,7 @@ import argparse
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError
 
@@ -55,51 +55,13 @@ def run_cli(args: argparse.Namespace) -> int:
     """
     from edm_sym.core.result import save_result
     from edm_sym.engines.abstraction.checkpoint import stray_checkpoints
+    from edm_sym.engines.abstraction.parallel import Parallel
     from edm_sym.engines.abstraction.run import abstract
-    from edm_sym.engines.abstraction.schedule import default_config, load_config
     from edm_sym.engines.abstraction.searches import checkpoint_files
-    from edm_sym.engines.sources import load_data
 
-    config = load_config(args.config) if args.config else default_config()
-    columns, target, inputs = resolve_columns(args, config)
-    axis = getattr(args, "axis", None) or config.axis or "rotary"
-    if args.workers is not None and args.workers < 1:
-        raise ConfigError("--workers", f"expected an integer >= 1, found {args.workers}")
-    if args.seed < 0:
-        raise ConfigError("--seed", f"expected an integer >= 0, found {args.seed}")
-    share = getattr(args, "validation_share", None)
-    validate_path = getattr(args, "validate", None)
-    if share is not None and validate_path is not None:
-        raise ConfigError("--validation-share", f"expected no share with --validate (the "
-                                                f"second log is held out whole), found {share}")
-    if share is not None:
-        try:
-            config = replace(config, validation=replace(config.validation, share=share))
-        except ConfigError as exc:
-            raise ConfigError("--validation-share", exc.problem) from None
-    config = _parsimony_options(config, args)
+    config, columns, target, inputs, axis = _options(args)
     names = getattr(args, "columns", None) or config.column_names
-    specs = _specs(args, config)
-    logs = [load_data(spec, ts=args.ts, columns=columns, names=names) for spec in specs]
-    from edm_sym.core.data import decimate, decimation_factor
-
-    factor = getattr(args, "decimate", None)
-    period = getattr(args, "decimate_to", None)
-    if factor is not None and period is not None:
-        raise ConfigError("--decimate-to", f"expected either --decimate or --decimate-to, "
-                                           f"found both (--decimate {factor})")
-    if period is not None:  # each log's own factor: logs of several rates meet at one
-        logs = [decimate(log, decimation_factor(log, period), where="--decimate-to")
-                for log in logs]
-    elif factor is not None:
-        logs = [decimate(log, factor) for log in logs]
-    for log in logs:
-        log.column(target, role="target column")
-        log.stack(inputs)
-    if len(logs) > 1:
-        from edm_sym.core.data import join_logs
-
-        join_logs(logs, [target, *inputs])  # one sample time and roles, before any work
+    logs, validate = _read_logs(args, config, columns, names, target=target, inputs=inputs)
     data = logs[0] if len(logs) == 1 else logs
     previous = None
     if getattr(args, "initial", None):
@@ -110,15 +72,8 @@ def run_cli(args: argparse.Namespace) -> int:
         ts = float(logs[0].ts)
         config = inherit(config, previous, inputs=inputs, axis=axis, ts=ts,
                          t_sum=max(len(log) for log in logs) * ts)
-    validate = None
-    if validate_path is not None:
-        validate = load_data(validate_path, ts=args.ts, require=[target, *inputs], columns=columns,
-                             names=names)
-        if period is not None:
-            validate = decimate(validate, decimation_factor(validate, period),
-                                where="--decimate-to")
-        elif factor is not None:
-            validate = decimate(validate, factor)
+    if validate is not None:
+        validate = validate()
     output = Path(args.output)
     ckpt = checkpoint_path(output)
     count = args.searches if getattr(args, "searches", None) is not None else config.searches
@@ -130,28 +85,98 @@ def run_cli(args: argparse.Namespace) -> int:
 
     # Ctrl-C and SIGTERM (both a KeyboardInterrupt: cli._interruptible) end the search;
     # abstract() returns the best so far and keeps the checkpoint, and it is written below.
-    try:
-        with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
-            result = abstract(data, target=target, inputs=inputs, config=config,
-                              seed=args.seed, time_limit=args.time_limit,
-                              callback=reporter.abstraction,
-                              checkpoint=ckpt, resume=args.resume, workers=args.workers,
-                              validate=validate, select=getattr(args, "select", None), axis=axis,
-                              scheduler=getattr(args, "scheduler", None),
-                              validation_share=share, searches=getattr(args, "searches", None))
-    except ConfigError as exc:
-        option = {"scheduler": "--scheduler", "validation_share": "--validation-share",
-                  "searches": "--searches"}
-        if exc.where in option:
-            raise ConfigError(option[exc.where], exc.problem) from None
-        raise
+    # An error naming a parameter (scheduler, searches, ...) is printed naming its option.
+    with ProgressReporter("edm abstract", quiet=args.quiet, unit=_unit(args)) as reporter:
+        result = abstract(data, target=target, inputs=inputs, config=config,
+                          seed=args.seed, time_limit=args.time_limit,
+                          callback=reporter.abstraction,
+                          checkpoint=ckpt, resume=args.resume,
+                          validate=validate, select=getattr(args, "select", None), axis=axis,
+                          validation_share=getattr(args, "validation_share", None),
+                          searches=getattr(args, "searches", None),
+                          parallel=Parallel(workers=args.workers,
+                                            scheduler=getattr(args, "scheduler", None)))
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})
-    from edm_sym.application.summary import physics_line, with_physics
+    from edm_sym.application.summary import with_physics
 
     result, phys = with_physics(result, data)
     save_result(result, output)
+    return _report(result, output, data, phys)
+
+
+def _options(args: argparse.Namespace) -> tuple:
+    """The config with the options over it, the column roles, target, inputs and axis.
+
+    Raises
+    ------
+    ConfigError
+        Naming the option (``--workers``, ``--seed``, ``--validation-share``, ...).
+    """
+    from edm_sym.engines.abstraction.schedule import default_config, load_config
+
+    config = load_config(args.config) if args.config else default_config()
+    columns, target, inputs = resolve_columns(args, config)
+    axis = getattr(args, "axis", None) or config.axis or "rotary"
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError("--workers", f"expected an integer >= 1, found {args.workers}")
+    if args.seed < 0:
+        raise ConfigError("--seed", f"expected an integer >= 0, found {args.seed}")
+    share = getattr(args, "validation_share", None)
+    if share is not None and getattr(args, "validate", None) is not None:
+        raise ConfigError("--validation-share", f"expected no share with --validate (the "
+                                                f"second log is held out whole), found {share}")
+    if share is not None:
+        try:
+            config = replace(config, validation=replace(config.validation, share=share))
+        except ConfigError as exc:
+            raise ConfigError("--validation-share", exc.problem) from None
+    return _parsimony_options(config, args), columns, target, inputs, axis
+
+
+def _read_logs(args: argparse.Namespace, config, columns, names,  # noqa: ANN001
+               *, target: str, inputs: tuple[str, ...]) -> tuple[list, Any]:
+    """The logs of the run, decimated as the options say and checked (the target and inputs
+    in each, one sample time and roles among them), before any work; and, with
+    ``--validate``, a function that reads the held-out log the same way (read after
+    ``--initial`` is checked)."""
+    from edm_sym.core.data import decimate, decimation_factor
+    from edm_sym.engines.sources import load_data
+
+    logs = [load_data(spec, ts=args.ts, columns=columns, names=names)
+            for spec in _specs(args, config)]
+    factor = getattr(args, "decimate", None)
+    period = getattr(args, "decimate_to", None)
+    if factor is not None and period is not None:
+        raise ConfigError("--decimate-to", f"expected either --decimate or --decimate-to, "
+                                           f"found both (--decimate {factor})")
+
+    def decimated(log):  # noqa: ANN001, ANN202
+        if period is not None:  # each log's own factor: logs of several rates meet at one
+            return decimate(log, decimation_factor(log, period), where="--decimate-to")
+        return decimate(log, factor) if factor is not None else log
+
+    logs = [decimated(log) for log in logs]
+    for log in logs:
+        log.column(target, role="target column")
+        log.stack(inputs)
+    if len(logs) > 1:
+        from edm_sym.core.data import join_logs
+
+        join_logs(logs, [target, *inputs])  # one sample time and roles, before any work
+    path = getattr(args, "validate", None)
+    if path is None:
+        return logs, None
+    return logs, lambda: decimated(load_data(path, ts=args.ts, require=[target, *inputs],
+                                             columns=columns, names=names))
+
+
+def _report(result: EdmResult, output: Path, data, phys) -> int:  # noqa: ANN001
+    """What the run wrote and found (``phys``: the physics it measured, or None), then how
+    it ended; the exit status."""
+    from edm_sym.application.summary import physics_line
+
     reason = result.provenance.get("stop_reason")
     print(f"wrote {output}")
     print(f"fitness {result.fitness:.10g}" if result.fitness is not None else "fitness inf")

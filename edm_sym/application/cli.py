@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError
+from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError, as_options
 from edm_sym.core.fileio import check_outputs
 
 
@@ -190,7 +190,6 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_describe(args: argparse.Namespace) -> int:
-    from edm_sym.core.errors import DataFormatError
     from edm_sym.engines.description import describe
     from edm_sym.engines.symbolic.significance import SignificanceOptions
 
@@ -207,15 +206,10 @@ def _cmd_describe(args: argparse.Namespace) -> int:
                  for spec in specs if spec is not None]
     descs = []
     for spec in specs:  # several logs: each described on its own, from rest
-        try:
-            descs.append(describe(args.result, data=spec, ts=args.ts,
-                                  options=SignificanceOptions(threshold=args.threshold / 100),
-                                  axis=args.axis, columns=_columns(args), resample=args.resample,
-                                  observer_bandwidth=args.observer_bandwidth))
-        except DataFormatError as exc:
-            if exc.where != "observer_bandwidth":
-                raise
-            raise DataFormatError("--observer-bandwidth", exc.problem) from None
+        descs.append(describe(args.result, data=spec, ts=args.ts,
+                              options=SignificanceOptions(threshold=args.threshold / 100),
+                              axis=args.axis, columns=_columns(args), resample=args.resample,
+                              observer_bandwidth=args.observer_bandwidth))
     if len(descs) == 1:
         print(json.dumps(descs[0].to_json(), indent=2, allow_nan=False) if args.json
               else descs[0].table())
@@ -246,9 +240,29 @@ def build_parser() -> argparse.ArgumentParser:
     _add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
+    # One line per subcommand, in the order of `edm --help`; each adds its own options.
     _add_export_args(sub.add_parser("export", help="render a result as C, Python or LaTeX"))
+    _add_abstract_args(sub.add_parser(
+        "abstract", help="run the hierarchical EDM abstraction (GA) on a log"))
+    _add_describe_args(sub.add_parser(
+        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
+    _add_simulate_args(sub.add_parser(
+        "simulate", help="run the reference simulator of a model on a log"))
+    _add_plant_args(sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion"))
+    _add_pipeline_args(sub.add_parser(
+        "pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file"))
+    _add_observe_args(sub.add_parser(
+        "observe", help="build the reaction-torque-observer view of a measured log"))
+    _add_lugre_args(sub.add_parser(
+        "lugre", help="identify the LuGre baseline model on one or more logs"))
+    _add_doctor_args(sub.add_parser(
+        "doctor", help="list the optional tools (compilers, QEMU, LaTeX) and numba (the GA's row "
+                       "kernel) found or missing"))
+    return parser
 
-    p = sub.add_parser("abstract", help="run the hierarchical EDM abstraction (GA) on a log")
+
+def _add_abstract_args(p: argparse.ArgumentParser) -> None:
+    """``edm abstract``: the log(s), columns, config, search and held-out options."""
     p.add_argument("data", metavar="DATA", nargs="*",
                    help=DATA_HELP + "; several logs are fitted together, each from rest (default: "
                         "the config's data list)")
@@ -302,10 +316,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 
-    _add_describe_args(sub.add_parser(
-        "describe", help="what a result's model found: rows, physical terms, contributions, flags"))
 
-    p = sub.add_parser("simulate", help="run the reference simulator of a model on a log")
+def _add_simulate_args(p: argparse.ArgumentParser) -> None:
+    """``edm simulate``: a model and the logs to run it on."""
     p.add_argument("model", metavar="MODEL.json", help="an EDM result or a LuGre result")
     p.add_argument("data", metavar="DATA", nargs="+",
                    help=DATA_HELP + "; several logs are each simulated from rest")
@@ -318,7 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_simulate)
 
-    p = sub.add_parser("plant", help="simulate a servo axis with RTOB in free motion")
+
+def _add_plant_args(p: argparse.ArgumentParser) -> None:
+    """``edm plant``: the simulated servo axis and its excitation."""
     p.add_argument("--preset", required=True, metavar="NAME",
                    help="the plant: a preset of docs/plant.md (auger, ballscrew, lugre, ...) or "
                         "family-N, draw N of the family of plants with known truth")
@@ -328,7 +343,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_shared(p, "--seed", "noise seed (default 0)")
     p.set_defaults(func=_cmd_plant)
 
-    p = sub.add_parser("pipeline", help="data -> LuGre -> EDM -> evaluation -> export, from a TOML file")
+
+def _add_pipeline_args(p: argparse.ArgumentParser) -> None:
+    """``edm pipeline``: the pipeline file."""
     p.add_argument("pipeline", metavar="PIPELINE.toml", help="the pipeline file (docs/cli.md#edm-pipeline)")
     p.add_argument("--quiet", action="store_true",
                    help="no progress (bar on a terminal, a line every few seconds elsewhere)")
@@ -337,7 +354,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_shared(p, "--axis", "the axis, over the file's [data] axis (default: the file's, else rotary)")
     p.set_defaults(func=_cmd_pipeline)
 
-    p = sub.add_parser("observe", help="build the reaction-torque-observer view of a measured log")
+
+def _add_observe_args(p: argparse.ArgumentParser) -> None:
+    """``edm observe``: a measured log and the observer's settings."""
     p.add_argument("data", metavar="DATA", help=DATA_HELP)
     p.add_argument("--position", metavar="COL",
                    help="the measured position column (or --role COL=position)")
@@ -355,7 +374,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_observe)
 
-    p = sub.add_parser("lugre", help="identify the LuGre baseline model on one or more logs")
+
+def _add_lugre_args(p: argparse.ArgumentParser) -> None:
+    """``edm lugre``: the logs and the identification's settings."""
     p.add_argument("data", metavar="DATA", nargs="+",
                    help=DATA_HELP + "; several logs are each simulated from rest and fitted together")
     p.add_argument("--target", metavar="COL",
@@ -375,13 +396,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_column_args(p)
     p.set_defaults(func=_cmd_lugre)
 
-    p = sub.add_parser("doctor", help="list the optional tools (compilers, QEMU, LaTeX) and numba "
-                                      "(the GA's row kernel) found or missing")
+
+def _add_doctor_args(p: argparse.ArgumentParser) -> None:
+    """``edm doctor``: a table, or JSON with ``--json``."""
     p.add_argument("--json", action="store_true",
                    help="print a JSON list of {kind, name, apt, purpose, found, location, version, "
                         "pip, status} instead")
     p.set_defaults(func=_cmd_doctor)
-    return parser
 
 
 def _cmd_doctor(args: argparse.Namespace) -> int:
@@ -409,23 +430,22 @@ def _cmd_export(args: argparse.Namespace) -> int:
         from edm_sym.core.result import front_member
 
         result = front_member(result, args.front_member)
-    from edm_sym.application.exporting import export
+    from edm_sym.application.exporting import export_files
     out = Path(args.out_dir) if args.out_dir else Path("generated") / Path(args.result).resolve().parent.name
     inputs = [args.result, *(args.data or []), *(args.eval_data or []), args.lugre]
     check_outputs([out / name for name in _export_names(args)], [i for i in inputs if i],
                   option="-o" if args.out_dir else "output folder")
     # The summary's log is read (and refused) before any file is written.
     log = _summary_log(result, args)
-    notes: list[str] = []
     # The report draws every log and gives the fit on each and over all; the summary
     # judges all of them.
-    written = export(result, args.target, out, prefix=args.prefix, real=args.real, pdf=args.pdf,
-                     data=_one_or_all(args.data), eval_data=_one_or_all(args.eval_data),
-                     lugre=args.lugre,
-                     ts=args.ts, input_range=dict(args.input_range or ()), notes=notes)
-    for path in written:
+    written = export_files(result, args.target, out, prefix=args.prefix, real=args.real,
+                           pdf=args.pdf, data=_one_or_all(args.data),
+                           eval_data=_one_or_all(args.eval_data), lugre=args.lugre, ts=args.ts,
+                           input_range=dict(args.input_range or ()))
+    for path in written.files:
         print(path)
-    for line in notes:
+    for line in written.notes:
         print(line)
     _export_summary(result, args, log)
     return 0
@@ -701,6 +721,7 @@ def _cmd_abstract(args: argparse.Namespace) -> int:
 #: Exit statuses of every command (docs/cli.md#exit-status).
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
+
 #: Where a bug is reported (exit 1 says so).
 REPORT_BUG = "this is a bug of edm_sym: please report it with the output of EDM_DEBUG=1"
 
@@ -711,7 +732,8 @@ def _raise_interrupt(signum: int, frame: object) -> None:
 
 def _run(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> int:
     def one_line(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ANN001
-        print(f"{parser.prog}: warning: {' '.join(str(message).split())}", file=sys.stderr)
+        print(f"{parser.prog}: warning: {as_options(' '.join(str(message).split()))}",
+              file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.showwarning = one_line
@@ -750,12 +772,13 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         if not isinstance(exc, EdmError) and not _raised_by_edm_sym(exc):
             return _failed(parser.prog, exc)  # a library's own check: input edm_sym let through
         if isinstance(exc, ToolMissingError):
-            print(f"{parser.prog}: {exc}", file=sys.stderr)
+            print(f"{parser.prog}: {as_options(str(exc))}", file=sys.stderr)
             return EXIT_FAILED
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
-        # ValueError here comes from validation inside the library: bad input.
-        line = " ".join(str(exc).split())
+        # ValueError here comes from validation inside the library: bad input. The library
+        # names its parameters; the command names the options that give them.
+        line = as_options(" ".join(str(exc).split()))
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

@@ -39,7 +39,7 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess by th
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError
 from edm_sym.core.units import AXES
-from edm_sym.engines.abstraction import AbstractionConfig, abstract, load_config
+from edm_sym.engines.abstraction import AbstractionConfig, Parallel, abstract, load_config
 from edm_sym.engines.simulate import simulate
 
 __all__ = ["EDMRegressor"]
@@ -233,8 +233,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         with ProgressReporter("EDMRegressor.fit", quiet=not self.progress) as reporter:
             result = abstract(data, target=self.target_name, inputs=names,
                               config=self._config(), seed=self.seed, time_limit=self.time_limit,
-                              workers=self.workers, callback=reporter.abstraction, axis=axis,
-                              searches=self.searches)
+                              callback=reporter.abstraction, axis=axis, searches=self.searches,
+                              parallel=Parallel(workers=self.workers))
         from edm_sym.application.summary import with_physics
 
         self.result_ = with_physics(result, data)[0]

@@ -1,6 +1,7 @@
 """Export: a result as code and report, from one symbolic model (the application layer).
 
-:func:`export` checks the options, makes the stages of the result's symbolic
+:func:`export` (and :func:`export_files`, which also returns what a fixed-point
+build states about its deviation) checks the options, makes the stages of the result's symbolic
 model the code needs and hands them to the code renderer
 (:mod:`edm_sym.outputs.render`); the report (:mod:`edm_sym.outputs.report`)
 decodes the whole model itself, with the classifier options of the data it
@@ -11,6 +12,7 @@ call it.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -20,13 +22,28 @@ from edm_sym.core.errors import ExternalToolError, ToolMissingError
 from edm_sym.outputs.render import REPORT, render, target_names, write_files
 from edm_sym.outputs.render.context import FIXED_REALS, source_of, validate_prefix, validate_real
 
-__all__ = ["export", "recorded_log", "report_inputs"]
+__all__ = ["Exported", "export", "export_files", "recorded_log", "report_inputs"]
+
+
+@dataclass(frozen=True)
+class Exported:
+    """What :func:`export_files` wrote, and what it states beside the files.
+
+    Attributes
+    ----------
+    files : list of pathlib.Path
+        The files written, in order.
+    notes : tuple of str
+        The lines a fixed-point build states about its deviation (``"q31: ..."``).
+    """
+
+    files: list[Path]
+    notes: tuple[str, ...] = ()
 
 
 def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_comp",
            real: str = "double", pdf: bool = False, data: Any = None, eval_data: Any = None,
-           lugre: Any = None, ts: float | None = None, input_range: Any = None,
-           notes: list[str] | None = None) -> list[Path]:
+           lugre: Any = None, ts: float | None = None, input_range: Any = None) -> list[Path]:
     """Render ``result`` as C, Python, the LaTeX report or all of them into ``out_dir``.
 
     Parameters
@@ -49,13 +66,12 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         fixed-point build and gives the kit's vectors (:func:`recorded_log`).
     input_range : mapping of str to (float, float), optional
         Input ranges over those the result records (fixed-point builds and the kit).
-    notes : list of str, optional
-        Receives the lines a fixed-point build states about its deviation.
 
     Returns
     -------
     list of pathlib.Path
-        The files written, in order.
+        The files written, in order (:func:`export_files` also gives what a
+        fixed-point build states about its deviation).
 
     Raises
     ------
@@ -69,6 +85,25 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         With ``pdf=True`` and no latexmk; the .tex, figures and code are written.
     OutputError
         When ``out_dir`` or a file in it cannot be written.
+    """
+    return export_files(result, target, out_dir, prefix=prefix, real=real, pdf=pdf, data=data,
+                        eval_data=eval_data, lugre=lugre, ts=ts, input_range=input_range).files
+
+
+def export_files(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_comp",
+                 real: str = "double", pdf: bool = False, data: Any = None, eval_data: Any = None,
+                 lugre: Any = None, ts: float | None = None, input_range: Any = None) -> Exported:
+    """:func:`export`, and also what a fixed-point build states about its deviation.
+
+    Parameters
+    ----------
+    result, target, out_dir, prefix, real, pdf, data, eval_data, lugre, ts, input_range
+        As for :func:`export`.
+
+    Returns
+    -------
+    Exported
+        The files written, in order, and the lines a fixed-point build states.
     """
     validate_prefix(prefix)
     validate_real(real)
@@ -87,6 +122,7 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
     model = build_model(result.compensator, sha256=source.sha256, target=result.target,
                         axis=source.axis)
     options: dict[str, Any] = {"input_range": input_range}
+    notes: tuple[str, ...] = ()
     if "test" in names or (real in FIXED_REALS and "c" in names):
         options["log"] = recorded_log(result, data=data, eval_data=eval_data)
     if real in FIXED_REALS and ({"c", "test"} & set(names)):
@@ -94,12 +130,11 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         from edm_sym.outputs.render.fixed_context import accuracy_lines, fixed_build
 
         options["build"] = fixed_build(model, source, real, input_range, options["log"])
-        if notes is not None:
-            notes += [f"{real}: {line}" for line in accuracy_lines(
-                options["build"], axis_units(source.axis).force)]
+        notes = tuple(f"{real}: {line}" for line in accuracy_lines(
+            options["build"], axis_units(source.axis).force))
     files = render(result, target, prefix=prefix, real=real, model=model, options=options)
     if REPORT not in names:
-        return write_files(out_dir, files)
+        return Exported(write_files(out_dir, files), notes)
     from edm_sym.outputs.report import write_report
 
     inputs = report_inputs(result, data=data, eval_data=eval_data, lugre=lugre)
@@ -116,7 +151,7 @@ def export(result: Any, target: str, out_dir: str | Path, *, prefix: str = "edm_
         landed = ", ".join(p.name for p in code)
         raise type(exc)(f"target latex (PDF): {exc}; the other targets were written ({landed})") \
             from None
-    return write_files(out_dir, files) + written
+    return Exported(write_files(out_dir, files) + written, notes)
 
 
 def report_inputs(result: Any, *, data: Any = None, eval_data: Any = None,

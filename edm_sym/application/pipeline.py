@@ -41,7 +41,7 @@ import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -51,6 +51,9 @@ from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, O
 from edm_sym.core.fileio import check_outputs, read_toml, write_atomic
 from edm_sym.core.fitness import rms
 from edm_sym.engines.sources import load_data
+
+if TYPE_CHECKING:
+    from edm_sym.engines.abstraction.parallel import Parallel
 
 SECTIONS = {
     "data": {"abstraction", "evaluation", "axis"},
@@ -275,7 +278,8 @@ def _report_logs(pipe: Pipeline) -> dict[str, list[str | Path]]:
 
 
 def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False,
-                 out: Any = None, axis: str | None = None) -> dict[str, Any]:
+                 out: Any = None, axis: str | None = None,
+                 parallel: Parallel | None = None) -> dict[str, Any]:
     """Run the whole flow of a pipeline file.
 
     Parameters
@@ -296,88 +300,146 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
         standard output); the fitness and the flags go to standard error.
     axis : str, optional
         ``"rotary"`` or ``"linear"`` over the file's ``[data] axis`` (``--axis``).
+    parallel : Parallel, optional
+        Where the abstraction's work goes (:class:`~edm_sym.engines.abstraction.Parallel`;
+        default: this machine's cores).
 
     Returns
     -------
     dict
         The evaluation summary (also written to ``evaluation.json``).
     """
-    from edm_sym.application.exporting import export
-    from edm_sym.application.progress import ProgressReporter
-    from edm_sym.application.summary import fitness_line, print_summary, result_flags
-    from edm_sym.core.result import load_result, save_result
-    from edm_sym.engines.abstraction import abstract, default_config, load_config
-    from edm_sym.engines.abstraction.checkpoint import read_checkpoint
-    from edm_sym.engines.abstraction.holdout import log_starts
-    from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
-    from edm_sym.engines.abstraction.searches import checkpoint_files
-    from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre, shape_bound_flags
-    from edm_sym.engines.models import model_of
+    run = _PipelineRun.start(path, progress=progress, reuse=reuse,
+                             out=out if out is not None else sys.stdout, axis=axis)
+    run.check_before_work()
+    lugre = run.identify_lugre()
+    result = run.abstraction(lugre, parallel)
+    summary = run.evaluate(result, lugre)
+    run.export(result, lugre)
+    return summary
 
-    out = out if out is not None else sys.stdout
-    pipe = load_pipeline(path)
-    if axis is not None:  # --axis, over the file's
-        pipe = replace(pipe, axis=axis)
-    name = Path(path).name
-    def load(spec: str) -> DataLog:
-        return load_data(pipe.data_path(spec), require=[*pipe.inputs, pipe.target],
-                         columns=pipe.columns)
 
-    logs = {"abstraction": [load(spec) for spec in pipe.abstraction_data]}
-    if pipe.evaluation_data:
-        logs["evaluation"] = [load(spec) for spec in pipe.evaluation_data]
-    abst_logs = logs["abstraction"]
-    # Several logs: one sample time and column roles (exit 2 naming the file); each is
-    # simulated from rest on its own.
-    abst = abst_logs[0] if len(abst_logs) == 1 else join_logs(abst_logs,
-                                                                [pipe.target, *pipe.inputs])
-    # What the abstraction and the evaluation will refuse, refused before any work: a
-    # refused pipeline leaves the outputs of an earlier run as they were.
-    try:
-        check_inputs(pipe.target, pipe.inputs)
-    except ConfigError as exc:
-        raise ConfigError(f"{name}: abstraction.{exc.where}", exc.problem) from None
-    for log in abst_logs:
-        check_data(log, pipe.target, pipe.inputs)
-    for log in logs.get("evaluation", []):
-        match_sample_time(log, abst.ts, model=str(abst_logs[0].source))
-    lugre_file, result_file = pipe.folder / "lugre.json", pipe.folder / "result.json"
-    ex = pipe.export
-    out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
-        Path("generated") / pipe.folder.name
-    # Every output is checked before the long work: none may be an input, all must be writable.
-    data_files = [pipe.data_path(s) for s in (*pipe.abstraction_data, *pipe.evaluation_data)]
-    ckpt = result_file.with_name(result_file.name + ".checkpoint")
-    prefix = ex.get("prefix", "edm_comp")
-    inputs = [path, pipe.config, *data_files]
-    check_outputs([lugre_file, result_file, ckpt, pipe.folder / "evaluation.json",
-                   out_dir / f"{prefix}.h"], inputs, option="pipeline output")
-    # Every file the export writes is <out_dir>/<prefix>... (.c, .py, the report, its figures).
-    for src in (Path(i) for i in inputs if i is not None and not str(i).startswith("plant:")):
-        if src.exists() and src.resolve().parent == out_dir.resolve() and \
-                src.name.startswith(prefix):
-            raise OutputError(f"pipeline output {out_dir / prefix}*: expected the export's files "
-                              f"apart from the inputs, found the input {src} among the names it "
-                              "writes (writing would destroy it); choose another out_dir or "
-                              "prefix")
-    # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
-    keep_result = reuse and result_file.exists() and \
-        load_result(result_file).provenance.get("stop_reason") != "interrupted"
-    # The abstraction's sizes are checked before the LuGre identification runs.
-    config = load_config(pipe.config) if pipe.config else None
-    if not keep_result:
-        check_budget(config or default_config(), len(abst), len(pipe.inputs),
-                     time_limit=pipe.time_limit)
-    if reuse and not keep_result:
-        # A checkpoint --reuse cannot continue is refused before the LuGre identification
-        # (whether it is of this run is known once the abstraction has the training samples).
-        count = (config or default_config()).searches
-        for f in checkpoint_files(ckpt, count):
-            if f is not None and f.exists():
-                read_checkpoint(f)
+@dataclass
+class _PipelineRun:
+    """One run of a pipeline file: its logs and output files, and the flow's steps in order."""
 
-    lugre = None
-    if pipe.lugre is not None:
+    path: str | Path
+    pipe: Pipeline
+    progress: bool
+    reuse: bool
+    out: Any
+    logs: dict[str, list[DataLog]]
+    #: The abstraction logs as one (several: laid end to end, each simulated from rest).
+    abst: DataLog
+    lugre_file: Path
+    result_file: Path
+    checkpoint: Path
+    out_dir: Path
+    #: Whether --reuse keeps the result.json there (not an interrupted one: it is continued).
+    keep_result: bool = False
+    config: Any = None
+
+    @property
+    def name(self) -> str:
+        """The pipeline file's name, for messages."""
+        return Path(self.path).name
+
+    @property
+    def abst_logs(self) -> list[DataLog]:
+        """The abstraction logs, each on its own."""
+        return self.logs["abstraction"]
+
+    @classmethod
+    def start(cls, path: str | Path, *, progress: bool, reuse: bool, out: Any,
+              axis: str | None) -> _PipelineRun:
+        """The pipeline file read and its logs loaded; where every output goes."""
+        pipe = load_pipeline(path)
+        if axis is not None:  # --axis, over the file's
+            pipe = replace(pipe, axis=axis)
+
+        def load(spec: str) -> DataLog:
+            return load_data(pipe.data_path(spec), require=[*pipe.inputs, pipe.target],
+                             columns=pipe.columns)
+
+        logs = {"abstraction": [load(spec) for spec in pipe.abstraction_data]}
+        if pipe.evaluation_data:
+            logs["evaluation"] = [load(spec) for spec in pipe.evaluation_data]
+        abst_logs = logs["abstraction"]
+        # Several logs: one sample time and column roles (exit 2 naming the file); each is
+        # simulated from rest on its own.
+        abst = abst_logs[0] if len(abst_logs) == 1 else join_logs(abst_logs,
+                                                                    [pipe.target, *pipe.inputs])
+        result_file = pipe.folder / "result.json"
+        ex = pipe.export
+        out_dir = Path(os.path.normpath(pipe.folder / ex["out_dir"])) if "out_dir" in ex else \
+            Path("generated") / pipe.folder.name
+        return cls(path, pipe, progress, reuse, out, logs, abst, pipe.folder / "lugre.json",
+                   result_file, result_file.with_name(result_file.name + ".checkpoint"), out_dir)
+
+    def check_before_work(self) -> None:
+        """What the abstraction, the evaluation and the export will refuse, refused before any
+        work: a refused pipeline leaves the outputs of an earlier run as they were."""
+        from edm_sym.core.result import load_result
+        from edm_sym.engines.abstraction import default_config, load_config
+        from edm_sym.engines.abstraction.checkpoint import read_checkpoint
+        from edm_sym.engines.abstraction.run import check_budget, check_data, check_inputs
+        from edm_sym.engines.abstraction.searches import checkpoint_files
+
+        pipe, name = self.pipe, self.name
+        try:
+            check_inputs(pipe.target, pipe.inputs)
+        except ConfigError as exc:
+            raise ConfigError(f"{name}: abstraction.{exc.where}", exc.problem) from None
+        for log in self.abst_logs:
+            check_data(log, pipe.target, pipe.inputs)
+        for log in self.logs.get("evaluation", []):
+            match_sample_time(log, self.abst.ts, model=str(self.abst_logs[0].source))
+        self._check_outputs()
+        # An interrupted abstraction left the best so far and its checkpoint: --reuse continues it.
+        self.keep_result = self.reuse and self.result_file.exists() and \
+            load_result(self.result_file).provenance.get("stop_reason") != "interrupted"
+        # The abstraction's sizes are checked before the LuGre identification runs.
+        self.config = load_config(pipe.config) if pipe.config else None
+        if not self.keep_result:
+            check_budget(self.config or default_config(), len(self.abst), len(pipe.inputs),
+                         time_limit=pipe.time_limit)
+        if self.reuse and not self.keep_result:
+            # A checkpoint --reuse cannot continue is refused before the LuGre identification
+            # (whether it is of this run is known once the abstraction has the training samples).
+            count = (self.config or default_config()).searches
+            for f in checkpoint_files(self.checkpoint, count):
+                if f is not None and f.exists():
+                    read_checkpoint(f)
+
+    def _check_outputs(self) -> None:
+        """Every output is checked before the long work: none may be an input, all must be
+        writable."""
+        pipe, out_dir = self.pipe, self.out_dir
+        data_files = [pipe.data_path(s) for s in (*pipe.abstraction_data, *pipe.evaluation_data)]
+        prefix = pipe.export.get("prefix", "edm_comp")
+        inputs = [self.path, pipe.config, *data_files]
+        check_outputs([self.lugre_file, self.result_file, self.checkpoint,
+                       pipe.folder / "evaluation.json", out_dir / f"{prefix}.h"], inputs,
+                      option="pipeline output")
+        # Every file the export writes is <out_dir>/<prefix>... (.c, .py, the report, its figures).
+        for src in (Path(i) for i in inputs if i is not None and not str(i).startswith("plant:")):
+            if src.exists() and src.resolve().parent == out_dir.resolve() and \
+                    src.name.startswith(prefix):
+                raise OutputError(f"pipeline output {out_dir / prefix}*: expected the export's "
+                                  f"files apart from the inputs, found the input {src} among the "
+                                  "names it writes (writing would destroy it); choose another "
+                                  "out_dir or prefix")
+
+    def identify_lugre(self) -> Any:
+        """The LuGre baseline (``[lugre]``): identified, or with --reuse the one there; None
+        without the table."""
+        from edm_sym.application.progress import ProgressReporter
+        from edm_sym.engines.abstraction.holdout import log_starts
+        from edm_sym.engines.lugre import identify_lugre, load_lugre, save_lugre
+
+        pipe, name, abst_logs = self.pipe, self.name, self.abst_logs
+        if pipe.lugre is None:
+            return None
         velocity = _get(f"{name}: lugre", pipe.lugre, "velocity", str)
         if velocity == pipe.target:  # as edm lugre --velocity
             raise ConfigError(f"{name}: lugre.velocity", f"expected a column other than the "
@@ -386,13 +448,13 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
             log.require_varying([velocity])  # a constant column, or the clock, is no velocity
         lugre_data = abst_logs[0] if len(abst_logs) == 1 else join_logs(abst_logs,
                                                                          [pipe.target, velocity])
-        if not (reuse and lugre_file.exists()):
+        if not (self.reuse and self.lugre_file.exists()):
             seed = _get(f"{name}: lugre", pipe.lugre, "seed", int, 0)
             spec = pipe.lugre.get("weighting")
             weights = None if spec is None else np.concatenate([
                 _lugre_weights(spec, log, pipe.target, f"{name}: lugre.weighting")
                 for log in abst_logs])
-            with ProgressReporter("edm pipeline", quiet=not progress) as reporter, \
+            with ProgressReporter("edm pipeline", quiet=not self.progress) as reporter, \
                     lugre_data.naming(target=pipe.target, velocity=velocity):
                 res = identify_lugre(
                     lugre_data.columns[pipe.target],
@@ -402,66 +464,99 @@ def run_pipeline(path: str | Path, *, progress: bool = True, reuse: bool = False
                     seed=seed,
                     time_limit=_get(f"{name}: lugre", pipe.lugre, "time_limit", (int, float), None),
                     weights=weights, progress=reporter.lugre, starts=log_starts(abst_logs))
-            save_lugre(lugre_file, res, target=pipe.target, velocity=velocity,
+            save_lugre(self.lugre_file, res, target=pipe.target, velocity=velocity,
                        data_sha256=lugre_data.sha256, seed=seed)
-        lugre = load_lugre(lugre_file)
-        print(f"lugre: {lugre_file}", file=out)
+        lugre = load_lugre(self.lugre_file)
+        print(f"lugre: {self.lugre_file}", file=self.out)
+        return lugre
 
-    if not keep_result:
-        with ProgressReporter("edm pipeline", quiet=not progress) as reporter:
-            result = abstract(abst_logs[0] if len(abst_logs) == 1 else abst_logs,
-                              target=pipe.target, inputs=pipe.inputs, config=config,
-                              seed=pipe.seed, time_limit=pipe.time_limit,
-                              callback=reporter.abstraction,
-                              checkpoint=ckpt, resume=reuse, axis=pipe.axis)
-        # The result records one log of each kind; several are given to the export here.
-        stored = {}
-        if len(pipe.abstraction_data) == 1:
-            stored["data"] = pipe.abstraction_data[0]
-        if len(pipe.evaluation_data) == 1:
-            stored["eval_data"] = pipe.evaluation_data[0]
+    def abstraction(self, lugre: Any, parallel: Parallel | None) -> Any:
+        """The EDM result: found (``result.json`` written with the logs it records), or with
+        --reuse the one there.
+
+        Raises
+        ------
+        KeyboardInterrupt
+            When the abstraction was interrupted (its best so far is written).
+        """
+        from edm_sym.application.progress import ProgressReporter
+        from edm_sym.core.result import load_result, save_result
+        from edm_sym.engines.abstraction import abstract
+
+        pipe, abst_logs = self.pipe, self.abst_logs
+        if not self.keep_result:
+            with ProgressReporter("edm pipeline", quiet=not self.progress) as reporter:
+                result = abstract(abst_logs[0] if len(abst_logs) == 1 else abst_logs,
+                                  target=pipe.target, inputs=pipe.inputs, config=self.config,
+                                  seed=pipe.seed, time_limit=pipe.time_limit,
+                                  callback=reporter.abstraction,
+                                  checkpoint=self.checkpoint, resume=self.reuse, axis=pipe.axis,
+                                  parallel=parallel)
+            # The result records one log of each kind; several are given to the export here.
+            stored = {}
+            if len(pipe.abstraction_data) == 1:
+                stored["data"] = pipe.abstraction_data[0]
+            if len(pipe.evaluation_data) == 1:
+                stored["eval_data"] = pipe.evaluation_data[0]
+            if lugre is not None:
+                stored["lugre"] = self.lugre_file.name
+            logs = self.abst_logs
+            result, _ = with_physics(result, logs[0] if len(logs) == 1 else logs)
+            save_result(replace(result, report_inputs=stored), self.result_file)
+            if result.provenance.get("stop_reason") == "interrupted":
+                # The best result so far is saved; the rest of the flow must not run on it.
+                raise KeyboardInterrupt
+        result = load_result(self.result_file)
+        print(f"result: {self.result_file}", file=self.out)
+        return result
+
+    def evaluate(self, result: Any, lugre: Any) -> dict[str, Any]:
+        """The RMSE of EDM (and LuGre) on every log, written to ``evaluation.json`` and printed
+        as a table."""
+        from edm_sym.engines.models import model_of
+
+        pipe, out = self.pipe, self.out
+        summary: dict[str, Any] = {}
+        models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None
+                                               else {})
+        for label, kind_logs in self.logs.items():
+            # Each log simulated from rest; several logs give a row each and one over all.
+            errors = {kind: [log.columns[pipe.target] - m.run(log).torque for log in kind_logs]
+                      for kind, m in models.items()}
+            if len(kind_logs) > 1:
+                for k, log in enumerate(kind_logs):
+                    src = str(log.source)
+                    shown = src if is_plant_spec(src) else Path(src).name
+                    summary[f"{label}: {shown}"] = _scores(
+                        {kind: e[k] for kind, e in errors.items()})
+            summary[label] = _scores({kind: np.concatenate(e) for kind, e in errors.items()})
+        write_atomic(pipe.folder / "evaluation.json",
+                     json.dumps(summary, sort_keys=True, indent=2) + "\n")
+        width = max(12, *(len(label) for label in summary))
+        print(f"{'log':<{width}} {'EDM RMSE':>12} {'LuGre RMSE':>12} {'EDM/LuGre':>10}", file=out)
+        for label, row in summary.items():
+            lug = f"{row['lugre']:12.4g} {row['ratio']:10.3f}" if "lugre" in row else ""
+            print(f"{label:<{width}} {row['edm']:12.4g} {lug}", file=out)
+        return summary
+
+    def export(self, result: Any, lugre: Any) -> None:
+        """The export (``[export]``), then the closing summary: fitness and flags."""
+        from edm_sym.application.exporting import export
+        from edm_sym.application.summary import fitness_line, print_summary, result_flags
+        from edm_sym.engines.lugre import shape_bound_flags
+
+        pipe, name, ex = self.pipe, self.name, self.pipe.export
+        written = export(result, _get(f"{name}: export", ex, "target", str, "all"), self.out_dir,
+                         prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
+                         real=_get(f"{name}: export", ex, "real", str, "double"),
+                         pdf=_get(f"{name}: export", ex, "pdf", bool, False),
+                         **_report_logs(pipe))
+        for p in written:
+            print(f"wrote {p}", file=self.out)
+        judged = self.logs.get("evaluation", self.abst_logs)
+        flags = result_flags(result, judged[0] if len(judged) == 1 else judged)
         if lugre is not None:
-            stored["lugre"] = lugre_file.name
-        result, _ = with_physics(result, abst_logs[0] if len(abst_logs) == 1 else abst_logs)
-        save_result(replace(result, report_inputs=stored), result_file)
-        if result.provenance.get("stop_reason") == "interrupted":
-            # The best result so far is saved; the rest of the flow must not run on it.
-            raise KeyboardInterrupt
-    result = load_result(result_file)
-    print(f"result: {result_file}", file=out)
-
-    summary: dict[str, Any] = {}
-    models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None else {})
-    for label, kind_logs in logs.items():
-        # Each log simulated from rest; several logs give a row each and one over all.
-        errors = {kind: [log.columns[pipe.target] - m.run(log).torque for log in kind_logs]
-                  for kind, m in models.items()}
-        if len(kind_logs) > 1:
-            for k, log in enumerate(kind_logs):
-                src = str(log.source)
-                shown = src if is_plant_spec(src) else Path(src).name
-                summary[f"{label}: {shown}"] = _scores(
-                    {kind: e[k] for kind, e in errors.items()})
-        summary[label] = _scores({kind: np.concatenate(e) for kind, e in errors.items()})
-    write_atomic(pipe.folder / "evaluation.json", json.dumps(summary, sort_keys=True, indent=2) + "\n")
-    width = max(12, *(len(label) for label in summary))
-    print(f"{'log':<{width}} {'EDM RMSE':>12} {'LuGre RMSE':>12} {'EDM/LuGre':>10}", file=out)
-    for label, row in summary.items():
-        lug = f"{row['lugre']:12.4g} {row['ratio']:10.3f}" if "lugre" in row else ""
-        print(f"{label:<{width}} {row['edm']:12.4g} {lug}", file=out)
-
-    written = export(result, _get(f"{name}: export", ex, "target", str, "all"), out_dir,
-                     prefix=_get(f"{name}: export", ex, "prefix", str, "edm_comp"),
-                     real=_get(f"{name}: export", ex, "real", str, "double"),
-                     pdf=_get(f"{name}: export", ex, "pdf", bool, False),
-                     **_report_logs(pipe))
-    for p in written:
-        print(f"wrote {p}", file=out)
-    judged = logs.get("evaluation", abst_logs)
-    flags = result_flags(result, judged[0] if len(judged) == 1 else judged)
-    if lugre is not None:
-        velocity = np.concatenate([log.columns[lugre.velocity_name] for log in abst_logs])
-        flags += shape_bound_flags(lugre.params, velocity, abst.ts)
-    print_summary("edm pipeline", fitness=[fitness_line(result)], flags=flags,
-                  describe=result_file)
-    return summary
+            velocity = np.concatenate([log.columns[lugre.velocity_name] for log in self.abst_logs])
+            flags += shape_bound_flags(lugre.params, velocity, self.abst.ts)
+        print_summary("edm pipeline", fitness=[fitness_line(result)], flags=flags,
+                      describe=self.result_file)

@@ -137,7 +137,7 @@ def complexity(comp: Compensator, matrix: ElementMatrix | None = None) -> int:
     for row in (matrix or comp.matrix).rows:
         total += 1
         for gene in row.genes:
-            if gene.element.name == "through":
+            if gene.element.is_identity:
                 continue
             total += 1 + int(gene.element.state_size(comp.value(gene), ts))
     return total

@@ -70,7 +70,7 @@ def matrix_lines(comp: Any) -> list[str]:
         parts = [comp.matrix.inputs[row.input]]
         for gene in row.genes:
             el = gene.element
-            if el.name == "through":
+            if el.is_identity:
                 continue
             if el.param is None:
                 parts.append(el.name)

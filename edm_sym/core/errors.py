@@ -6,6 +6,10 @@ and what was found, so the command line can print it as one line and exit 2.
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping
+from types import MappingProxyType
+
 #: The problem of a JSON or TOML document too deeply nested for Python's parsers.
 TOO_DEEP = "expected a document nested at most about a thousand levels deep, found deeper nesting"
 #: The target among the inputs: a model would reproduce it from itself (fitness 0).
@@ -99,3 +103,50 @@ class ClockWarning(UserWarning):
 
 class BudgetWarning(UserWarning):
     """A size that fits but is worth a word: a compensator state larger than a microcontroller's RAM."""
+
+
+#: The command-line option (docs/cli.md) that gives each parameter of the Python API an
+#: error may name. The library names the parameter (``prefix: expected a C identifier``,
+#: ``use real="float"``), as a Python caller passed it; a command prints the option
+#: (:func:`as_options`).
+OPTIONS: Mapping[str, str] = MappingProxyType({
+    "prefix": "--prefix",
+    "real": "--real",
+    "axis": "--axis",
+    "pdf": "--pdf",
+    "input_range": "--input-range",
+    "scheduler": "--scheduler",
+    "validation_share": "--validation-share",
+    "searches": "--searches",
+    "observer_bandwidth": "--observer-bandwidth",
+})
+
+# The three ways a message names a parameter: its first field (``prefix: ...``), a value
+# in a hint (``real="float"``), one input's range (``input_range={"omega": (LO, HI)}``);
+# and the bare name in parentheses (``(input_range)``).
+_FIRST = re.compile(r"^(\w+):")
+_VALUE = re.compile(r"\b(\w+)=\"([^\"]*)\"")
+_RANGE = re.compile(r"\binput_range=\{\"([^\"]+)\": \(LO, HI\)\}")
+_BARE = re.compile(r"(?<![\w.])\((\w+)\)")
+
+
+def as_options(message: str) -> str:
+    """A library message as a command prints it: each parameter it names (:data:`OPTIONS`)
+    as the option that gives it.
+
+    ``prefix: expected a C identifier`` becomes ``--prefix: expected a C identifier``,
+    ``use real="float"`` becomes ``use --real float``, ``input_range={"omega": (LO, HI)}``
+    becomes ``--input-range omega=LO:HI``; other text is left as it is.
+    """
+    def first(m: re.Match[str]) -> str:
+        return f"{OPTIONS[m[1]]}:" if m[1] in OPTIONS else m[0]
+
+    def value(m: re.Match[str]) -> str:
+        return f"{OPTIONS[m[1]]} {m[2]}" if m[1] in OPTIONS else m[0]
+
+    def bare(m: re.Match[str]) -> str:
+        return f"({OPTIONS[m[1]]})" if m[1] in OPTIONS else m[0]
+
+    message = _FIRST.sub(first, message, count=1)
+    message = _RANGE.sub(lambda m: f"{OPTIONS['input_range']} {m[1]}=LO:HI", message)
+    return _BARE.sub(bare, _VALUE.sub(value, message))

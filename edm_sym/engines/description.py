@@ -135,7 +135,7 @@ class Description:
                 params = ", ".join(f"{k.replace('_', ' ')} {v:.4g}" + (f" {unit}" if unit != "1"
                                                                            else "")
                                    for k, (v, unit) in jt.term.parameters.items())
-                lines.append(f"  -> {jt.term.kind}" + (f": {params}" if params else ""))
+                lines.append(f"  -> {jt.term.kind.value}" + (f": {params}" if params else ""))
                 lines += [f"     ! {f.code}: {f.message}" for f in jt.flags]
             # Without data the header says so once; the per-row flag stays in the JSON.
             lines += [f"  ! {f.code}: {f.message}" for f in r.flags if f.code != "unmeasured"]
@@ -146,7 +146,7 @@ def _names(r: RowDescription) -> str:
     codes = {f.code for f in r.flags}
     if "negligible" in codes and "joint" not in codes and not r.terms:
         return "negligible"
-    kinds = [jt.term.kind for jt in r.terms]
+    kinds = [jt.term.kind.value for jt in r.terms]
     text = ", ".join(dict.fromkeys(kinds)) or "nothing"
     others = sorted(codes - {"negligible", "unmeasured"})
     return text + (f"  [{', '.join(others)}]" if others else "")
@@ -414,9 +414,7 @@ def describe(
     ResultFormatError, DataFormatError
         A bad result file or data log (the CLI prints one line, exit 2).
     """
-    from edm_sym.engines.simulate import simulate_rows
     from edm_sym.engines.symbolic import decode
-    from edm_sym.engines.symbolic.inertia import rows_inertia
     from edm_sym.engines.symbolic.significance import acceleration_of, judge_rows
 
     if not isinstance(result, EdmResult):
@@ -425,111 +423,155 @@ def describe(
         try:
             axis_units(axis)
         except ValueError as exc:
-            raise DataFormatError("--axis", str(exc)) from None
+            raise DataFormatError("axis", str(exc)) from None
         result = replace(result, axis=axis)
-    notes = []
-    log = None
-    if data is not None:
-        log = _load(data, result, ts, columns, resample)
-    elif (spec := recorded_data(result)) is not None:
-        try:
-            log = _load(spec, result, ts, columns, resample)
-        except (OSError, ValueError) as exc:
-            msg = f"the data the result records cannot be used ({' '.join(str(exc).split())})"
-            warnings.warn(msg, stacklevel=2)
-            notes.append(msg)
+    log, notes = _log_of(result, data, ts, columns, resample)
     comp = result.compensator
-    outputs = target = inputs = None
-    data_fit = None
-    force = result.units.force
-    if log is not None:
-        if drift(log.ts, result.sample_time):
-            notes.append(f"sample time {log.ts:.9g} s in {log.source}, {result.sample_time:.9g} s "
-                         f"in the result (relative drift {drift(log.ts, result.sample_time):.2g}, "
-                         "accepted)")
-        x = log.stack(comp.matrix.inputs)
-        outputs = simulate_rows(comp, comp.matrix.rows, x)
-        target = log.column(result.target, role="target column")
-        inputs = [x[row.input] for row in comp.matrix.rows]
-        # On the log the search was fitted to, judge on its held-out rows alone
-        # (simulated after the training rows, as the search scored them).
-        held = held_out_rows(result, log)
-        full_inputs, full_outputs = inputs, outputs
-        if held is not None:
-            sl = held_out_selector(held)
-            outputs, target, inputs = outputs[:, sl], target[sl], [v[sl] for v in inputs]
-        resid = target - outputs.sum(axis=0)
-        data_fit = {"source": str(log.source), "samples": len(target),
-                    "target_rms": [float(np.sqrt(np.mean(target ** 2))), force],
-                    "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
-        if held is not None:
-            data_fit["rows"] = list(held) if isinstance(held, tuple) else held
+    on = _measure(result, log) if log is not None else None
+    if on is not None and drift(log.ts, result.sample_time):
+        notes.append(f"sample time {log.ts:.9g} s in {log.source}, {result.sample_time:.9g} s "
+                     f"in the result (relative drift {drift(log.ts, result.sample_time):.2g}, "
+                     "accepted)")
     # Shapes are judged over the velocities the data reaches, not a fixed range:
     # a gentle saturation that looks viscous over +-10 rad/s acts as Coulomb at 60.
     role_map = input_roles(comp.matrix.inputs, {**getattr(result, "roles", {}), **(roles or {})})
     recorded = ranges_from_result(result, role_map)
-    classify = (classify_on(result, x, roles=roles,
-                            part=held_out_selector(held) if held is not None else slice(None))
-                if inputs is not None else ClassifyOptions.for_axis(result.axis))
-    if inputs is None and recorded is not None:
+    classify = (classify_on(result, on.x, roles=roles, part=on.part)
+                if on is not None else ClassifyOptions.for_axis(result.axis))
+    if on is None and recorded is not None:
         # Without data, shapes are judged over the velocities the result records, not
         # the axis's default range (+-0.5 m/s judged a +-0.13 m/s axis's Coulomb as viscous).
         classify = replace(classify, velocity_range=recorded.velocity)
     model = decode(result, roles=roles, systems=False, classify=classify)
-    accelerations = None
-    if inputs is not None:
+    accelerations = inertia = None
+    if on is not None:
         # Differentiated on the whole log, then cut like the rest: held-out blocks
         # joined end to end would give a spike at every join.
         accelerations = [acceleration_of(v, row.role, log.ts)
-                         for v, row in zip(full_inputs, model.rows, strict=True)]
-        if held is not None:
-            accelerations = [a if a is None else a[sl] for a in accelerations]
-    inertia = None
-    if inputs is not None:
-        g = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
-            "observer_bandwidth")
-        if g is not None:
-            # An observer slower than the whole log says nothing (its lag y'/g then
-            # dwarfs the rows: 1e-300 rad/s named -4.9e298 kg m^2); NaN, 0 or a negative
-            # value in a log was dropped in silence.
-            low = 2 * math.pi / (len(log) * log.ts)
-            if isinstance(g, bool) or not isinstance(g, int | float | np.number) or not (
-                    math.isfinite(float(g)) and float(g) >= low):
-                where = ("observer_bandwidth" if observer_bandwidth is not None
-                         else f"{log.source}: observer_bandwidth")
-                raise DataFormatError(where, f"expected an observer bandwidth of at least 2 pi / "
-                                             f"the log's length, {low:.4g} rad/s, found {g!r}")
-        inertia = rows_inertia([row.role for row in model.rows], full_outputs, full_inputs,
-                               log.ts, g, held_out_selector(held) if held is not None
-                               else slice(None))
-    judged = judge_rows(model, outputs, target, inputs, options=options, classify=classify,
+                         for v, row in zip(on.full_inputs, model.rows, strict=True)]
+        if on.held is not None:
+            accelerations = [a if a is None else a[on.part] for a in accelerations]
+        inertia = _inertia(model, on, log, observer_bandwidth)
+    judged = judge_rows(model, on.outputs if on else None, on.target if on else None,
+                        on.inputs if on else None, options=options, classify=classify,
                         accelerations=accelerations, inertia=inertia)
     rows = tuple(RowDescription(row.index + 1, row.input, row.role, _expression(row.expr_numeric),
                                 j.contribution, j.terms, j.flags)
                  for row, j in zip(model.rows, judged, strict=True))
-    fitness = {**recorded_fitness(result), "data": data_fit}
+    fitness = {**recorded_fitness(result), "data": on.data_fit if on else None}
     threshold = getattr(options, "threshold", 0.01) if options is not None else 0.01
     g_used = None
-    if inputs is not None:
+    if on is not None:
         g_used = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
             "observer_bandwidth")
     elif observer_bandwidth is not None:
         g_used = observer_bandwidth
-    physics = _physics(result, role_map, recorded, threshold, g_used, log,
-                       full_inputs if inputs is not None else None,
-                       full_outputs if inputs is not None else None,
-                       held_out_selector(held) if inputs is not None and held is not None
-                       else slice(None), notes)
+    physics, note = _physics(result, role_map, recorded, threshold, g_used, log,
+                             on.full_inputs if on else None, on.full_outputs if on else None,
+                             on.part if on is not None and on.held is not None else slice(None))
+    notes += [note] if note else []
     return Description(rows, fitness, complexity(comp), result.source or "<memory>",
                        threshold, tuple(notes), result.axis, physics)
+
+
+def _log_of(result: EdmResult, data: DataLog | str | Path | None, ts: float | None,
+            columns: ColumnRoles | None, resample: bool) -> tuple[DataLog | None, list[str]]:
+    """The log to measure on: ``data``, else the one the result records, else None; and
+    the notes (a recorded log that cannot be used is a warning and a note)."""
+    if data is not None:
+        return _load(data, result, ts, columns, resample), []
+    spec = recorded_data(result)
+    if spec is None:
+        return None, []
+    try:
+        return _load(spec, result, ts, columns, resample), []
+    except (OSError, ValueError) as exc:
+        msg = f"the data the result records cannot be used ({' '.join(str(exc).split())})"
+        warnings.warn(msg, stacklevel=3)
+        return None, [msg]
+
+
+@dataclass(frozen=True)
+class _Measured:
+    """The rows simulated on a log: on the part judged, and on the whole log."""
+
+    #: The log's input columns, stacked in the model's input order.
+    x: np.ndarray
+    #: The row outputs, the target and each row's input on the part judged.
+    outputs: np.ndarray
+    target: np.ndarray
+    inputs: list[np.ndarray]
+    #: The same on the whole log (the held-out rows among the training ones).
+    full_outputs: np.ndarray
+    full_inputs: list[np.ndarray]
+    #: The held-out rows judged alone (:func:`held_out_rows`), or None: the whole log.
+    held: Any
+    #: The part judged (a selector of the held-out rows, or every sample).
+    part: Any
+    #: The ``fitness.data`` entry: the log, its samples, the target's RMS and the RMSE.
+    data_fit: dict[str, Any]
+
+
+def _measure(result: EdmResult, log: DataLog) -> _Measured:
+    """The rows simulated on ``log``; on the log the search was fitted to, judged on its
+    held-out rows alone (simulated after the training rows, as the search scored them)."""
+    from edm_sym.engines.simulate import simulate_rows
+
+    comp, force = result.compensator, result.units.force
+    x = log.stack(comp.matrix.inputs)
+    full_outputs = outputs = simulate_rows(comp, comp.matrix.rows, x)
+    target = log.column(result.target, role="target column")
+    full_inputs = inputs = [x[row.input] for row in comp.matrix.rows]
+    held = held_out_rows(result, log)
+    part = slice(None)
+    if held is not None:
+        part = held_out_selector(held)
+        outputs, target, inputs = outputs[:, part], target[part], [v[part] for v in inputs]
+    resid = target - outputs.sum(axis=0)
+    data_fit = {"source": str(log.source), "samples": len(target),
+                "target_rms": [float(np.sqrt(np.mean(target ** 2))), force],
+                "rmse": [float(np.sqrt(np.mean(resid ** 2))), force]}
+    if held is not None:
+        data_fit["rows"] = list(held) if isinstance(held, tuple) else held
+    return _Measured(x, outputs, target, inputs, full_outputs, full_inputs, held, part, data_fit)
+
+
+def _inertia(model: Any, on: _Measured, log: DataLog, observer_bandwidth: float | None) -> Any:
+    """The inertia the rows hold together, with the observer's lag taken out
+    (:func:`~edm_sym.engines.symbolic.inertia.rows_inertia`); None without a bandwidth.
+
+    Raises
+    ------
+    DataFormatError
+        A bandwidth (given, else the log's scalar) below 2 pi / the log's length.
+    """
+    from edm_sym.engines.symbolic.inertia import rows_inertia
+
+    g = observer_bandwidth if observer_bandwidth is not None else log.scalars.get(
+        "observer_bandwidth")
+    if g is None:
+        return None
+    # An observer slower than the whole log says nothing (its lag y'/g then
+    # dwarfs the rows: 1e-300 rad/s named -4.9e298 kg m^2); NaN, 0 or a negative
+    # value in a log was dropped in silence.
+    low = 2 * math.pi / (len(log) * log.ts)
+    if isinstance(g, bool) or not isinstance(g, int | float | np.number) or not (
+            math.isfinite(float(g)) and float(g) >= low):
+        where = ("observer_bandwidth" if observer_bandwidth is not None
+                 else f"{log.source}: observer_bandwidth")
+        raise DataFormatError(where, f"expected an observer bandwidth of at least 2 pi / "
+                                     f"the log's length, {low:.4g} rad/s, found {g!r}")
+    return rows_inertia([row.role for row in model.rows], on.full_outputs, on.full_inputs,
+                        log.ts, g, on.part)
 
 
 def _physics(result: EdmResult, role_map: Mapping[str, str | None], recorded: Any,
              threshold: float, g: float | None, log: DataLog | None,
              inputs: list[np.ndarray] | None, outputs: np.ndarray | None,
-             part: slice | np.ndarray, notes: list[str]) -> Any:
+             part: slice | np.ndarray) -> tuple[Any, str | None]:
     """The model's laws by behaviour (:mod:`edm_sym.engines.physics`), over the data's motion
-    when there is data (its shares measured on ``part``), else over the recorded ranges."""
+    when there is data (its shares measured on ``part``), else over the recorded ranges;
+    or None and the note that says why not."""
     from edm_sym.engines.physics import PhysicsOptions, model_physics, physics_on_log
 
     comp = result.compensator
@@ -543,17 +585,15 @@ def _physics(result: EdmResult, role_map: Mapping[str, str | None], recorded: An
                                    ts=log.ts, source=str(log.source), axis=result.axis,
                                    bandwidth=bandwidth, part=part, fallback=recorded, options=opts)
             if found is not None:
-                return found
+                return found, None
         ranges = recorded
         if ranges is None:
-            notes.append("the physics is not named by behaviour: no data, and the result records "
-                         "no velocity range to probe over")
-            return None
+            return None, ("the physics is not named by behaviour: no data, and the result records "
+                          "no velocity range to probe over")
         return model_physics(comp, roles, ranges, axis=result.axis, bandwidth=bandwidth,
-                             options=opts)
+                             options=opts), None
     except (ValueError, np.linalg.LinAlgError) as exc:
-        notes.append(f"the physics could not be named by behaviour ({exc})")
-        return None
+        return None, f"the physics could not be named by behaviour ({exc})"
 
 
 def _expression(expr: Any) -> str:

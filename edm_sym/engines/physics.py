@@ -38,7 +38,6 @@ source (docs/describe.md#physics-named-by-behaviour).
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -49,22 +48,11 @@ import numpy as np
 from edm_sym.core.elements.realisation import DelayLine, LinearFilter
 from edm_sym.core.matrix import Compensator
 from edm_sym.core.roles import motion_signals
+from edm_sym.core.terms import TermKind
 from edm_sym.core.units import axis_units
 from edm_sym.engines.plant.filters import lowpass
 
 TWO_PI = 2.0 * math.pi
-
-
-class TermKind(str, enum.Enum):
-    """The physical laws a model may be named by."""
-
-    COULOMB = "coulomb"
-    STRIBECK = "stribeck"
-    VISCOUS = "viscous"
-    ACCELERATION = "acceleration"
-    SPATIAL = "spatial"
-    OFFSET = "offset"
-    UNCLASSIFIED = "unclassified"
 
 
 @dataclass(frozen=True)
@@ -539,9 +527,10 @@ class _Basis:
     span: tuple[float, float] = (0.0, 1.0)
 
     def names(self) -> list[str]:
-        out = ["coulomb", "viscous", "acceleration", "offset"]
+        out: list[str] = [TermKind.COULOMB, TermKind.VISCOUS, TermKind.ACCELERATION,
+                          TermKind.OFFSET]
         if self.stribeck_velocity is not None:
-            out.append("stribeck")
+            out.append(TermKind.STRIBECK)
         out += [f"{t}{k}" for k in range(1, self.harmonics + 1) for t in ("cos", "sin")]
         out += [f"pos{k}" for k in range(1, self.profile + 1)]
         return out
@@ -582,6 +571,11 @@ def model_physics(
     lags: Mapping[str, float] | None = None,
 ) -> Physics:
     """Name the laws a model holds by driving it with probe motions.
+
+    One long function on purpose: every law's test reads the one least-squares
+    fit of the probes (coefficients, standard errors, row shares) through the
+    closures ``share``, ``rel`` and ``consider``; apart, they would pass a dozen
+    arrays each.
 
     Parameters
     ----------
@@ -769,9 +763,10 @@ def model_physics(
                                            f"{100 * e:.2g} % (the law describes the model loosely)"))
         terms.append(Law(kind, params, s, errors, rows_of(cols), tuple(flags)))
 
-    fc, d, j, c0 = (float(coef[idx[n]]) for n in ("coulomb", "viscous", "acceleration", "offset"))
-    consider(TermKind.COULOMB, [idx["coulomb"]], {"level": (fc, units.force)},
-             {"level": rel(idx["coulomb"])},
+    fc, d, j, c0 = (float(coef[idx[n]]) for n in (TermKind.COULOMB, TermKind.VISCOUS,
+                                                                  TermKind.ACCELERATION, TermKind.OFFSET))
+    consider(TermKind.COULOMB, [idx[TermKind.COULOMB]], {"level": (fc, units.force)},
+             {"level": rel(idx[TermKind.COULOMB])},
              "" if fc > 0 else f"level {fc:.4g} {units.force}: a negative Coulomb level drives "
                                "the motion, not friction")
     if vs is None:
@@ -779,25 +774,25 @@ def model_physics(
                                         f"{units.velocity} (a Stribeck term lowers the residual "
                                         "by less than 30 %)"))
     else:
-        fs = float(coef[idx["stribeck"]])
+        fs = float(coef[idx[TermKind.STRIBECK]])
         if fc > 0 and fc + fs >= opts.stribeck_ratio * fc:
-            consider(TermKind.STRIBECK, [idx["stribeck"]],
+            consider(TermKind.STRIBECK, [idx[TermKind.STRIBECK]],
                      {"peak": (fs, units.force), "level_at_rest": (fc + fs, units.force),
                       "stribeck_velocity": (vs, units.velocity)},
-                     {"peak": rel(idx["stribeck"])})
+                     {"peak": rel(idx[TermKind.STRIBECK])})
         else:
             left.append((TermKind.STRIBECK, f"level at rest {fc + fs:.4g} {units.force} is below "
                                             f"{opts.stribeck_ratio:g} x the Coulomb level"))
-    consider(TermKind.VISCOUS, [idx["viscous"]], {"coefficient": (d, units.viscous)},
-             {"coefficient": rel(idx["viscous"])},
+    consider(TermKind.VISCOUS, [idx[TermKind.VISCOUS]], {"coefficient": (d, units.viscous)},
+             {"coefficient": rel(idx[TermKind.VISCOUS])},
              "" if d > 0 else f"coefficient {d:.4g} {units.viscous}: negative viscous friction "
                               "drives the motion")
     lag = (() if bandwidth is not None else
            (("lag_included", "no observer bandwidth: an observer's lag would show here as "
                              "-(viscous)/g"),))
-    consider(TermKind.ACCELERATION, [idx["acceleration"]], {"inertia": (j, units.inertia)},
-             {"inertia": rel(idx["acceleration"])}, extra=lag)
-    consider(TermKind.OFFSET, [idx["offset"]], {"value": (c0, units.force)}, {})
+    consider(TermKind.ACCELERATION, [idx[TermKind.ACCELERATION]], {"inertia": (j, units.inertia)},
+             {"inertia": rel(idx[TermKind.ACCELERATION])}, extra=lag)
+    consider(TermKind.OFFSET, [idx[TermKind.OFFSET]], {"value": (c0, units.force)}, {})
     if harm_cols:
         amp = np.hypot(coef[harm_cols[0::2]], coef[harm_cols[1::2]])
         k = int(np.argmax(amp)) + 1
@@ -827,11 +822,11 @@ def model_physics(
                   "span": (span[1], units.position)}, {})
     terms.sort(key=lambda t: list(TermKind).index(t.kind))
     # Rows: their share of each named law, and what no law explains.
-    named_cols = {TermKind.COULOMB: [idx["coulomb"]], TermKind.VISCOUS: [idx["viscous"]],
-                  TermKind.ACCELERATION: [idx["acceleration"]], TermKind.OFFSET: [idx["offset"]],
-                  TermKind.SPATIAL: harm_cols or prof_cols}
+    named_cols = {k: [idx[k]] for k in (TermKind.COULOMB, TermKind.VISCOUS, TermKind.ACCELERATION,
+                                        TermKind.OFFSET)}
+    named_cols[TermKind.SPATIAL] = harm_cols or prof_cols
     if vs is not None:
-        named_cols[TermKind.STRIBECK] = [idx["stribeck"]]
+        named_cols[TermKind.STRIBECK] = [idx[TermKind.STRIBECK]]
     behaviours = []
     for jr in range(Y.shape[1]):
         laws = {t.kind.value: t.rows[jr] for t in terms if t.rows and abs(t.rows[jr]) >= ROW_SHARE}

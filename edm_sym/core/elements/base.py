@@ -192,10 +192,32 @@ class Element:
             raise ValueError(f"element code {cls.code} of {cls.__name__} is already used by {other}")
         if cls.name in BY_NAME:
             raise ValueError(f"element name {cls.name!r} of {cls.__name__} is already used")
+        if cls.scales_output and not cls.multiplies_output:
+            raise TypeError(f"element class {cls.__name__}: an output a f(x) (scales_output) is "
+                            "multiplied by a; declare multiplies_output = True")
         REGISTRY[cls.code] = cls
         BY_NAME[cls.name] = cls
 
-    # -- traits the genetic algorithm reads (declared here, not in name lists) -----
+    # -- how it computes (the four base classes set these; asked instead of a kind) ---
+    #: Memoryless, ``y = f(x, a)``: no state (:class:`StaticElement`).
+    is_static: ClassVar[bool] = False
+    #: A rational transfer function ``G(s; a)`` (:class:`LinearElement`).
+    is_filter: ClassVar[bool] = False
+    #: A pure delay of whole samples (:class:`DelayElement`).
+    is_delay: ClassVar[bool] = False
+    #: The relay with hysteresis (:class:`RelayElement`).
+    is_relay: ClassVar[bool] = False
+
+    # -- traits the genetic algorithm, pruning and outputs read (declared here, not in
+    # name lists) -----------------------------------------------------------------
+    #: The output is the input, whatever ``a`` (``through``: an empty cell of the matrix).
+    is_identity: ClassVar[bool] = False
+    #: ``a`` multiplies the output (``a f(x)``, ``a s``, ``a / s``): a factor moved
+    #: between two such elements of a row (with only homogeneous ones after) leaves it unchanged.
+    multiplies_output: ClassVar[bool] = False
+    #: For a tangent: ``g(x, a)``, the argument of ``tan`` (a pole where it crosses
+    #: pi/2 + k pi); None for an element without poles.
+    tangent_argument: ClassVar[Callable[[np.ndarray, float], np.ndarray] | None] = None
     #: The output is the parameter times a function of the input (``a f(x)``),
     #: so a least-squares gain can be folded into ``a``.
     scales_output: ClassVar[bool] = False
@@ -258,6 +280,7 @@ class StaticElement(Element):
     """A memoryless element ``y = f(x, a)``, realised as a :class:`StaticMap`."""
 
     kind: ClassVar[str] = StaticMap.kind
+    is_static: ClassVar[bool] = True
     cost: ClassVar[float] = 0.06
     _abstract: ClassVar[bool] = True
 
@@ -281,6 +304,7 @@ class LinearElement(Element):
     """
 
     kind: ClassVar[str] = LinearFilter.kind
+    is_filter: ClassVar[bool] = True
     cost: ClassVar[float] = 0.45
     homogeneous: ClassVar[bool] = True
     method: ClassVar[str] = "bilinear"
@@ -307,6 +331,7 @@ class DelayElement(Element):
     """A pure delay of ``samples(a, ts)`` whole samples, realised as a :class:`DelayLine`."""
 
     kind: ClassVar[str] = DelayLine.kind
+    is_delay: ClassVar[bool] = True
     cost: ClassVar[float] = 0.23
     homogeneous: ClassVar[bool] = True
     _abstract: ClassVar[bool] = True
@@ -329,6 +354,7 @@ class RelayElement(Element):
     """
 
     kind: ClassVar[str] = Relay.kind
+    is_relay: ClassVar[bool] = True
     cost: ClassVar[float] = 0.33
     switches: ClassVar[bool] = True
     _abstract: ClassVar[bool] = True

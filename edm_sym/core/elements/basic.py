@@ -14,6 +14,7 @@ class Through(StaticElement):
     title = "Through"
     category = "basic"
     homogeneous = True
+    is_identity = True
     formula = "y = x"
 
     @staticmethod

@@ -38,6 +38,7 @@ class Gain(StaticElement):
     category = "calculation"
     homogeneous = True
     scales_output = True
+    multiplies_output = True
     formula = "y = a x"
     param = Param("gain (either sign)", "output unit per input unit",
                   lambda ts, t_sum: ParamRange(-10.0, 10.0, "linear"), "-10 .. 10 (linear)")
@@ -57,6 +58,7 @@ class PowerGain(StaticElement):
     category = "calculation"
     homogeneous = True
     scales_output = True
+    multiplies_output = True
     formula = "y = a x,  a = 10^e (searched over decades)"
     param = Param("gain magnitude", "output unit per input unit",
                   lambda ts, t_sum: ParamRange(1e-4, 1e4, "log"), "1e-4 .. 1e4 (log, eq. 5)")
@@ -72,6 +74,7 @@ class Derivative(LinearElement):
     title = "Derivation"
     category = "calculation"
     formula = "y = a s x"
+    multiplies_output = True
     method = "backward_diff"
     param = Param("derivative gain", "s",
                   lambda ts, t_sum: ParamRange(1e-6, 1e1, "log"), "1e-6 .. 10 (log)")
@@ -87,6 +90,7 @@ class Integral(LinearElement):
     title = "Integral"
     category = "calculation"
     formula = "y = (a / s) x"
+    multiplies_output = True
     param = Param("integral gain", "1/s",
                   lambda ts, t_sum: ParamRange(1e-3, 1e3, "log"), "1e-3 .. 1e3 (log)")
 

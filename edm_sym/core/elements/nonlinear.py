@@ -161,6 +161,7 @@ class SineAmplitude(StaticElement):
     title = "Sine wave (amp.)"
     category = "nonlinear"
     scales_output = True
+    multiplies_output = True
     formula = "y = a sin(x)"
     param = AMPLITUDE
 
@@ -189,6 +190,7 @@ class TangentPhase(StaticElement):
     category = "nonlinear"
     formula = "y = tan(x + a)"
     guard = TAN_GUARD
+    tangent_argument = staticmethod(lambda x, a: x + a)
     param = Param("phase", "rad", lambda ts, t_sum: ParamRange(-1.5707963267948966,
                   1.5707963267948966, "linear"), "-pi/2 .. pi/2 (linear)",
                   period=3.141592653589793)
@@ -207,8 +209,10 @@ class TangentAmplitude(StaticElement):
     title = "Tangent (amp.)"
     category = "nonlinear"
     scales_output = True
+    multiplies_output = True
     formula = "y = a tan(x)"
     guard = TAN_GUARD
+    tangent_argument = staticmethod(lambda x, a: x)
     param = AMPLITUDE
 
     @staticmethod

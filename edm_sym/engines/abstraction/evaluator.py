@@ -553,6 +553,10 @@ class Evaluator:
 
         With shared stores every lane reads every row, so ``local`` (rows
         wanted back) does not keep the batch in this process.
+
+        About 100 lines on purpose: the hot path of every generation, whose
+        slots, prefix and candidate plans the ``settle`` closure records as each
+        lane's piece comes in.
         """
         count = len(members)
         alone = (local and not self.shared) or len(self.lanes) == 1 or (

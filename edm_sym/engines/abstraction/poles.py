@@ -24,13 +24,11 @@ import numpy as np
 
 from edm_sym.core.elements import REGISTRY, Element
 
-#: The elements with poles: tan(x + a) and a tan(x).
-TANGENTS = ("tan_phase", "tan_amp")
-#: Their codes.
-TANGENT_CODES = frozenset(c for c, el in REGISTRY.items() if el.name in TANGENTS)
+#: Codes of the elements with poles, the tangents (``Element.tangent_argument``).
+TANGENT_CODES = frozenset(c for c, el in REGISTRY.items() if el.tangent_argument is not None)
 _TANGENT_ARRAY = np.array(sorted(TANGENT_CODES))
 #: Codes of the elements without state (a static prefix is made of them).
-STATIC_CODES = frozenset(c for c, el in REGISTRY.items() if el.kind == "static")
+STATIC_CODES = frozenset(c for c, el in REGISTRY.items() if el.is_static)
 #: Grid points over the input's range after the search (a step best is checked once).
 FINAL_GRID = 200_001
 #: Grid points during the search (every new row with a tangent in its static prefix).
@@ -75,10 +73,10 @@ def prefix_has_pole(lo: float, hi: float, elements: Sequence[tuple[type[Element]
     y = np.linspace(lo, hi, grid)
     with np.errstate(all="ignore"):
         for el, a in elements:
-            if el.kind != "static":
+            if not el.is_static:
                 return False
-            if el.name in TANGENTS:
-                arg = y + a if el.name == "tan_phase" else y
+            if el.tangent_argument is not None:
+                arg = el.tangent_argument(y, a)
                 branch = np.floor(arg[np.isfinite(arg)] / math.pi + 0.5)
                 if branch.size and branch.min() != branch.max():
                     return True

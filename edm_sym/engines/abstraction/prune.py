@@ -47,15 +47,15 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.bounds import BOUND_MARGIN, bound_flags, complexity
-from edm_sym.core.elements import BY_NAME
+from edm_sym.core.elements import REGISTRY
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
-from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, SCALABLE, row_gains, scale_position
+from edm_sym.engines.abstraction.ga import THROUGH
+from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, row_gains, scale_position
 from edm_sym.engines.abstraction.holdout import Scorer
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_select, select
 
-THROUGH = BY_NAME["through"].code
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
-MULTIPLYING = SCALABLE | {BY_NAME["derivative"].code, BY_NAME["integral"].code}
+MULTIPLYING = frozenset(c for c, el in REGISTRY.items() if el.multiplies_output)
 COMPLEXITY = ("rows + active elements (all but through) + state size (values kept between "
               "samples; a delay's length in samples)")
 
@@ -96,7 +96,7 @@ def _candidates(comp: Compensator, m: ElementMatrix) -> list[tuple[str, ElementM
             genes[i] = Gene(THROUGH, 0.0)
             out.append((f"row {j + 1}: {g.element.name} replaced by through",
                         ElementMatrix(m.inputs, rows[:j] + (Row(row.input, genes),) + rows[j + 1:])))
-            if g.element.kind == "delay" and g.element.state_size(comp.value(g), comp.sample_time) > 1:
+            if g.element.is_delay and g.element.state_size(comp.value(g), comp.sample_time) > 1:
                 half = _set_value(comp, g, 0.5 * comp.value(g))
                 if half is not None and half != g:
                     genes[i] = half

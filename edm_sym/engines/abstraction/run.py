@@ -22,7 +22,6 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -52,6 +51,7 @@ from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progr
 from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_holdout
 from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.multi import Fidelities, MultiSteps, evaluate_fitted
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.searches import (
     checkpoint_files,
@@ -453,17 +453,15 @@ def abstract(
     config: AbstractionConfig | None = None,
     seed: int = 0,
     time_limit: float | None = None,
-    executor: Executor | None = None,
     checkpoint: Path | None = None,
     resume: bool = False,
-    workers: int | None = None,
     callback: Callable[[GenerationInfo], bool | None] | None = None,
     validate: DataLog | None = None,
     validation_share: float | None = None,
     select: str | None = None,
     axis: str = "rotary",
-    scheduler: Any = None,
     searches: int | None = None,
+    parallel: Parallel | None = None,
 ) -> EdmResult:
     """Run the hierarchical EDM abstraction (Algorithm 1, step by step) on a log.
 
@@ -486,19 +484,12 @@ def abstract(
     time_limit : float, optional
         Wall-clock seconds; the run ends at the first generation boundary
         after it and returns the best so far.
-    executor : concurrent.futures.Executor, optional
-        Where chunks of individuals are evaluated (``workers`` unpinned lanes;
-        for a dask cluster ``scheduler`` is better); it is not shut down.
-        None: this process and ``workers - 1`` forked processes.
     checkpoint : pathlib.Path, optional
         Where to write the run's state at a generation boundary: at most every
         :data:`CHECKPOINT_SECONDS`, at each step's end and when the run stops
         (removed when the run completes).
     resume : bool
         Continue from ``checkpoint`` when that file exists.
-    workers : int, optional
-        Processes evaluating, this one included (default: every usable core;
-        1: this process only).
     callback : callable, optional
         Called with a :class:`GenerationInfo` after every generation; a true
         return value ends the run there, like a time limit. The engine prints
@@ -510,11 +501,6 @@ def abstract(
         Share of ``data`` held out at its end, in [0, 0.9]; None: the
         config's ``[validation] share`` (default 0.2). See
         :mod:`edm_sym.engines.abstraction.holdout`.
-    scheduler : str or distributed.Client, optional
-        A dask.distributed scheduler's address (``tcp://host:8786``) or a
-        connected client: chunks of individuals go to its workers, one lane
-        each (``workers`` and ``executor`` are then ignored). Needs the extra
-        ``edm_sym[dask]``.
     select : str, optional
         Which member of the complexity-vs-fitness front is exported:
         ``"best"``, ``"knee"`` or ``"simplest-within=PCT"``; None: the
@@ -527,10 +513,15 @@ def abstract(
         Independent searches of the whole schedule, each from its own seed
         (search 0 from ``seed``); None: the config's ``searches`` (default
         1). On this machine they run side by side, one process each, on
-        ``workers`` cores; with ``scheduler`` or ``executor`` one after
+        ``parallel.workers`` cores; with a scheduler or an executor one after
         another, each on all of it. The search's model is chosen among the
         step bests of all of them; ``provenance.searches`` records each one
         (docs/abstraction.md#independent-searches).
+    parallel : Parallel, optional
+        Where the work goes: ``Parallel(workers=..., executor=...,
+        scheduler=...)`` (:class:`~edm_sym.engines.abstraction.parallel.Parallel`);
+        None: this process and a forked worker per further usable core. No
+        setting of it changes the result.
 
     Returns
     -------
@@ -550,8 +541,45 @@ def abstract(
     KeyboardInterrupt
         Only when interrupted before the first population was evaluated.
     """
-    from edm_sym.core.version import __version__
+    logs = _given_logs(data)
+    _check_arguments(config, time_limit, parallel)
+    inputs = check_inputs(target, inputs)
+    # Several logs are laid end to end; every simulation starts each from rest (``starts``).
+    data = logs[0] if len(logs) == 1 else join_logs(logs, [target, *inputs])
+    logs = logs if len(logs) > 1 else []
+    cfg = _settings(config, seed=seed, searches=searches, axis=axis,
+                    validation_share=validation_share)
+    parallel = parallel if parallel is not None else Parallel()
+    hold = _holdout(data, cfg, target=target, inputs=inputs, validate=validate, logs=logs,
+                    validation_share=validation_share)
+    # The sizes first (config alone), then whether the log can support them.
+    check_budget(cfg, hold.n_train, len(inputs), workers=parallel.workers, time_limit=time_limit)
+    _require_samples(data, hold.n_train if hold.mask is None
+                     else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
+    check_data(data, target, inputs, logs=logs)
+    job = _search_job(cfg, data, logs, hold, target=target, inputs=inputs, axis=axis)
+    seeds = search_seeds(int(seed), cfg.searches)
+    checkpoint = Path(checkpoint) if checkpoint is not None else None
+    files = checkpoint_files(checkpoint, cfg.searches)
+    if resume:
+        # Every search's checkpoint is checked before any search starts (and writes its own).
+        check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), job.x, job.y,
+                                                      job.ts, job.starts) for s in seeds])
+    with parallel.connected() as here:
+        outcomes = run_searches(job, seeds, files, resume, parallel=here, time_limit=time_limit,
+                                callback=callback)
+    return _search_result(job, outcomes, seeds, files, data=data, logs=logs, validate=validate,
+                          seed=int(seed), select=select, axis=axis)
 
+
+def _given_logs(data: DataLog | Sequence[DataLog]) -> list[DataLog]:
+    """The logs of ``abstract(data)``: one, or a non-empty list of DataLog.
+
+    Raises
+    ------
+    DataFormatError
+        Naming ``data``.
+    """
     logs = list(data) if isinstance(data, list | tuple) else [data]
     for log in logs:
         if not isinstance(log, DataLog):
@@ -559,6 +587,11 @@ def abstract(
                                   f"them, found {type(log).__name__}")
     if not logs:
         raise DataFormatError("data", "expected a DataLog or a list of them, found an empty list")
+    return logs
+
+
+def _check_arguments(config: Any, time_limit: Any, parallel: Any) -> None:
+    """Refuse a ``config``, ``time_limit`` or ``parallel`` of the wrong kind (ConfigError)."""
     if config is not None and not isinstance(config, AbstractionConfig):
         raise ConfigError("config", f"expected an AbstractionConfig (load_config(path)), found "
                           f"{type(config).__name__}")
@@ -566,16 +599,23 @@ def abstract(
                                    or not isinstance(time_limit, int | float | np.floating)
                                    or not math.isfinite(time_limit) or time_limit < 0):
         raise ConfigError("time_limit", f"expected a number of seconds >= 0, found {time_limit!r}")
+    if parallel is not None and not isinstance(parallel, Parallel):
+        raise ConfigError("parallel", f"expected a Parallel(workers=..., executor=..., "
+                          f"scheduler=...), found {type(parallel).__name__}")
+
+
+def _settings(config: AbstractionConfig | None, *, seed: Any, searches: int | None, axis: str,
+              validation_share: float | None) -> AbstractionConfig:
+    """The config a run uses: the given one (or the default) with the arguments over it.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``seed``, ``searches`` or ``axis``.
+    """
     cfg = config if config is not None else default_config()
-    inputs = check_inputs(target, inputs)
-    # Several logs are laid end to end; every simulation starts each from rest (``starts``).
-    data = logs[0] if len(logs) == 1 else join_logs(logs, [target, *inputs])
-    logs = logs if len(logs) > 1 else []
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ConfigError("seed", f"expected an integer >= 0, found {seed!r}")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int | np.integer)
-                                or workers < 1):
-        raise ConfigError("workers", f"expected an integer >= 1, found {workers!r}")
     if searches is not None:
         try:
             cfg = replace(cfg, searches=searches)
@@ -589,22 +629,28 @@ def abstract(
         cfg = replace(cfg, validation=replace(cfg.validation, share=validation_share))
     if cfg.validation.unit is None:
         cfg = replace(cfg, validation=replace(cfg.validation, unit=units.force))
+    return cfg
+
+
+def _holdout(data: DataLog, cfg: AbstractionConfig, *, target: str, inputs: tuple[str, ...],
+             validate: DataLog | None, logs: list[DataLog], validation_share: float | None
+             ) -> Holdout:
+    """The held-out layout (:func:`plan_holdout`), its errors named where the share came from:
+    the argument, else the config file's key."""
     try:
-        hold = plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
+        return plan_holdout(data, target=target, inputs=inputs, settings=cfg.validation,
                             validate=validate, logs=logs)
     except ConfigError as exc:
-        # Named where the share came from: the argument, else the config file's key.
         if not exc.where.startswith("validation."):
             raise
         if validation_share is not None:
             raise ConfigError("validation_share", exc.problem) from None
         raise ConfigError(f"{cfg.source}: {exc.where}", exc.problem) from None
-    # The sizes first (config alone), then whether the log can support them.
-    check_budget(cfg, hold.n_train, len(inputs), workers=workers, time_limit=time_limit)
-    _require_samples(data, hold.n_train if hold.mask is None
-                     else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
-    check_data(data, target, inputs, logs=logs)
-    starts = hold.training.starts
+
+
+def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold: Holdout, *,
+                target: str, inputs: tuple[str, ...], axis: str) -> _SearchJob:
+    """What every search of the run shares: the training samples, the ranges, the human model."""
     # The GA sees the training samples only (causal rows: they do not depend on later ones);
     # with held-out blocks it simulates them all and its Lambda is 0 on the held-out ones.
     part = hold.training
@@ -615,44 +661,43 @@ def abstract(
     n = max(len(d) for d in logs) if logs else len(data)
     ranges = cfg.resolve_ranges(ts, n * ts)
     human = _human_rows(cfg, inputs, ranges)
-    count = cfg.searches
-    seeds = search_seeds(int(seed), count)
-    checkpoint = Path(checkpoint) if checkpoint is not None else None
-    files = checkpoint_files(checkpoint, count)
-    if resume:
-        # Every search's checkpoint is checked before any search starts (and writes its own).
-        check_resume(checkpoint, files, [_fingerprint(cfg, target, inputs, int(s), x, y, ts, starts)
-                                         for s in seeds])
-    client, own_client = _dask_client(scheduler)
     # Multi-fidelity evaluation on a long training log (docs/abstraction.md#multi-fidelity-evaluation).
-    mode = effective(cfg.fidelity, hold.n_train)
-    job = _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
-                     human=human, hold=hold, executor=executor, client=client, n=n, starts=starts,
-                     fidelity=mode, periodic=angle_input(_roles(data, inputs), axis))
-    try:
-        outcomes = run_searches(job, seeds, files, resume, workers=workers, time_limit=time_limit,
-                                callback=callback)
-    finally:
-        if own_client:
-            client.close()
+    return _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
+                      human=human, hold=hold, n=n, starts=hold.training.starts,
+                      fidelity=effective(cfg.fidelity, hold.n_train),
+                      periodic=angle_input(_roles(data, inputs), axis))
+
+
+def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
+                   files: Sequence[Path | None], *, data: DataLog, logs: list[DataLog],
+                   validate: DataLog | None, seed: int, select: str | None, axis: str
+                   ) -> EdmResult:
+    """The run's result from its searches' outcomes: the search's model chosen, pruned and
+    scored (:func:`finish_searches`), the provenance, the logs' records; the checkpoints
+    of a completed run removed."""
+    from edm_sym.core.version import __version__
+
+    cfg, count = job.cfg, len(seeds)
     groups = [o[0] for o in outcomes]
     reasons = [o[1] for o in outcomes]
     made = [o[2] for o in outcomes] if count > 1 else None
     reason = ("interrupted" if "interrupted" in reasons
               else next((r for r in reasons if r != "completed"), "completed"))
-    ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, ts, ranges, n * ts)
+    ranges_comp = Compensator(next(g for g in groups if g)[-1].matrix, job.ts, job.ranges,
+                              job.n * job.ts)
     fin = cfg
     if reason == "interrupted":
         # An interrupt is answered at once: the search's own model, scored, with no refit
         # and no pruning (these take a minute on a long log); --resume finishes the run.
         fin = replace(cfg, parsimony=replace(cfg.parsimony, prune=False))
         made = None
-    comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, hold, fin, select, made)
+    comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, job.hold, fin, select,
+                                                     made)
     steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
-    provenance: dict[str, Any] = {"seed": int(seed), "package_version": __version__,
+    provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
                                   "data_sha256": data.sha256, "stop_reason": reason}
-    if mode == "multi":
+    if job.fidelity == "multi":
         # Only when used: a run of full fidelity writes the result.json it always did.
         provenance["fidelity"] = {"mode": "multi", "config": cfg.fidelity,
                                   **cfg.multi_fidelity.to_json()}
@@ -668,13 +713,13 @@ def abstract(
                 f.unlink()
     records = tuple(d.record("abstraction") for d in (logs or [data]))
     records += (validate.record("validation"),) if validate else ()
-    return EdmResult(comp, target, tuple(steps), provenance, fit, validation=final,
+    return EdmResult(comp, job.target, tuple(steps), provenance, fit, validation=final,
                      parsimony=parsimony, axis=axis, logs=records)
 
 
 @dataclass(frozen=True)
 class _SearchJob:
-    """What every search of a run shares: the config, the training data, where to evaluate."""
+    """What every search of a run shares: the config, the training data."""
 
     cfg: AbstractionConfig
     target: str
@@ -686,8 +731,6 @@ class _SearchJob:
     ranges: dict[str, ParamRange]
     human: Population | None
     hold: Holdout
-    executor: Executor | None
-    client: Any
     #: Samples of the abstraction log (the record length of the ranges).
     n: int = 0
     #: Where further logs begin in ``x`` (several logs, each simulated from rest).
@@ -702,10 +745,11 @@ class _SearchJob:
         """The held-out samples' mask (Lambda is 0 there), or None."""
         return self.hold.mask
 
-    def run(self, seed: int, workers: int | None, checkpoint: Path | None, resume: bool,
+    def run(self, seed: int, parallel: Parallel, checkpoint: Path | None, resume: bool,
             time_limit: float | None, callback: Callable[[GenerationInfo], bool | None] | None
             ) -> tuple[list[StepRecord], str]:
-        """One search of the schedule from ``seed``: its step bests and how it ended.
+        """One search of the schedule from ``seed``, where ``parallel`` says (its
+        ``scheduler`` a connected client or None): its step bests and how it ended.
 
         Raises
         ------
@@ -730,17 +774,19 @@ class _SearchJob:
             # rows are short, half (docs/abstraction.md#multi-fidelity-evaluation).
             full_batch = max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1,
                                             1 + s.n_elements) for s in cfg.steps)
-            evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
-                                  cache_bytes=cache // 4, max_batch_rows=full_batch,
-                                  client=self.client, starts=self.starts)
+            evaluator = Evaluator(x, y, ts, self.ranges, executor=parallel.executor,
+                                  workers=parallel.workers, cache_bytes=cache // 4,
+                                  max_batch_rows=full_batch, client=parallel.scheduler,
+                                  starts=self.starts)
             fid = Fidelities(evaluator, x, y, ts, self.ranges, cfg.multi_fidelity,
-                             executor=self.executor, workers=workers,
+                             executor=parallel.executor, workers=parallel.workers,
                              cache_bytes=cache // 2, max_batch_rows=batch,
-                             client=self.client)
+                             client=parallel.scheduler)
         else:
-            evaluator = Evaluator(x, y, ts, self.ranges, executor=self.executor, workers=workers,
-                                  cache_bytes=cache, max_batch_rows=batch,
-                                  client=self.client, starts=self.starts)
+            evaluator = Evaluator(x, y, ts, self.ranges, executor=parallel.executor,
+                                  workers=parallel.workers, cache_bytes=cache,
+                                  max_batch_rows=batch, client=parallel.scheduler,
+                                  starts=self.starts)
         evaluator.start()
         runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
@@ -929,38 +975,6 @@ def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
     check(est, cfg.source, "use a smaller population or matrix, or a shorter log",
           time_hint="use a smaller population or matrix, fewer generations (or patience), "
                     "a shorter log or a time limit")
-
-
-def _dask_client(scheduler: Any) -> tuple[Any, bool]:
-    """A dask client for ``scheduler`` (an address or a client) and whether it is ours to close.
-
-    Raises
-    ------
-    ConfigError
-        When dask.distributed is not installed, or no scheduler answers at
-        the address, or it has no worker within a minute.
-    """
-    if scheduler is None:
-        return None, False
-    try:
-        import distributed
-    except ImportError:
-        raise ConfigError("scheduler", "expected dask.distributed (pip install 'edm_sym[dask]'), "
-                                       "found it not installed") from None
-    if not isinstance(scheduler, str):
-        return scheduler, False
-    try:
-        client = distributed.Client(scheduler, timeout=10)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise ConfigError("scheduler", f"expected a dask scheduler at {scheduler}, found none "
-                                       f"({type(exc).__name__}: {exc})") from None
-    try:
-        client.wait_for_workers(1, timeout=60)
-    except (OSError, TimeoutError) as exc:
-        client.close()
-        raise ConfigError("scheduler", f"expected a worker on the dask scheduler at {scheduler}, "
-                                       f"found none within 60 s ({type(exc).__name__})") from None
-    return client, True
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],

@@ -706,9 +706,10 @@ def inherit(cfg: AbstractionConfig, previous: Any, *, inputs: Sequence[str], axi
     comp = previous.compensator
     rows = []
     for row in comp.matrix.rows:
-        elements = [(g.element.name, comp.value(g)) for g in row.genes]
-        while len(elements) > 1 and elements[-1][0] == "through":
-            elements.pop()
+        genes = list(row.genes)
+        while len(genes) > 1 and genes[-1].element.is_identity:
+            genes.pop()
+        elements = [(g.element.name, comp.value(g)) for g in genes]
         rows.append(InitialRow(prev_inputs[row.input], tuple(elements)))
     m, n = len(rows), max(len(r.elements) for r in rows)
     first = next((k for k, s in enumerate(cfg.steps) if s.n_rows >= m and s.n_elements >= n), None)

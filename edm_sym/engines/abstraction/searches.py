@@ -34,6 +34,7 @@ from edm_sym.core.result import StepRecord
 from edm_sym.engines.abstraction.finish import finish
 from edm_sym.engines.abstraction.holdout import Holdout
 from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
+from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.schedule import AbstractionConfig
 from edm_sym.engines.abstraction.worker import default_workers, warm_up
 
@@ -70,23 +71,25 @@ def checkpoint_files(checkpoint: Path | None, count: int) -> list[Path | None]:
 
 
 def run_searches(job: Any, seeds: Sequence[int], files: Sequence[Path | None], resume: bool, *,
-                 workers: int | None, time_limit: float | None,
+                 parallel: Parallel, time_limit: float | None,
                  callback: Callable[[Any], bool | None] | None) -> list[tuple]:
     """Every search of a run, where they run best; each one's outcome.
 
     Parameters
     ----------
     job : run._SearchJob
-        What the searches share; ``job.run(seed, workers, checkpoint, resume,
-        time_limit, callback)`` runs one of them (its ``client`` and
-        ``executor`` say where).
+        What the searches share; ``job.run(seed, parallel, checkpoint, resume,
+        time_limit, callback)`` runs one of them.
     seeds : sequence of int
         Each search's seed (:func:`search_seeds`); one seed: one search, here.
     files : sequence of pathlib.Path or None
         Each search's checkpoint (:func:`checkpoint_files`).
     resume : bool
         Continue each search from its checkpoint.
-    workers, time_limit, callback
+    parallel : Parallel
+        The run's settings, its ``scheduler`` a connected client or None
+        (:meth:`Parallel.connected`); each search gets its share of them.
+    time_limit, callback
         As for :func:`edm_sym.engines.abstraction.abstract`.
 
     Returns
@@ -96,22 +99,23 @@ def run_searches(job: Any, seeds: Sequence[int], files: Sequence[Path | None], r
         reason, candidates)`` (:func:`search_candidates`); a search that never
         began has no steps and the reason ``"stopped"`` or ``"interrupted"``.
     """
-    count, client, executor = len(seeds), job.client, job.executor
+    count, client, workers = len(seeds), parallel.scheduler, parallel.workers
     if count == 1:
-        return [job.run(int(seeds[0]), workers, files[0], resume, time_limit, callback)]
+        return [job.run(int(seeds[0]), parallel, files[0], resume, time_limit, callback)]
     if client is not None:
         # Each search a task of its own on the cluster, run by one worker alone.
-        task = functools.partial(_one_search, replace(job, client=None), seeds, files,
-                                 resume, workers=1)
+        task = functools.partial(_one_search, job, seeds, files, resume,
+                                 parallel=Parallel(workers=1))
         ended = on_cluster(client, count, task, callback, time_limit)
     else:
         # Side by side on this machine's cores (one process each, sharing nothing);
         # one after another with an executor, each search on all of it.
-        lanes = 1 if executor is not None else (workers or default_workers())
+        lanes = 1 if parallel.executor is not None else (workers or default_workers())
         if lanes > 1:
             warm_up()  # the row kernel, loaded once before the searches are forked
         per = max(1, lanes // min(count, lanes)) if lanes > 1 else workers
-        task = functools.partial(_one_search, job, seeds, files, resume, workers=per)
+        task = functools.partial(_one_search, job, seeds, files, resume,
+                                 parallel=replace(parallel, workers=per))
         ended = side_by_side(count, lanes, task, callback, time_limit)
     outcomes: list[tuple] = []
     for value, error in ended:
@@ -125,12 +129,13 @@ def run_searches(job: Any, seeds: Sequence[int], files: Sequence[Path | None], r
 
 def _one_search(job: Any, seeds: Sequence[int], files: Sequence[Path | None], resume: bool,
                 k: int, limit: float | None, report: Callable[[Any], bool | None], *,
-                workers: int | None = 1) -> tuple[list[StepRecord], str, list[Candidate]]:
-    """Search ``k`` of a run with several, and its candidates for the search's model.
+                parallel: Parallel) -> tuple[list[StepRecord], str, list[Candidate]]:
+    """Search ``k`` of a run with several, on ``parallel``, and its candidates for the
+    search's model.
 
     The refits of its step bests are made where it ran, beside the other searches'.
     """
-    steps, why = job.run(seeds[k], workers, files[k], resume, limit, report)
+    steps, why = job.run(seeds[k], parallel, files[k], resume, limit, report)
     if not steps or why == "interrupted":  # an interrupted run exports no refit (see run.abstract)
         return steps, why, []
     comp = Compensator(steps[-1].matrix, job.ts, job.ranges, job.n * job.ts)

@@ -219,8 +219,8 @@ def check_accuracy(d: FixedDesign, comp: Any, x: np.ndarray, *, on: str = "the e
         where, why = culprit(d, comp, x)
         raise FixedPointError(
             f"{where}: {miss}; {why}; use "
-            f"{'--real q31' if d.word.name == 'q15' else '--real float'} or narrow the input "
-            "ranges (--input-range)")
+            f"real=\"{'q31' if d.word.name == 'q15' else 'float'}\" or narrow the input "
+            "ranges (input_range)")
     return acc
 
 
@@ -235,7 +235,7 @@ def _outside(d: FixedDesign, x: np.ndarray) -> str:
             lo, hi = d.ranges[name]
             return (f"inputs: {name}: reaches {peak:.6g}, beyond the range +-{top:.6g} of its "
                     f"format (from the range {lo:.6g} .. {hi:.6g}), where it saturates; widen it "
-                    f"with --input-range {name}=LO:HI")
+                    f"with input_range={{\"{name}\": (LO, HI)}}")
     return ""
 
 

@@ -273,7 +273,7 @@ class _Designer:
                     f"{where}: a table of {w.max_segments} segments cannot follow it to "
                     f"{w.table_tolerance:g} of its bound {bound:.6g} over its input range "
                     f"{x0 * 2.0 ** -fin:.6g} .. {x1 * 2.0 ** -fin:.6g} in {w.name}; narrow the "
-                    "input's range (--input-range) or use --real float")
+                    "input's range (input_range) or use real=\"float\"")
         xs = np.array(sorted({i for i, _ in done} | {x1}), dtype=np.int64)
         ys = q(xs)
         slope, shift, steep = [], [], 0.0
@@ -319,7 +319,7 @@ class _Designer:
         if n and np.max(np.abs(np.roots(aq))) >= 1.0 > np.max(np.abs(np.roots(a))):
             raise FixedPointError(f"{where}: a pole too close to 1 for {WIDE_BITS}-bit "
                                   f"coefficients (it leaves the unit circle once rounded); "
-                                  "use --real float or double")
+                                  'use real="float" or real="double"')
         hq = _impulse(bq, aq)
         coef = float(np.sum(np.abs(_impulse(b, a) - hq))) * bound_in
         noise = _l1(np.array([1.0]), aq) * 0.5 * 2.0 ** -fwide + 0.5 * 2.0 ** -fout
@@ -379,7 +379,7 @@ def input_ranges(inputs: tuple[str, ...], used: set[str], recorded: Mapping[str,
     given = dict(given or {})
     unknown = sorted(set(given) - set(inputs))
     if unknown:
-        raise FixedPointError(f"--input-range: {unknown[0]!r} is no input of the model "
+        raise FixedPointError(f"input_range: {unknown[0]!r} is no input of the model "
                               f"(inputs: {', '.join(inputs)})")
     out = {}
     for name in inputs:
@@ -387,7 +387,7 @@ def input_ranges(inputs: tuple[str, ...], used: set[str], recorded: Mapping[str,
         if rng is None:
             if name in used:
                 raise FixedPointError(f"inputs: {name}: no range recorded in the result; give one "
-                                      f"with --input-range {name}=LO:HI")
+                                      f'with input_range={{"{name}": (LO, HI)}}')
             continue
         lo, hi = float(rng[0]), float(rng[1])
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):

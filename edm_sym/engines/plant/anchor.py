@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.plant.filters import lowpass
 
 __all__ = ["AnchorFit", "centred_motion", "fit_anchor", "law_torque"]
@@ -78,18 +79,18 @@ class AnchorFit:
         dict of str to dict of str to float
         """
         out: dict[str, dict[str, float]] = {
-            "coulomb": {"level": self.coulomb},
-            "viscous": {"coefficient": self.viscous},
-            "acceleration": {"inertia": self.inertia},
-            "offset": {"level": self.offset},
+            TermKind.COULOMB: {"level": self.coulomb},
+            TermKind.VISCOUS: {"coefficient": self.viscous},
+            TermKind.ACCELERATION: {"inertia": self.inertia},
+            TermKind.OFFSET: {"level": self.offset},
         }
         if self.stribeck_velocity is not None:
-            out["stribeck"] = {"peak": self.stribeck_peak,
-                               "stribeck_velocity": self.stribeck_velocity}
+            out[TermKind.STRIBECK] = {"peak": self.stribeck_peak,
+                                      "stribeck_velocity": self.stribeck_velocity}
         if self.harmonics:
             k, (amplitude, phase) = max(self.harmonics.items(), key=lambda kv: kv[1][0])
-            out["spatial"] = {"cycles_per_revolution": float(k), "amplitude": amplitude,
-                              "phase": phase}
+            out[TermKind.SPATIAL] = {"cycles_per_revolution": float(k), "amplitude": amplitude,
+                                     "phase": phase}
         return out
 
 
@@ -233,18 +234,18 @@ def law_torque(
     theta, omega, alpha = centred_motion(np.asarray(columns["theta_uw"], dtype=float), ts)
     sign = np.sign(omega)
     law = np.zeros_like(omega)
-    if "coulomb" in physics:
-        law += physics["coulomb"]["level"] * sign
-    if "stribeck" in physics:
-        st = physics["stribeck"]
+    if TermKind.COULOMB in physics:
+        law += physics[TermKind.COULOMB]["level"] * sign
+    if TermKind.STRIBECK in physics:
+        st = physics[TermKind.STRIBECK]
         law += st["peak"] * sign * np.exp(-(omega / st["stribeck_velocity"]) ** 2)
-    if "viscous" in physics:
-        law += physics["viscous"]["coefficient"] * omega
-    if "acceleration" in physics:
-        law += physics["acceleration"]["inertia"] * alpha
-    if "offset" in physics:
-        law += physics["offset"]["level"]
-    if "spatial" in physics:
-        sp = physics["spatial"]
+    if TermKind.VISCOUS in physics:
+        law += physics[TermKind.VISCOUS]["coefficient"] * omega
+    if TermKind.ACCELERATION in physics:
+        law += physics[TermKind.ACCELERATION]["inertia"] * alpha
+    if TermKind.OFFSET in physics:
+        law += physics[TermKind.OFFSET]["level"]
+    if TermKind.SPATIAL in physics:
+        sp = physics[TermKind.SPATIAL]
         law += sp["amplitude"] * np.sin(sp["cycles_per_revolution"] * theta + sp.get("phase", 0.0))
     return lowpass(law, g_rtob, ts)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from types import MappingProxyType
@@ -28,6 +28,7 @@ from types import MappingProxyType
 import numpy as np
 
 from edm_sym.core.errors import ConfigError
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.plant.filters import lowpass
 from edm_sym.engines.plant.presets import PRESETS, PlantPreset, RippleHarmonic
 from edm_sym.engines.plant.servo import PlantLog, simulate_plant
@@ -54,18 +55,18 @@ PRESENCE_SHARE = 0.03
 
 #: The units of every truth parameter (rotary axis, as `edm describe` gives them).
 TRUTH_UNITS: Mapping[str, Mapping[str, str]] = MappingProxyType({
-    "coulomb": MappingProxyType({"level": "N m"}),
-    "stribeck": MappingProxyType({"peak": "N m", "stiction": "N m",
-                                  "stribeck_velocity": "rad/s"}),
-    "viscous": MappingProxyType({"coefficient": "N m s/rad"}),
-    "acceleration": MappingProxyType({"inertia": "kg m^2"}),
-    "spatial": MappingProxyType({"cycles_per_revolution": "1", "amplitude": "N m",
-                                 "phase": "rad"}),
+    TermKind.COULOMB: MappingProxyType({"level": "N m"}),
+    TermKind.STRIBECK: MappingProxyType({"peak": "N m", "stiction": "N m",
+                                         "stribeck_velocity": "rad/s"}),
+    TermKind.VISCOUS: MappingProxyType({"coefficient": "N m s/rad"}),
+    TermKind.ACCELERATION: MappingProxyType({"inertia": "kg m^2"}),
+    TermKind.SPATIAL: MappingProxyType({"cycles_per_revolution": "1", "amplitude": "N m",
+                                        "phase": "rad"}),
 })
 
 #: Which log.truth component each kind is, for the presence rule.
-_COMPONENT = {"coulomb": "coulomb", "stribeck": "stribeck", "viscous": "viscous",
-              "acceleration": "inertia_mismatch", "spatial": "ripple"}
+_COMPONENT = {TermKind.COULOMB: "coulomb", TermKind.STRIBECK: "stribeck", TermKind.VISCOUS: "viscous",
+              TermKind.ACCELERATION: "inertia_mismatch", TermKind.SPATIAL: "ripple"}
 
 #: The drive settings the named presets show to work: (g_dob, K_v, K_i).
 _DRIVES = ((500.0, 150.0, 0.0), (800.0, 200.0, 4000.0))
@@ -261,18 +262,18 @@ def _drawn_preset(draw: int) -> PlantPreset:
     )
 
 
-def _without(preset: PlantPreset, kinds: list[str]) -> PlantPreset:
+def _without(preset: PlantPreset, kinds: Sequence[str]) -> PlantPreset:
     """The plant with the given terms taken out."""
     changes: dict[str, object] = {}
-    if "stribeck" in kinds:
+    if TermKind.STRIBECK in kinds:
         changes["stiction"] = preset.coulomb
-    if "coulomb" in kinds:
+    if TermKind.COULOMB in kinds:
         changes.update(coulomb=0.0, stiction=0.0, bristle_damping=0.0)
-    if "viscous" in kinds:
+    if TermKind.VISCOUS in kinds:
         changes["viscous"] = 0.0
-    if "acceleration" in kinds:
+    if TermKind.ACCELERATION in kinds:
         changes["inertia_nominal"] = preset.inertia
-    if "spatial" in kinds:
+    if TermKind.SPATIAL in kinds:
         changes["ripple"] = ()
     return replace(preset, **changes)
 
@@ -281,17 +282,18 @@ def _truth(p: PlantPreset) -> dict[str, dict[str, float]]:
     """The terms of a family plant (K_tn = K_t, one ripple harmonic at most)."""
     truth: dict[str, dict[str, float]] = {}
     if p.coulomb > 0.0:
-        truth["coulomb"] = {"level": p.coulomb}
+        truth[TermKind.COULOMB] = {"level": p.coulomb}
     if p.coulomb > 0.0 and p.stiction >= STRIBECK_MIN_RATIO * p.coulomb:
-        truth["stribeck"] = {"peak": _round(p.stiction - p.coulomb, 6), "stiction": p.stiction,
-                             "stribeck_velocity": p.stribeck_velocity}
+        truth[TermKind.STRIBECK] = {"peak": _round(p.stiction - p.coulomb, 6),
+                                    "stiction": p.stiction,
+                                    "stribeck_velocity": p.stribeck_velocity}
     if p.viscous > 0.0:
-        truth["viscous"] = {"coefficient": p.viscous}
+        truth[TermKind.VISCOUS] = {"coefficient": p.viscous}
     if p.inertia != p.inertia_nominal:
-        truth["acceleration"] = {"inertia": _round(p.inertia - p.inertia_nominal, 6)}
+        truth[TermKind.ACCELERATION] = {"inertia": _round(p.inertia - p.inertia_nominal, 6)}
     for h in p.ripple:
-        truth["spatial"] = {"cycles_per_revolution": float(h.cycles), "amplitude": h.amplitude,
-                            "phase": h.phase}
+        truth[TermKind.SPATIAL] = {"cycles_per_revolution": float(h.cycles),
+                                   "amplitude": h.amplitude, "phase": h.phase}
     return truth
 
 
@@ -310,9 +312,9 @@ def term_shares(log: PlantLog) -> dict[str, float]:
         ``spatial``) to its share, for the kinds whose parameters are not zero.
     """
     p = log.preset
-    has = {"coulomb": p.coulomb > 0.0, "stribeck": p.stiction > p.coulomb,
-           "viscous": p.viscous > 0.0, "acceleration": p.inertia != p.inertia_nominal,
-           "spatial": bool(p.ripple)}
+    has = {TermKind.COULOMB: p.coulomb > 0.0, TermKind.STRIBECK: p.stiction > p.coulomb,
+           TermKind.VISCOUS: p.viscous > 0.0, TermKind.ACCELERATION: p.inertia != p.inertia_nominal,
+           TermKind.SPATIAL: bool(p.ripple)}
     target = float(np.sqrt(np.mean(log.tau_ext ** 2)))
     out = {}
     for kind, here in has.items():

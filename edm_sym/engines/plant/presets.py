@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, fields
 
 from edm_sym.core.errors import ConfigError
+from edm_sym.core.terms import TermKind
 
 __all__ = ["PRESETS", "PlantPreset", "RippleHarmonic", "get_preset"]
 
@@ -170,8 +171,8 @@ class PlantPreset:
             )
 
     @property
-    def true_terms(self) -> tuple[str, ...]:
-        """tuple of str: the physical terms ``tau_ext`` holds, as the classifier names them.
+    def true_terms(self) -> tuple[TermKind, ...]:
+        """tuple of TermKind: the physical terms ``tau_ext`` holds, as the classifier names them.
 
         In free motion the RTOB sees ``(K_tn/K_t)(friction + J alpha) - J_n alpha``
         (docs/plant.md, "Ground truth"), so: ``"coulomb"`` when ``coulomb > 0``,
@@ -181,12 +182,12 @@ class PlantPreset:
         of the classifier's kinds. Never ``"offset"``.
         """
         present = {
-            "coulomb": self.coulomb > 0.0,
-            "viscous": self.viscous > 0.0,
+            TermKind.COULOMB: self.coulomb > 0.0,
+            TermKind.VISCOUS: self.viscous > 0.0,
             # Rounding aside: ballscrew's +5 % K_tn and +5 % J_n cancel exactly.
-            "acceleration": abs(self.inertia_error) > 1e-9 * self.inertia,
-            "spatial": bool(self.ripple),
-            "stribeck": self.stiction > self.coulomb,
+            TermKind.ACCELERATION: abs(self.inertia_error) > 1e-9 * self.inertia,
+            TermKind.SPATIAL: bool(self.ripple),
+            TermKind.STRIBECK: self.stiction > self.coulomb,
         }
         return tuple(kind for kind, here in present.items() if here)
 

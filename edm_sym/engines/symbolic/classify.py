@@ -58,6 +58,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import sympy as sp
 
+from edm_sym.core.terms import TermKind
 from edm_sym.core.units import AxisUnits, axis_units
 from edm_sym.engines.symbolic.characteristic import (
     acceleration_gain,
@@ -75,7 +76,8 @@ from edm_sym.engines.symbolic.operators import LTI, Delay, Relay
 from edm_sym.engines.symbolic.simplify import fold_constants
 
 #: The kinds of physical term.
-KINDS = ("coulomb", "viscous", "acceleration", "spatial", "stribeck", "offset", "unclassified")
+KINDS = (TermKind.COULOMB, TermKind.VISCOUS, TermKind.ACCELERATION, TermKind.SPATIAL,
+         TermKind.STRIBECK, TermKind.OFFSET, TermKind.UNCLASSIFIED)
 
 _CHAIN = ("angle", "velocity", "acceleration")
 
@@ -86,8 +88,8 @@ class PhysicalTerm:
 
     Attributes
     ----------
-    kind : str
-        One of :data:`KINDS`.
+    kind : TermKind
+        One of :data:`KINDS` (a string given is made one).
     parameters : dict of str to (float, str)
         Name -> (value, SI unit).
     description : str
@@ -96,10 +98,14 @@ class PhysicalTerm:
         The term of the row expression this describes.
     """
 
-    kind: str
+    kind: TermKind
     parameters: Mapping[str, tuple[float, str]] = field(default_factory=dict)
     description: str = ""
     expr: sp.Expr | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, TermKind):
+            object.__setattr__(self, "kind", TermKind(self.kind))
 
 
 #: Default thresholds per axis, in its units (rotary: the field defaults of
@@ -282,8 +288,8 @@ def _extras(leaf: _Leaf) -> tuple[dict[str, tuple[float, str]], str]:
 
 #: A term linear in a velocity or an acceleration: (kind, parameter, unit attribute, name).
 _LINEAR = {
-    "velocity": ("viscous", "coefficient", "viscous", "viscous friction"),
-    "acceleration": ("acceleration", "inertia", "inertia", "acceleration-dependent term"),
+    "velocity": (TermKind.VISCOUS, "coefficient", "viscous", "viscous friction"),
+    "acceleration": (TermKind.ACCELERATION, "inertia", "inertia", "acceleration-dependent term"),
 }
 
 
@@ -318,7 +324,7 @@ def classify_expression(
     out: list[PhysicalTerm] = []
     for term in sp.Add.make_args(expr):
         found = _classify_term(term, u, role, opts)
-        if role is not None and len(found) == 1 and found[0].kind == "unclassified":
+        if role is not None and len(found) == 1 and found[0].kind is TermKind.UNCLASSIFIED:
             found = _measured(term, u, role, opts) or found
         out += found
     return tuple(out)
@@ -419,11 +425,11 @@ def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: 
     F, V = opts.units.force, opts.units.velocity
     if f == sp.sign(w):
         level = c * sg
-        return [PhysicalTerm("coulomb", {"level": (level, F), **extra},
+        return [PhysicalTerm(TermKind.COULOMB, {"level": (level, F), **extra},
                              f"Coulomb friction: {level:.6g} {F} sgn(velocity){note}", term)]
     if isinstance(f, Relay) and f.args[0] == w and f.args[1].is_Number:
         level, band = c * sg, float(f.args[1]) / abs(g)
-        return [PhysicalTerm("coulomb", {"level": (level, F),
+        return [PhysicalTerm(TermKind.COULOMB, {"level": (level, F),
                                          "hysteresis": (band, V), **extra},
                              f"Coulomb friction with hysteresis: {level:.6g} {F}, switching "
                              f"at +-{band:.4g} {V}{note}", term)]
@@ -433,7 +439,7 @@ def _coulomb(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, extra: 
     name, top, k = sat
     level, vt = c * top * math.copysign(1.0, k * g), top / abs(k * g)
     if vt <= opts.coulomb_velocity:
-        return [PhysicalTerm("coulomb", {"level": (level, F),
+        return [PhysicalTerm(TermKind.COULOMB, {"level": (level, F),
                                          "transition_velocity": (vt, V), **extra},
                              f"Coulomb friction ({name}-smoothed): {level:.6g} {F}, "
                              f"transition {vt:.4g} {V}{note}", term)]
@@ -468,7 +474,7 @@ def _saturating_acceleration(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g
         return None
     name, top, k = sat
     inertia, level = c * k * g, c * top * math.copysign(1.0, k * g)
-    return [PhysicalTerm("acceleration", {"inertia": (inertia, U.inertia),
+    return [PhysicalTerm(TermKind.ACCELERATION, {"inertia": (inertia, U.inertia),
                                           "saturation_level": (level, U.force), **extra},
                          f"saturating acceleration-dependent term ({name}): {inertia:.6g} "
                          f"{U.inertia} for small accelerations, limited to {level:.6g} "
@@ -552,7 +558,7 @@ def _spatial(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float, role: s
     if role == "angle_wrapped" and abs(k - round(k)) > 1e-9:
         per_wrap = "revolution" if U.axis == "rotary" else "wrap of the position"
         wrap_note = f"; not a whole number of cycles per {per_wrap}: it jumps at each wrap"
-    return [PhysicalTerm("spatial", params,
+    return [PhysicalTerm(TermKind.SPATIAL, params,
                          f"position-dependent friction, {shape}: amplitude {amp:.6g} {U.force}, "
                          f"{cycles[0]:.6g} {per} (period {2 * math.pi / k:.6g} {U.position}), "
                          f"phase {phi:.4g} rad{wrap_note}{note}", term)]
@@ -594,7 +600,7 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
         params = {"peak": (float(pos[i]), N), "peak_velocity": (float(v[i]), V),
                   "level_at_range": (float(pos[-1]), N),
                   "stribeck_velocity": (vs, V), **extra}
-        return [PhysicalTerm("stribeck", params,
+        return [PhysicalTerm(TermKind.STRIBECK, params,
                              f"Stribeck-like hump: peak {pos[i]:.4g} {N} at {v[i]:.4g} {V}, "
                              f"falling to {pos[-1]:.4g} {N} at {vmax:g} {V}{note}", term)]
     # Coulomb + viscous fit by least squares over the range.
@@ -603,11 +609,11 @@ def _velocity_shape(term: sp.Expr, c: float, f: sp.Expr, w: sp.Dummy, g: float,
     if np.max(np.abs(A @ np.array([fc, d]) - pos)) <= 1e-3 * scale:
         out = []
         if abs(fc) > 1e-6 * scale:
-            out.append(PhysicalTerm("coulomb", {"level": (float(fc), N), **extra},
+            out.append(PhysicalTerm(TermKind.COULOMB, {"level": (float(fc), N), **extra},
                                     f"Coulomb friction (fitted to {f}): {fc:.6g} {N}{note}",
                                     term))
         D = opts.units.viscous
-        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), D), **extra},
+        out.append(PhysicalTerm(TermKind.VISCOUS, {"coefficient": (float(d), D), **extra},
                                 f"viscous friction (fitted to {f}): {d:.6g} {D}{note}",
                                 term))
         return out
@@ -652,14 +658,14 @@ def _stribeck_split(term: sp.Expr, f: sp.Expr, v: np.ndarray, pos: np.ndarray, s
     how = f" (the asymptote of {f} over the top {100 * _TAIL:g} % of +-{v[-1]:g} {V})"
     out = []
     if abs(fc) >= _SIGNIFICANT * scale:
-        out.append(PhysicalTerm("coulomb", {"level": (float(fc), N), **extra},
+        out.append(PhysicalTerm(TermKind.COULOMB, {"level": (float(fc), N), **extra},
                                 f"Coulomb friction: {fc:.6g} {N}{how}{note}", term))
     if abs(d) * v[-1] >= _SIGNIFICANT * scale:
-        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), D), **extra},
+        out.append(PhysicalTerm(TermKind.VISCOUS, {"coefficient": (float(d), D), **extra},
                                 f"viscous friction: {d:.6g} {D}{how}{note}", term))
     if vs <= opts.coulomb_velocity:
         return out or None
-    out.append(PhysicalTerm("stribeck", {"peak": (peak, N),
+    out.append(PhysicalTerm(TermKind.STRIBECK, {"peak": (peak, N),
                                          "peak_velocity": (float(v[i]), V),
                                          "stribeck_velocity": (vs, V), **extra},
                             f"Stribeck-like: {peak:.4g} {N} above Coulomb + viscous at "
@@ -698,7 +704,7 @@ def _measured(term: sp.Expr, u: sp.Symbol, role: str,
             if p.jump:
                 params["wrap_jump"] = (p.jump, F)
                 more += f"; jumps by {p.jump:.4g} {F} at each wrap of the {_moved(U)}"
-            return [PhysicalTerm("spatial", {
+            return [PhysicalTerm(TermKind.SPATIAL, {
                 "amplitude": (p.amplitude, F), "period": (period, U.position),
                 key: cycles, "phase": (p.phase, "rad"),
                 "fundamental_amplitude": (p.fundamental_amplitude, F), **params},
@@ -752,7 +758,7 @@ def _measured_acceleration(term: sp.Expr, u: sp.Symbol, role: str,
                 a.inertia_in_band):
             params["inertia_in_band"] = (a.inertia_in_band, U.inertia)
             text += f", where the inertia is {a.inertia_in_band:.6g} {U.inertia}"
-    return [PhysicalTerm("acceleration", params, text + note, term)]
+    return [PhysicalTerm(TermKind.ACCELERATION, params, text + note, term)]
 
 
 #: A part of a measured velocity term counts when it makes this share of its peak.
@@ -780,13 +786,13 @@ def _measured_velocity(term: sp.Expr, u: sp.Symbol,
            f"R^2 {fit.r2:.3f}{note})")
     out = []
     if coulomb:
-        out.append(PhysicalTerm("coulomb", {"level": (fit.coulomb, F), **params},
+        out.append(PhysicalTerm(TermKind.COULOMB, {"level": (fit.coulomb, F), **params},
                                 f"Coulomb friction: {fit.coulomb:.6g} {F}{how}", term))
     if abs(fit.viscous) * v_range >= _SIGNIFICANT * fit.peak:
-        out.append(PhysicalTerm("viscous", {"coefficient": (fit.viscous, D), **params},
+        out.append(PhysicalTerm(TermKind.VISCOUS, {"coefficient": (fit.viscous, D), **params},
                                 f"viscous friction: {fit.viscous:.6g} {D}{how}", term))
     if abs(fit.offset) >= _SIGNIFICANT * fit.peak:
-        out.append(PhysicalTerm("offset", {"level": (fit.offset, F)},
+        out.append(PhysicalTerm(TermKind.OFFSET, {"level": (fit.offset, F)},
                                 f"constant offset: {fit.offset:.6g} {F}{how}", term))
     return out or None
 
@@ -820,13 +826,13 @@ def _offset(term: sp.Expr, U: AxisUnits) -> PhysicalTerm:  # noqa: N803
     except TypeError:
         return _unclassified(term, f"a constant that does not evaluate to a number: {term}")
     note = f" ({'; '.join(notes)})" if notes else ""
-    return PhysicalTerm("offset", {"level": (level, U.force)},
+    return PhysicalTerm(TermKind.OFFSET, {"level": (level, U.force)},
                         f"constant offset {level:.6g} {U.force}{note}", term)
 
 
 def _unclassified(term: sp.Expr, reason: str,
                   params: dict[str, tuple[float, str]] | None = None) -> PhysicalTerm:
-    return PhysicalTerm("unclassified", params or {}, reason, term)
+    return PhysicalTerm(TermKind.UNCLASSIFIED, params or {}, reason, term)
 
 
 def _annotate(t: PhysicalTerm, note: str, corners: tuple[float, ...], term: sp.Expr,

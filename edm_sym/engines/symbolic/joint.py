@@ -33,12 +33,13 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.symbolic.characteristic import Filter, static_form
 from edm_sym.engines.symbolic.classify import ClassifyOptions, PhysicalTerm
 from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
 
 #: The kinds a velocity term may have been named by one at a time.
-VELOCITY_KINDS = ("coulomb", "viscous", "stribeck", "unclassified")
+VELOCITY_KINDS = (TermKind.COULOMB, TermKind.VISCOUS, TermKind.STRIBECK, TermKind.UNCLASSIFIED)
 #: The role index of each input role (an angle's derivative is a velocity).
 _INDEX = {"angle": 0, "velocity": 1, "acceleration": 2}
 #: A Stribeck part (or a departure from the sum's odd symmetry) counts when it
@@ -212,13 +213,13 @@ def joint_velocity_terms(parts: Sequence[VelocityPart], options: ClassifyOptions
     expr = sp.Add(*(p.term.expr for p in parts))
     out = []
     if abs(fc) >= _NAMED * scale:
-        out.append(PhysicalTerm("coulomb", coulomb, text + how, expr))
+        out.append(PhysicalTerm(TermKind.COULOMB, coulomb, text + how, expr))
     if abs(d) * vmax >= _NAMED * scale:
-        out.append(PhysicalTerm("viscous", {"coefficient": (float(d), D)},
+        out.append(PhysicalTerm(TermKind.VISCOUS, {"coefficient": (float(d), D)},
                                 f"viscous friction: {d:.6g} {D}{how}", expr))
     if fs * sign > 0:
         out.append(PhysicalTerm(
-            "stribeck", {"peak": (float(fs), N), "stribeck_velocity": (float(vs), V)},
+            TermKind.STRIBECK, {"peak": (float(fs), N), "stribeck_velocity": (float(vs), V)},
             f"Stribeck friction: {fs:.4g} {N} above Coulomb + viscous at rest (after a "
             f"reversal), falling as exp(-(v/{vs:.4g} {V})^2){how}", expr))
     return tuple(out) or None

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.symbolic.characteristic import (
     PERIOD_SAMPLES,
     dc_gain,
@@ -47,7 +48,7 @@ from edm_sym.engines.symbolic.characteristic import (
 from edm_sym.engines.symbolic.classify import ClassifyOptions, PhysicalTerm, spatial_frequency
 
 #: The kinds an angle term may have been named by one at a time.
-SPATIAL_KINDS = ("spatial", "unclassified")
+SPATIAL_KINDS = (TermKind.SPATIAL, TermKind.UNCLASSIFIED)
 #: A wrap jump or mean of the sum counts when it reaches this share of its amplitude;
 #: so does a harmonic of one term, against that term's strongest.
 _SIGNIFICANT = 0.05
@@ -113,7 +114,7 @@ def spatial_part(term: PhysicalTerm, u: sp.Symbol, role: str | None) -> SpatialP
 def overlapping(parts: Sequence[SpatialPart]) -> bool:
     """True when the one-by-one names cannot stand: a term unclassified or jumping at
     the wrap, or two terms sharing a harmonic (one ripple written as several rows)."""
-    if any(p.term.kind != "spatial" or p.jump for p in parts):
+    if any(p.term.kind is not TermKind.SPATIAL or p.jump for p in parts):
         return True
     seen: set[int] = set()
     for p in parts:
@@ -170,4 +171,4 @@ def joint_spatial_term(parts: Sequence[SpatialPart], options: ClassifyOptions,
             f"({params['dominant_amplitude'][0]:.4g} {F}); mean over a revolution "
             f"{params['mean'][0]:.4g} {F}")
     expr = sp.Add(*(p.term.expr for p in parts))
-    return PhysicalTerm("spatial", params, text, expr)
+    return PhysicalTerm(TermKind.SPATIAL, params, text, expr)

@@ -20,15 +20,37 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import control as ct
 import numpy as np
 import sympy as sp
 
-from edm_sym.core.elements.realisation import DelayLine, LinearFilter
-from edm_sym.engines.symbolic.model import RowModel, Stage
+from edm_sym.core.elements import Element
+from edm_sym.core.elements.realisation import DelayLine, LinearFilter, Realisation
 from edm_sym.engines.symbolic.operators import rational, s
+
+
+class StageView(Protocol):
+    """What these forms read of a stage (:class:`~edm_sym.engines.symbolic.model.Stage`).
+
+    Read through this view, so that this module does not import ``model.py``,
+    whose :meth:`~edm_sym.engines.symbolic.model.SymbolicModel.to_control` imports it.
+    """
+
+    col: int
+    element: type[Element]
+    realisation: Realisation
+
+    def numeric_tf(self) -> tuple[Any, Any]: ...
+
+
+class RowView(Protocol):
+    """What these forms read of a row (:class:`~edm_sym.engines.symbolic.model.RowModel`)."""
+
+    index: int
+    input: str
+    stages: Sequence[StageView]
 
 
 @dataclass(frozen=True)
@@ -117,7 +139,7 @@ def to_tf(G: sp.Expr, name: str | None = None) -> ct.TransferFunction:  # noqa: 
     return ct.tf(n, d, name=name)
 
 
-def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
+def stage_parts(row: RowView, ts: float) -> tuple[LinearPart, ...]:
     """The linear stages (filters and delays) of ``row`` as :class:`LinearPart` objects.
 
     ``ts`` is the sample time [s]; static maps and relays have no part.
@@ -131,13 +153,13 @@ def stage_parts(row: RowModel, ts: float) -> tuple[LinearPart, ...]:
     return tuple(parts)
 
 
-def _filter_part(st: Stage, name: str, ts: float) -> LinearPart:
+def _filter_part(st: StageView, name: str, ts: float) -> LinearPart:
     r = st.realisation
     return LinearPart(st.col, st.element.name, to_tf(rational(*st.numeric_tf()), name),
                       discrete_tf(r.b, r.a, ts, f"{name}_d"), r.method)
 
 
-def _delay_part(st: Stage, name: str, ts: float) -> LinearPart:
+def _delay_part(st: StageView, name: str, ts: float) -> LinearPart:
     n = st.realisation.samples
     return LinearPart(st.col, st.element.name, None,
                       ct.tf([1.0], [1.0] + [0.0] * n, dt=ts, name=f"{name}_d"), "delay")
@@ -150,12 +172,12 @@ _PARTS = {LinearFilter: _filter_part, DelayLine: _delay_part}
 # -- the row as one discrete nonlinear system -----------------------------------
 
 
-def state_labels(row: RowModel) -> list[str]:
+def state_labels(row: RowView) -> list[str]:
     """Names of the row system's states: ``c<col>_z<i>``, ``c<col>_d<i>``, ``c<col>_relay``.
 
     Parameters
     ----------
-    row : RowModel
+    row : RowModel or RowView
 
     Returns
     -------
@@ -164,12 +186,12 @@ def state_labels(row: RowModel) -> list[str]:
     return [label for st in row.stages for label in st.realisation.state_labels(f"c{st.col}")]
 
 
-def row_system(row: RowModel, ts: float) -> ct.NonlinearIOSystem:
+def row_system(row: RowView, ts: float) -> ct.NonlinearIOSystem:
     """The row as a discrete python-control system (``dt = ts``), starting from rest.
 
     Parameters
     ----------
-    row : RowModel
+    row : RowModel or RowView
     ts : float
         The sample time [s].
 

@@ -54,6 +54,7 @@ import numpy as np
 import sympy as sp
 
 from edm_sym.core.bounds import BOUND_MARGIN, BoundFlag, bound_flags
+from edm_sym.core.terms import TermKind
 from edm_sym.core.units import axis_units
 from edm_sym.engines.symbolic.classify import ClassifyOptions, PhysicalTerm
 from edm_sym.engines.symbolic.functions import NUMPY_FUNCTIONS
@@ -182,14 +183,14 @@ def _pct(share: float) -> str:
 def term_summary(term: PhysicalTerm) -> str:
     """``coulomb (level -0.00064 N m)``: a term's kind and its main parameter (in its unit)."""
     if not term.parameters:
-        return term.kind
+        return term.kind.value
     name, (value, unit) = next(iter(term.parameters.items()))
-    return f"{term.kind} ({name.replace('_', ' ')} {value:.4g} {unit})"
+    return f"{term.kind.value} ({name.replace('_', ' ')} {value:.4g} {unit})"
 
 
 def _term_rms(term: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None) -> float | None:
     """The RMS of a static term on the input ``x`` (None when it has dynamics)."""
-    if term.kind == "offset" and "level" in term.parameters:
+    if term.kind is TermKind.OFFSET and "level" in term.parameters:
         return abs(float(term.parameters["level"][0]))
     e = term.expr
     if e is None or x is None or e.has(LTI, Delay, Relay) or e.free_symbols - {u}:
@@ -244,7 +245,7 @@ def _position_shape(term: PhysicalTerm, u: sp.Symbol, x: np.ndarray) -> np.ndarr
 def _term_flags(term: PhysicalTerm) -> list[Flag]:
     p = term.parameters
     out = []
-    if term.kind == "unclassified":
+    if term.kind is TermKind.UNCLASSIFIED:
         out.append(Flag("unclassified", term.description or "no physical pattern fits"))
     if "linearity_r2" in p and p["linearity_r2"][0] < 0.95:
         out.append(Flag("nonlinear", f"far from linear in the acceleration "
@@ -375,10 +376,10 @@ def judge_rows(
 _JOINT_AGREE = 0.05
 
 
-def _sums(terms: Sequence[PhysicalTerm]) -> tuple[set[str], float, float]:
+def _sums(terms: Sequence[PhysicalTerm]) -> tuple[set[TermKind], float, float]:
     kinds = {t.kind for t in terms}
-    total = [sum(float(t.parameters[key][0]) for t in terms if t.kind == kind)
-             for kind, key in (("coulomb", "level"), ("viscous", "coefficient"))]
+    total = [sum(float(t.parameters[key][0]) for t in terms if t.kind is kind)
+             for kind, key in ((TermKind.COULOMB, "level"), (TermKind.VISCOUS, "coefficient"))]
     return kinds, total[0], total[1]
 
 
@@ -474,10 +475,10 @@ def _unsupported(t: PhysicalTerm, u: sp.Symbol, x: np.ndarray | None,
     if data is None:
         return None
     y, a = data
-    if t.kind == "acceleration" and a is not None:
+    if t.kind is TermKind.ACCELERATION and a is not None:
         fit = _fitted(y, a)
         what = "as an inertia (the row's output fitted by J a: J = {c:.4g} " + inertia_unit
-    elif t.kind == "spatial" and x is not None:
+    elif t.kind is TermKind.SPATIAL and x is not None:
         shape = _position_shape(t, u, x)
         fit = None if shape is None else _fitted(y, shape)
         what = ("as a function of the position (the row's output fitted by c times the "
@@ -503,7 +504,7 @@ def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelI
     if mi.rms / ref < opts.threshold:
         return _inertia_not_held(model, judged, mi, ref, opts)
     named = [(j, jt) for j, jr in enumerate(judged) for jt in jr.terms
-             if jt.term.kind == "acceleration"]
+             if jt.term.kind is TermKind.ACCELERATION]
     total = sum(float(jt.term.parameters["inertia"][0]) for _, jt in named)
     if named and abs(total - mi.inertia) <= _INERTIA_AGREE * abs(mi.inertia):
         return tuple(judged)
@@ -516,7 +517,7 @@ def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelI
     U = axis_units(model.axis)
     parts = ", ".join(f"row {j + 1} {mi.rows[j]:.3g} {U.inertia}" for j in sorted(holders))
     # Sentences apart ("; "): the report lists all but the first as notes.
-    term = PhysicalTerm("acceleration", {"inertia": (mi.inertia, U.inertia),
+    term = PhysicalTerm(TermKind.ACCELERATION, {"inertia": (mi.inertia, U.inertia),
                                          "observer_bandwidth": (mi.bandwidth, "rad/s")},
                         f"acceleration-dependent term: equivalent inertia {mi.inertia:.6g} "
                         f"{U.inertia}; the rows' outputs with the observer's lag taken out, "
@@ -526,7 +527,7 @@ def _joint_inertia(model: SymbolicModel, judged: Sequence[JudgedRow], mi: ModelI
     out = list(judged)
     for j in where:
         jr = judged[j]
-        keep = [jt for jt in jr.terms if jt.term.kind != "acceleration"]
+        keep = [jt for jt in jr.terms if jt.term.kind is not TermKind.ACCELERATION]
         if j == lead:
             keep.append(JudgedTerm(term))
         msg = (f"the model's inertia, {mi.inertia:.4g} {U.inertia}, is named as a whole: "
@@ -548,7 +549,7 @@ def _inertia_not_held(model: SymbolicModel, judged: Sequence[JudgedRow], mi: Mod
     U = axis_units(model.axis)
     out = list(judged)
     for j, jr in enumerate(judged):
-        gone = [jt for jt in jr.terms if jt.term.kind == "acceleration"]
+        gone = [jt for jt in jr.terms if jt.term.kind is TermKind.ACCELERATION]
         if not gone:
             continue
         flags = tuple(Flag("unsupported", f"term {term_summary(jt.term)} is not the model's: "
@@ -581,10 +582,10 @@ def _judge_terms(row: RowModel, x: np.ndarray | None, ref: float | None,
                                   f"{why[1]} (threshold {_pct(opts.threshold)}): not listed"))
                 continue
         tflags = _term_flags(t)
-        if row_bounds and t.kind != "unclassified":
+        if row_bounds and t.kind is not TermKind.UNCLASSIFIED:
             where = "; ".join(b.message() for b in row_bounds)
             tflags.insert(0, Flag("at_bound", f"would be named {term_summary(t)}, but {where}"))
-            t = replace(t, kind="unclassified",
+            t = replace(t, kind=TermKind.UNCLASSIFIED,
                         description=f"not named: a parameter is at its range bound ({where}); "
                                     f"would be {t.description}")
         terms.append(JudgedTerm(t, tuple(tflags)))
@@ -596,7 +597,7 @@ def judged_json(row: JudgedRow) -> list[dict[str, Any]]:
 
     A parameter that is not finite (an open pass band's gain) is ``null``.
     """
-    return [{"kind": jt.term.kind,
+    return [{"kind": jt.term.kind.value,
              "parameters": {k: [float(v) if math.isfinite(v) else None, unit]
                             for k, (v, unit) in jt.term.parameters.items()},
              "flags": [f.to_json() for f in jt.flags]} for jt in row.terms]

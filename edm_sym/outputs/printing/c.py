@@ -120,10 +120,10 @@ class EdmC99Printer(HelperCalls, StageLines, C99CodePrinter):
         settings = dict(settings or {})
         kind = settings.get("real", "double")
         if kind not in REALS:
-            raise ValueError(f"--real: expected one of {', '.join(REALS)}, found {kind!r}")
+            raise ValueError(f"real: expected one of {', '.join(REALS)}, found {kind!r}")
         prefix = settings.get("prefix", "edm_comp")
         if not is_c_identifier(prefix):
-            raise ValueError(f"--prefix: expected a C identifier, found {prefix!r}")
+            raise ValueError(f"prefix: expected a C identifier, found {prefix!r}")
         settings["type_aliases"] = {real: float32 if kind == "float" else float64}
         super().__init__(settings)
         self.real = kind

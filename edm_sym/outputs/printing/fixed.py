@@ -98,7 +98,7 @@ class FixedCPrinter:
 
     def __init__(self, word: Any, prefix: str = "edm_comp"):
         if not is_c_identifier(prefix):
-            raise ValueError(f"--prefix: expected a C identifier, found {prefix!r}")
+            raise ValueError(f"prefix: expected a C identifier, found {prefix!r}")
         self.word = word
         self.prefix = prefix
         self.helpers_used: set[str] = set()

@@ -28,7 +28,7 @@ TARGET_NAMES = ("c", "python", "latex", "test", "all")
 def target_names(target: str) -> list[str]:
     """The targets ``target`` stands for (``"all"`` is every one), or ValueError."""
     if target not in TARGET_NAMES:
-        raise ValueError(f"--target: expected one of {', '.join(TARGET_NAMES)}, found {target!r}")
+        raise ValueError(f"target: expected one of {', '.join(TARGET_NAMES)}, found {target!r}")
     return list(ALL) if target == "all" else [target]
 
 

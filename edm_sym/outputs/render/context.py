@@ -184,18 +184,18 @@ def validate_prefix(prefix: str) -> str:
     """
     problem = prefix_problem(prefix)
     if problem:
-        raise ValueError(f"--prefix: {problem}, found {prefix!r}")
+        raise ValueError(f"prefix: {problem}, found {prefix!r}")
     return prefix
 
 
-#: The ``--real`` values of the fixed-point builds (edm_sym.outputs.render.fixed_context).
+#: The ``real`` values of the fixed-point builds (edm_sym.outputs.render.fixed_context).
 FIXED_REALS = ("q31", "q15")
 
 
 def validate_real(real: str) -> str:
     """Return ``real`` when it is ``"float"``, ``"double"``, ``"q31"`` or ``"q15"``, else raise ValueError."""
     if real not in REALS + FIXED_REALS:
-        raise ValueError(f"--real: expected one of {', '.join(REALS + FIXED_REALS)}, found {real!r}")
+        raise ValueError(f"real: expected one of {', '.join(REALS + FIXED_REALS)}, found {real!r}")
     return real
 
 
@@ -313,7 +313,7 @@ def warn_single_precision(rows: tuple[RowPlan, ...]) -> list[str]:
                     f"rows[{row.index}].elements[{sp.col}] ({sp.label}): rounding its coefficients "
                     f"to float moves its frequency response by {err:.1e} of its peak, so the "
                     "float C may miss the simulator by more than 1e-4 of the RMS; prefer "
-                    "--real double")
+                    'real="double"')
     for msg in messages:
         warnings.warn(msg, NumericsWarning, stacklevel=3)
     return messages

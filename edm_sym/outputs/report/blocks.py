@@ -11,6 +11,7 @@ function of its input. Language-neutral: the printers label the blocks.
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 
 import sympy as sp
@@ -20,15 +21,29 @@ from edm_sym.engines.symbolic.operators import LTI, Delay, Relay
 #: Stands for a block's input inside its expression (printed as a dot).
 PLACEHOLDER = sp.Dummy("u", real=True)
 
+
+
+class BlockKind(str, enum.Enum):
+    """The shape of one block of a simplified row expression (not an element's kind)."""
+
+    GAIN = "gain"
+    OFFSET = "offset"
+    FUNCTION = "function"
+    LTI = "lti"
+    DELAY = "delay"
+    RELAY = "relay"
+    CONSTANT = "constant"
+
+
 #: The kinds of block, and what ``Block.expr`` holds for each.
 BLOCK_KINDS = {
-    "gain": "the factor",
-    "offset": "the constant added",
-    "function": "the output in terms of PLACEHOLDER",
-    "lti": "the transfer function G(s)",
-    "delay": "the delay T [s]",
-    "relay": "the half width of the hysteresis band",
-    "constant": "the constant output (the row ignores its input)",
+    BlockKind.GAIN: "the factor",
+    BlockKind.OFFSET: "the constant added",
+    BlockKind.FUNCTION: "the output in terms of PLACEHOLDER",
+    BlockKind.LTI: "the transfer function G(s)",
+    BlockKind.DELAY: "the delay T [s]",
+    BlockKind.RELAY: "the half width of the hysteresis band",
+    BlockKind.CONSTANT: "the constant output (the row ignores its input)",
 }
 
 
@@ -38,13 +53,13 @@ class Block:
 
     Attributes
     ----------
-    kind : str
-        One of :data:`BLOCK_KINDS`.
+    kind : BlockKind
+        See :data:`BLOCK_KINDS`.
     expr : sympy.Expr
         What the block is (see :data:`BLOCK_KINDS`).
     """
 
-    kind: str
+    kind: BlockKind
     expr: sp.Expr
 
 
@@ -64,7 +79,7 @@ def row_chain(expr: sp.Expr, u: sp.Symbol) -> tuple[Block, ...]:
         Empty when the row passes its input through unchanged.
     """
     if not expr.has(u):
-        return (Block("constant", expr),)
+        return (Block(BlockKind.CONSTANT, expr),)
     return tuple(_chain(expr, u))
 
 
@@ -72,24 +87,24 @@ def _chain(e: sp.Expr, u: sp.Symbol) -> list[Block]:
     if e == u:
         return []
     if isinstance(e, LTI):
-        return _chain(e.args[0], u) + [Block("lti", e.args[1])]
+        return _chain(e.args[0], u) + [Block(BlockKind.LTI, e.args[1])]
     if isinstance(e, Delay):
-        return _chain(e.args[0], u) + [Block("delay", e.args[1])]
+        return _chain(e.args[0], u) + [Block(BlockKind.DELAY, e.args[1])]
     if isinstance(e, Relay):
-        return _chain(e.args[0], u) + [Block("relay", e.args[1])]
+        return _chain(e.args[0], u) + [Block(BlockKind.RELAY, e.args[1])]
     if e.is_Mul:
         coeff = [f for f in e.args if not f.has(u)]
         rest = [f for f in e.args if f.has(u)]
         if len(rest) == 1 and coeff:
-            return _chain(rest[0], u) + [Block("gain", sp.Mul(*coeff))]
+            return _chain(rest[0], u) + [Block(BlockKind.GAIN, sp.Mul(*coeff))]
     elif e.is_Add:
         const = [t for t in e.args if not t.has(u)]
         rest = [t for t in e.args if t.has(u)]
         if len(rest) == 1 and const:
-            return _chain(rest[0], u) + [Block("offset", sp.Add(*const))]
+            return _chain(rest[0], u) + [Block(BlockKind.OFFSET, sp.Add(*const))]
     else:
         inner = [a for a in e.args if a.has(u)]
         if len(inner) == 1 and not isinstance(inner[0], sp.Tuple):
             arg = inner[0]
-            return _chain(arg, u) + [Block("function", e.xreplace({arg: PLACEHOLDER}))]
-    return [Block("function", e.xreplace({u: PLACEHOLDER}))]
+            return _chain(arg, u) + [Block(BlockKind.FUNCTION, e.xreplace({arg: PLACEHOLDER}))]
+    return [Block(BlockKind.FUNCTION, e.xreplace({u: PLACEHOLDER}))]

@@ -233,7 +233,7 @@ def _physics(p: EdmLatexPrinter, model: SymbolicModel, result: Any,
                            for k, (v, u) in t.parameters.items() if k != "harmonics")
         rows = ", ".join(rf"{j + 1}: {p.math(p.number(round(100 * sh, 1)))}\,\%"
                          for j, sh in enumerate(t.rows) if abs(sh) >= 0.1)
-        laws.append({"kind": p.text(KIND_TITLES.get(t.kind.value, t.kind.value)), "params": params,
+        laws.append({"kind": p.text(KIND_TITLES.get(t.kind, t.kind.value)), "params": params,
                      "share": p.math(p.number(round(100 * t.share, 3))) + r"\,\%", "rows": rows})
     notes = [p.text(f"not named: {k.value}: {why}") for k, why in phys.left_out]
     notes.append(p.text(f"the laws explain {100 * phys.explained:.4g} % of what the model does "
@@ -337,6 +337,9 @@ def _commands(p: EdmLatexPrinter, inp: ReportInputs) -> list[str]:
 
 def report_context(inp: ReportInputs) -> dict[str, Any]:
     """The validated context of ``templates/report.tex.j2``.
+
+    Long on purpose: one literal of the template's context, key by key, in the
+    order the report reads; each value comes from a named helper.
 
     Parameters
     ----------

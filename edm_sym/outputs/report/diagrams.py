@@ -16,7 +16,7 @@ from typing import Any
 
 from edm_sym.engines.symbolic.model import RowModel, SymbolicModel
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
-from edm_sym.outputs.report.blocks import PLACEHOLDER, Block, row_chain
+from edm_sym.outputs.report.blocks import PLACEHOLDER, Block, BlockKind, row_chain
 
 #: Grid geometry [cm]: box width, horizontal gap, row pitch, input column, bus offset.
 BOX_WIDTH = 2.0
@@ -25,10 +25,11 @@ ROW_PITCH = 1.45
 INPUT_X = 0.0
 FIRST_X = INPUT_X + 0.45 + BOX_WIDTH / 2
 
-#: TikZ style of each block kind of a row's chain.
+#: TikZ style of each block kind of a row's chain (the template's style keys).
 BLOCK_STYLES = {
-    "gain": "edmgain", "offset": "edmblock", "function": "edmblock", "lti": "edmlti",
-    "delay": "edmlti", "relay": "edmblock", "constant": "edmblock",
+    BlockKind.GAIN: "edmgain", BlockKind.OFFSET: "edmblock", BlockKind.FUNCTION: "edmblock",
+    BlockKind.LTI: "edmlti", BlockKind.DELAY: "edmlti", BlockKind.RELAY: "edmblock",
+    BlockKind.CONSTANT: "edmblock",
 }
 
 
@@ -68,7 +69,7 @@ def matrix_diagram(model: SymbolicModel, printer: EdmLatexPrinter) -> dict[str, 
                                      f"{printer.number(st.param.value)}")
             cells.append({
                 "id": cid, "prev": prev, "x": _cm(FIRST_X + st.col * (BOX_WIDTH + GAP)),
-                "style": "edmthrough" if st.element.name == "through" else "edmcell",
+                "style": "edmthrough" if st.element.is_identity else "edmcell",
                 "code": str(st.element.code), "name": printer.text(st.element.name),
                 "param": param,
             })
@@ -84,14 +85,14 @@ def matrix_diagram(model: SymbolicModel, printer: EdmLatexPrinter) -> dict[str, 
 
 def block_label(block: Block, printer: EdmLatexPrinter) -> str:
     """The math-mode label of one block."""
-    if block.kind == "offset":
+    if block.kind is BlockKind.OFFSET:
         c = block.expr
         if c.could_extract_minus_sign():
             return rf"-\,{printer.doprint(-c)}"
         return rf"+\,{printer.doprint(c)}"
-    if block.kind == "delay":
+    if block.kind is BlockKind.DELAY:
         return rf"e^{{-{printer.parenthesize(block.expr, 1000)} s}}"
-    if block.kind == "relay":
+    if block.kind is BlockKind.RELAY:
         return rf"\operatorname{{relay}}_{{{printer.doprint(block.expr)}}}(\cdot)"
     return printer.doprint(block.expr)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from edm_sym.core.errors import as_options
 from edm_sym.engines.fixedpoint import WORDS, FixedPointError
 from edm_sym.engines.fixedpoint.formats import describe_format
 from edm_sym.outputs.render.context import source_of
@@ -27,7 +28,7 @@ def fixed_context(p: Any, model: Any, result: Any, runs: list[Any], unit: str
         try:
             b = fixed_build(model, source_of(result), real, None, log)
         except FixedPointError as exc:
-            refused.append({"word": p.mono(real), "reason": p.text(str(exc))})
+            refused.append({"word": p.mono(real), "reason": p.text(as_options(str(exc)))})
             continue
         d, acc = b.design, b.accuracy
         judged = [a for a in (acc, b.log) if a is not None]

@@ -8,10 +8,11 @@ does on that log. Every string returned here is finished LaTeX.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from edm_sym.core.bounds import bound_flags
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.description import classify_on
 from edm_sym.engines.symbolic.classify import ClassifyOptions
 from edm_sym.engines.symbolic.inertia import rows_inertia
@@ -63,11 +64,11 @@ def row_flags(p: EdmLatexPrinter, judged: JudgedRow) -> list[str]:
     return out
 
 
-def judged_titles(judged: JudgedRow, titles: dict[str, str]) -> list[str]:
+def judged_titles(judged: JudgedRow, titles: Mapping[TermKind, str]) -> list[str]:
     """What the row is called: its judged terms' titles, or ``negligible``."""
     if judged.negligible:
         return ["negligible"]
-    return [titles.get(jt.term.kind, jt.term.kind) for jt in judged.terms]
+    return [titles.get(jt.term.kind, jt.term.kind.value) for jt in judged.terms]
 
 
 def bounds_fact(p: EdmLatexPrinter, model: SymbolicModel) -> tuple[str, str]:

@@ -145,7 +145,7 @@ def latexmk_path() -> str:
     """
     exe = shutil.which("latexmk")
     if exe is None:
-        raise ToolMissingError(f"--pdf: latexmk was not found on the PATH; {INSTALL_HINT}")
+        raise ToolMissingError(f"pdf: latexmk was not found on the PATH; {INSTALL_HINT}")
     return exe
 
 

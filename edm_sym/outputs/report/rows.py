@@ -16,20 +16,21 @@ from typing import Any
 import sympy as sp
 
 from edm_sym.core.elements.realisation import DelayLine, LinearFilter, Relay, StaticMap
+from edm_sym.core.terms import TermKind
 from edm_sym.engines.symbolic.model import RowModel, SymbolicModel, X
 from edm_sym.outputs.printing.latex import EdmLatexPrinter
 from edm_sym.outputs.report.diagrams import chain_diagram, chain_printer
 from edm_sym.outputs.report.flags import row_flags
 
-#: Readable names of the physical term kinds (edm_sym.engines.symbolic.classify.KINDS).
-KIND_TITLES = {
-    "coulomb": "Coulomb friction",
-    "viscous": "viscous friction",
-    "acceleration": "acceleration-dependent term (inertia)",
-    "spatial": "position-dependent (spatial) friction",
-    "stribeck": "Stribeck friction",
-    "offset": "constant offset",
-    "unclassified": "unclassified term",
+#: Readable names of the physical term kinds.
+KIND_TITLES: dict[TermKind, str] = {
+    TermKind.COULOMB: "Coulomb friction",
+    TermKind.VISCOUS: "viscous friction",
+    TermKind.ACCELERATION: "acceleration-dependent term (inertia)",
+    TermKind.SPATIAL: "position-dependent (spatial) friction",
+    TermKind.STRIBECK: "Stribeck friction",
+    TermKind.OFFSET: "constant offset",
+    TermKind.UNCLASSIFIED: "unclassified term",
 }
 
 #: Readable names of the input roles (edm_sym.engines.symbolic.roles.ROLES).
@@ -187,13 +188,13 @@ def _term(p: EdmLatexPrinter, term: Any) -> dict[str, Any]:
     params = [{"name": p.text(name.replace("_", " ")), "value": p.math(p.number(v)),
                "unit": p.unit(unit)} for name, (v, unit) in term.parameters.items()]
     desc = term.description or ""
-    notes = desc if term.kind == "unclassified" else "; ".join(desc.split("; ")[1:])
+    notes = desc if term.kind is TermKind.UNCLASSIFIED else "; ".join(desc.split("; ")[1:])
     # The expression is printed above; the description's plain-text copy of it adds nothing.
     notes = re.sub(r"^no physical pattern for .* \((\w+) input\)", r"no physical pattern for "
                    r"this term (\1 input)", notes)
     notes = _drop_code(notes)
     return {
-        "title": p.text(KIND_TITLES.get(term.kind, term.kind)),
+        "title": p.text(KIND_TITLES.get(term.kind, term.kind.value)),
         "expr": p.doprint(term.expr) if term.expr is not None else "",
         "params": params,
         "notes": [p.breakable(notes)] if notes else [],
@@ -244,7 +245,7 @@ def row_context(p: EdmLatexPrinter, model: SymbolicModel, row: RowModel,
     honestly: only its judged terms, and its flags.
     """
     terms = row.terms if judged is None else tuple(jt.term for jt in judged.terms)
-    titles = [KIND_TITLES.get(t.kind, t.kind) for t in terms] or (
+    titles = [KIND_TITLES.get(t.kind, t.kind.value) for t in terms] or (
         ["negligible"] if judged is not None and judged.negligible
         else ["no output (identically 0)"])
     no_terms = ["The row's output is identically zero: it can be removed."]
