@@ -250,3 +250,43 @@ def test_emps_with_its_data_agrees_with_least_squares_on_the_log(
         emps_with_data: tuple[dict, np.ndarray], kind: str, param: str, column: int) -> None:
     named, ls = emps_with_data
     assert named[kind][param][0] == pytest.approx(ls[column], rel=0.15), kind
+
+
+def _reversing_log(n: int = 8000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A motion that reverses: angle, velocity and acceleration (no lag, no noise)."""
+    t = np.arange(n) * TS
+    omega = 12.0 * np.sin(2 * np.pi * 0.4 * t) + 4.0 * np.sin(2 * np.pi * 1.3 * t)
+    alpha = np.gradient(omega, TS)
+    theta = np.cumsum(omega) * TS
+    return theta, omega, alpha
+
+
+@pytest.mark.parametrize("plant_has_inertia", [True, False])
+def test_a_law_the_data_does_not_need_is_not_named(plant_has_inertia: bool) -> None:
+    from edm_sym.engines.physics import physics_on_log
+    from edm_sym.engines.simulate import simulate_rows
+
+    # The model: Coulomb 0.5 and an inertia of 3e-4 kg m^2 (its term about 2 % of the target).
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.5)]), ("alpha", [("gain", 3e-4)])],
+                 inputs=("theta_uw", "omega", "alpha"))
+    theta, omega, alpha = _reversing_log()
+    x = np.vstack([theta, omega, alpha])
+    rows = simulate_rows(comp, comp.matrix.rows, x)
+    rng = np.random.default_rng(3)
+    target = 0.5 * np.sign(omega) + rng.normal(0.0, 0.01, omega.size)
+    if plant_has_inertia:
+        target = target + 3e-4 * alpha
+    phys = physics_on_log(comp, ("angle", "velocity", "acceleration"), x=x, rows=rows,
+                          target=target, ts=TS, source="test.csv")
+    named = phys.named()
+    assert named["coulomb"]["level"] == pytest.approx(0.5, rel=0.01)
+    if plant_has_inertia:
+        assert named["acceleration"]["inertia"] == pytest.approx(3e-4, rel=0.02)
+    else:
+        assert "acceleration" not in named
+        why = dict(phys.left_out)[TermKind.ACCELERATION]
+        assert why.startswith("the data does not support it: without its term the model fits "
+                              "the target better")
+    # Without the data the same model's inertia is named (nothing says the plant lacks it).
+    assert "acceleration" in model_physics(comp, ("angle", "velocity", "acceleration"),
+                                           RANGE).named()
