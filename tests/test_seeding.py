@@ -1,5 +1,5 @@
 """Harmonic seeds: a step that adds rows seeds the residual's strongest angle harmonics
-(edm_sym.engines.abstraction.seeding, docs/abstraction.md#harmonic-seeds)."""
+(edm_sym.engines.abstraction.seeding, docs/abstraction.md#hierarchy-and-inheritance-figs-8-19)."""
 
 from __future__ import annotations
 
