@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import jsonschema
 import pytest
 from helpers import friction_log
 
@@ -18,6 +19,8 @@ from edm_sym.application.cli import main
 from edm_sym.core.data import write_csv
 from edm_sym.core.result import load_result
 from edm_sym.engines.abstraction.parallel import Parallel
+
+ROOT = Path(__file__).resolve().parents[1]
 
 QUICK = """
 [ga]
@@ -66,6 +69,15 @@ def test_abstract_writes_the_result_and_prints_fitness_and_path(
     # last, the physics by behaviour: this log's plant is Coulomb 1 N m + viscous 0.01 N m s/rad
     assert lines[-1] == ("physics (by behaviour, over log.csv): coulomb level 1 N m; "
                          "viscous coefficient 0.00999 N m s/rad")
+    # ... and result.json keeps what it printed (the physics key, as edm describe --json has it)
+    doc = json.loads(out.read_text())
+    jsonschema.validate(doc, json.loads((ROOT / "edm_sym" / "schema" / "result.schema.json")
+                                        .read_text()))
+    named = {t["kind"]: t["parameters"] for t in doc["physics"]["terms"]}
+    assert set(named) == {"coulomb", "viscous"}
+    assert f"{named['coulomb']['level'][0]:.4g}" == "1"
+    assert doc["physics"]["ranges"]["source"] == "log.csv"
+    assert res.physics == doc["physics"]
     assert res.inputs == ("omega", "alpha") and res.target == "tau_ext"
     assert res.provenance["seed"] == 3 and len(res.provenance["data_sha256"]) == 64
     assert not checkpoint_path(out).exists()

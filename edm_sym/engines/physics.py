@@ -923,9 +923,70 @@ def physics_on_log(
     out = np.asarray(rows, dtype=float)
     if bandwidth is not None and out.shape[1] > 2:
         out = out + np.gradient(out, ts, axis=1) / bandwidth
+    whole_out = np.asarray(rows, dtype=float).sum(axis=0)
     data = {"velocity": vel[part], "acceleration": acc[part],
             "angle": None if angle is None else angle[part],
             "target": np.asarray(target, dtype=float)[part], "rows": out[:, part],
             "model": np.asarray(rows, dtype=float).sum(axis=0)[part]}
-    return model_physics(comp, roles, ranges, axis=axis, bandwidth=bandwidth, data=data,
+    phys = model_physics(comp, roles, ranges, axis=axis, bandwidth=bandwidth, data=data,
                          options=options, lags=input_lags(x, roles, ts))
+    if "angle" in by_role:
+        unwrapped = by_role["angle"]
+    elif "angle_wrapped" in by_role:
+        unwrapped = np.unwrap(by_role["angle_wrapped"])
+    else:
+        return phys
+    return inertia_on_data(phys, unwrapped, whole_out, ts, axis=axis)
+
+
+def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts: float, *,
+                    axis: str = "rotary") -> Physics:
+    """``phys`` with its named inertia measured on the log's own motion.
+
+    The inertia a model holds depends on the accelerations it is driven with:
+    a row on the acceleration through a filter, a dead zone or a saturation
+    gives another gain on the probes' constant accelerations than on the
+    log's. On a log the acceleration the plant meets is the log's, so there
+    the inertia is the engineer's least squares
+    (:func:`edm_sym.engines.plant.anchor.fit_anchor`: sign, velocity,
+    acceleration, offset, the named Stribeck hump and angle harmonics, each
+    through the observer's low-pass, the reversals left out) of the model's
+    own output on the log. The probes' value stays in the law's flags.
+
+    Parameters
+    ----------
+    phys : Physics
+        :func:`model_physics` of the model with the log as data.
+    angle : numpy.ndarray
+        The unwrapped angle (position) over the whole log.
+    model_out : numpy.ndarray
+        The model's output over the whole log (the observer's lag in it).
+    ts : float
+    axis : str
+
+    Returns
+    -------
+    Physics
+    """
+    from dataclasses import replace
+
+    from edm_sym.engines.plant.anchor import fit_anchor
+
+    law = next((t for t in phys.terms if t.kind is TermKind.ACCELERATION), None)
+    if law is None or angle.size < 16:
+        return phys
+    stribeck = next((t for t in phys.terms if t.kind is TermKind.STRIBECK), None)
+    vs = stribeck.parameters["stribeck_velocity"][0] if stribeck is not None else None
+    g = phys.bandwidth if phys.bandwidth is not None else 1e12  # no observer: no lag
+    fit = fit_anchor({"theta_uw": angle, "tau_ext": model_out}, g_rtob=g, ts=ts,
+                     stribeck_velocity=vs,
+                     harmonics=range(1, PhysicsOptions().max_harmonic + 1) if axis == "rotary"
+                     else (), min_speed=phys.ranges.slowest)
+    old, unit = law.parameters["inertia"]
+    if not (math.isfinite(fit.inertia) and old != 0 and fit.inertia * old > 0):
+        return phys  # the log cannot tell it (or tells another sign): the probes' value stays
+    note = ("on_data", f"measured on the log's motion (least squares of the model's output); "
+                       f"on the probes {old:.4g} {unit}")
+    new = replace(law, parameters={**law.parameters, "inertia": (fit.inertia, unit)},
+                  share=law.share * abs(fit.inertia / old), flags=(*law.flags, note))
+    return replace(phys, terms=tuple(new if t is law else t for t in phys.terms))

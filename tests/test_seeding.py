@@ -1,0 +1,94 @@
+"""Harmonic seeds: a step that adds rows seeds the residual's strongest angle harmonics
+(edm_sym.engines.abstraction.seeding, docs/abstraction.md#hierarchy-and-inheritance-figs-8-19)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import TS
+
+from edm_sym.core.data import DataLog
+from edm_sym.core.elements import BY_NAME, default_ranges
+from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
+from edm_sym.core.result import dumps
+from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction.seeding import angle_input, harmonic_rows, residual_harmonics
+from edm_sym.engines.simulate import simulate_rows
+
+
+def test_the_strongest_harmonics_of_a_residual_are_found_with_their_phase() -> None:
+    rng = np.random.default_rng(0)
+    theta = np.cumsum(rng.uniform(0.0, 0.02, 20000))
+    resid = (0.2 * np.sin(5 * theta + 0.7) + 0.05 * np.sin(2 * theta - 1.0)
+             + 0.3 + rng.normal(0, 0.02, 20000))
+    found = residual_harmonics(theta, resid, np.ones_like(theta), count=2)
+    (k1, a1, p1), (k2, a2, p2) = found
+    assert (k1, k2) == (5, 2)
+    assert a1 == pytest.approx(0.2, rel=0.05) and p1 == pytest.approx(0.7, abs=0.05)
+    assert a2 == pytest.approx(0.05, rel=0.2) and p2 == pytest.approx(-1.0, abs=0.2)
+
+
+def test_held_out_samples_weigh_nothing() -> None:
+    theta = np.linspace(0.0, 200.0, 10000)
+    resid = np.where(np.arange(10000) < 5000, 0.1 * np.sin(3 * theta), 0.5 * np.sin(7 * theta))
+    w = (np.arange(10000) < 5000).astype(float)
+    assert residual_harmonics(theta, resid, w, count=1)[0][0] == 3
+    assert residual_harmonics(theta, resid, np.ones(10000), count=1)[0][0] == 7
+
+
+def test_a_seed_row_is_the_harmonic_it_was_made_from() -> None:
+    ranges = default_ranges(TS, 10.0)
+    allowed = {el.code for el in BY_NAME.values()}
+    (codes, ps), = harmonic_rows([(4, 0.08, -2.5)], ranges, 4, allowed)
+    row = Row(0, tuple(Gene(int(c), float(p)) for c, p in zip(codes, ps, strict=True)))
+    comp = Compensator(ElementMatrix(("theta_w",), (row,)), TS, ranges, 10.0)
+    theta = np.linspace(0.0, 2 * np.pi, 500)
+    out = simulate_rows(comp, [row], theta[None, :])[0]
+    np.testing.assert_allclose(out, 0.08 * np.sin(4 * theta - 2.5), atol=1e-12)
+    # no room, no gain or no sine allowed, or a gain beyond its range: no row
+    assert harmonic_rows([(4, 0.08, 0.0)], ranges, 2, allowed) == []
+    assert harmonic_rows([(4, 0.08, 0.0)], ranges, 4, allowed - {BY_NAME["sin_phase"].code}) == []
+    assert harmonic_rows([(40, 0.08, 0.0)], ranges, 4, allowed) == []
+
+
+def test_seeds_need_a_rotary_axis_and_an_angle() -> None:
+    assert angle_input(["velocity", "angle", "angle_wrapped"], "rotary") == 2
+    assert angle_input(["velocity", "angle"], "rotary") == 1
+    assert angle_input(["velocity", "acceleration"], "rotary") is None
+    assert angle_input(["angle_wrapped", "velocity"], "linear") is None
+
+
+def _ripple_log() -> DataLog:
+    n = 6000
+    t = np.arange(n) * TS
+    omega = 8.0 * np.sin(2 * np.pi * 0.3 * t) + 3.0
+    theta = np.cumsum(omega) * TS
+    rng = np.random.default_rng(1)
+    tau = (0.6 * np.sign(omega) + 0.01 * omega + 0.15 * np.sin(6 * theta + 0.4)
+           + rng.normal(0.0, 0.005, n))
+    return DataLog({"t": t, "theta_w": np.mod(theta, 2 * np.pi), "omega": omega, "tau": tau},
+                   TS, "ripple.csv")
+
+
+DOC = {"ga": {"population": 16, "generations": 3, "continue": "no", "restarts": 0,
+              "local_search": 0},
+       "step": [{"n_rows": 1, "n_elements": 4}, {"n_rows": 2, "n_elements": 4}]}
+
+
+def test_a_step_that_adds_a_row_meets_the_ripple_through_its_seed() -> None:
+    log = _ripple_log()
+
+    def run(seeds: int) -> object:
+        doc = {**DOC, "ga": {**DOC["ga"], "harmonic_seeds": seeds}}
+        return abstract(log, target="tau", inputs=["theta_w", "omega"],
+                        config=parse_config(doc, "t.toml"), seed=5, workers=1)
+
+    seeded, plain = run(3), run(0)
+    matrix = seeded.steps[-1].matrix
+    ripple = [r for r in matrix.rows if r.input == 0]
+    assert ripple, "the seeded harmonic row was bred out"
+    gain = default_ranges(TS, len(log) * TS)["gain"]
+    assert gain.decode(ripple[0].genes[0].p) == pytest.approx(6.0, abs=0.05)
+    assert seeded.steps[-1].fitness < 0.5 * plain.steps[-1].fitness
+    # a function of the seed: the same bytes again
+    assert dumps(run(3)) == dumps(seeded)
