@@ -12,7 +12,7 @@ from helpers import SMALL, friction_log, run
 
 from edm_sym.core.errors import ConfigError
 from edm_sym.core.result import dumps
-from edm_sym.engines.abstraction import GenerationInfo, parse_config
+from edm_sym.engines.abstraction import GenerationInfo, Parallel, parse_config
 from edm_sym.engines.abstraction import fidelity as fidelity_module
 from edm_sym.engines.abstraction.fidelity import (
     FidelitySettings,
@@ -42,11 +42,11 @@ def _stats(data, doc: dict, **kw):  # noqa: ANN001, ANN202
 # -- the config key ----------------------------------------------------------------------------
 
 def test_full_gives_the_result_of_a_run_without_the_key(friction_data) -> None:  # noqa: ANN001
-    plain = dumps(run(friction_data, SMALL, seed=4, workers=1))
-    assert dumps(run(friction_data, {**SMALL, "fidelity": "full"}, seed=4, workers=1)) == plain
+    plain = dumps(run(friction_data, SMALL, seed=4, parallel=Parallel(workers=1)))
+    assert dumps(run(friction_data, {**SMALL, "fidelity": "full"}, seed=4, parallel=Parallel(workers=1))) == plain
     # auto on a short log is full, whatever the multi-fidelity settings say
     auto = {**SMALL, "fidelity": "auto", "multi_fidelity": MULTI}
-    assert dumps(run(friction_data, auto, seed=4, workers=1)) == plain
+    assert dumps(run(friction_data, auto, seed=4, parallel=Parallel(workers=1))) == plain
     assert "fidelity" not in json.loads(plain)["provenance"]
 
 
@@ -68,10 +68,10 @@ def test_a_bad_fidelity_is_refused_by_name(doc: dict, expect: str) -> None:
 
 def test_auto_runs_multi_above_the_documented_size(long_log, monkeypatch) -> None:  # noqa: ANN001
     doc = {**WHOLE, "multi_fidelity": MULTI}
-    res = run(long_log, doc, seed=2, workers=1)
+    res = run(long_log, doc, seed=2, parallel=Parallel(workers=1))
     assert "fidelity" not in res.provenance  # 8 000 samples <= AUTO_SAMPLES: full
     monkeypatch.setattr(fidelity_module, "AUTO_SAMPLES", 6_000)
-    res = run(long_log, doc, seed=2, workers=1)
+    res = run(long_log, doc, seed=2, parallel=Parallel(workers=1))
     assert res.provenance["fidelity"] == {"mode": "multi", "config": "auto", "samples": 2000,
                                           "windows": 8, "warm_up": 0.05, "margin": 0.02,
                                           "promote": 4}
@@ -88,7 +88,7 @@ def _whole_log_fitness(comp, matrix, data) -> float:  # noqa: ANN001
 def test_multi_reports_whole_log_fitness_deterministically_with_fewer_whole_log_evaluations(
         long_log) -> None:  # noqa: ANN001
     multi = {**WHOLE, "fidelity": "multi", "multi_fidelity": MULTI}
-    res, stats = _stats(long_log, multi, seed=3, workers=2)
+    res, stats = _stats(long_log, multi, seed=3, parallel=Parallel(workers=2))
     assert res.provenance["fidelity"]["mode"] == "multi"
     # The reported fitness is eq. 8 on every training sample, recomputed independently.
     comp = res.compensator
@@ -100,10 +100,10 @@ def test_multi_reports_whole_log_fitness_deterministically_with_fewer_whole_log_
                                              rel=1e-9)
         assert all(b <= a for a, b in zip(step.history, step.history[1:], strict=False))
     # The same seed gives the same bytes, with another number of workers too.
-    again, _ = _stats(long_log, multi, seed=3, workers=1)
+    again, _ = _stats(long_log, multi, seed=3, parallel=Parallel(workers=1))
     assert dumps(again) == dumps(res)
     # Fewer individuals scored on the whole log than a run of full fidelity scores.
-    _, full = _stats(long_log, {**WHOLE, "fidelity": "full"}, seed=3, workers=1)
+    _, full = _stats(long_log, {**WHOLE, "fidelity": "full"}, seed=3, parallel=Parallel(workers=1))
     assert full.full_log == full.scored > 0
     assert 0 < stats.full_log < stats.scored
     assert stats.full_log < full.full_log / 4
@@ -111,7 +111,7 @@ def test_multi_reports_whole_log_fitness_deterministically_with_fewer_whole_log_
 
 def test_multi_resumes_to_the_uninterrupted_result(long_log, tmp_path: Path) -> None:  # noqa: ANN001
     multi = {**WHOLE, "fidelity": "multi", "multi_fidelity": MULTI}
-    want = dumps(run(long_log, multi, seed=6, workers=1))
+    want = dumps(run(long_log, multi, seed=6, parallel=Parallel(workers=1)))
     ckpt = tmp_path / "r.json.checkpoint"
     count = [0]
 

@@ -11,7 +11,7 @@ from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, default_ranges
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.result import dumps
-from edm_sym.engines.abstraction import abstract, parse_config
+from edm_sym.engines.abstraction import Parallel, abstract, parse_config
 from edm_sym.engines.abstraction.seeding import angle_input, harmonic_rows, residual_harmonics
 from edm_sym.engines.simulate import simulate_rows
 
@@ -81,7 +81,7 @@ def test_a_step_that_adds_a_row_meets_the_ripple_through_its_seed() -> None:
     def run(seeds: int) -> object:
         doc = {**DOC, "ga": {**DOC["ga"], "harmonic_seeds": seeds}}
         return abstract(log, target="tau", inputs=["theta_w", "omega"],
-                        config=parse_config(doc, "t.toml"), seed=5, workers=1)
+                        config=parse_config(doc, "t.toml"), seed=5, parallel=Parallel(workers=1))
 
     seeded, plain = run(3), run(0)
     matrix = seeded.steps[-1].matrix
