@@ -43,7 +43,8 @@ def _stats(data, doc: dict, **kw):  # noqa: ANN001, ANN202
 
 def test_full_gives_the_result_of_a_run_without_the_key(friction_data) -> None:  # noqa: ANN001
     plain = dumps(run(friction_data, SMALL, seed=4, parallel=Parallel(workers=1)))
-    assert dumps(run(friction_data, {**SMALL, "fidelity": "full"}, seed=4, parallel=Parallel(workers=1))) == plain
+    full = {**SMALL, "fidelity": "full"}
+    assert dumps(run(friction_data, full, seed=4, parallel=Parallel(workers=1))) == plain
     # auto on a short log is full, whatever the multi-fidelity settings say
     auto = {**SMALL, "fidelity": "auto", "multi_fidelity": MULTI}
     assert dumps(run(friction_data, auto, seed=4, parallel=Parallel(workers=1))) == plain
