@@ -120,9 +120,9 @@ def test_multi_resumes_to_the_uninterrupted_result(long_log, tmp_path: Path) -> 
         count[0] += 1
         return count[0] >= 5
 
-    part = run(long_log, multi, seed=6, workers=1, checkpoint=ckpt, callback=hook)
+    part = run(long_log, multi, seed=6, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "stopped" and ckpt.exists()
-    assert dumps(run(long_log, multi, seed=6, workers=1, checkpoint=ckpt, resume=True)) == want
+    assert dumps(run(long_log, multi, seed=6, parallel=Parallel(workers=1), checkpoint=ckpt, resume=True)) == want
 
 
 # -- the rule's parts ---------------------------------------------------------------------------
