@@ -122,7 +122,9 @@ def test_multi_resumes_to_the_uninterrupted_result(long_log, tmp_path: Path) -> 
 
     part = run(long_log, multi, seed=6, parallel=Parallel(workers=1), checkpoint=ckpt, callback=hook)
     assert part.provenance["stop_reason"] == "stopped" and ckpt.exists()
-    assert dumps(run(long_log, multi, seed=6, parallel=Parallel(workers=1), checkpoint=ckpt, resume=True)) == want
+    again = run(long_log, multi, seed=6, parallel=Parallel(workers=1), checkpoint=ckpt,
+                resume=True)
+    assert dumps(again) == want
 
 
 # -- the rule's parts ---------------------------------------------------------------------------
