@@ -24,7 +24,7 @@ run. ``--reuse`` takes earlier runs (another sitting's ``--out``) as done:
 they are not run again and serve as references. ``--generations G`` caps
 every step at G generations (one block, no patience): a cheaper mode that
 measures the cost per generation, not a search to its end; say so beside
-its figures. The goal (issue 41): the 320 000-sample multi-fidelity run
+its figures. The goal: the 320 000-sample multi-fidelity run
 within 3x the 20 000-sample time, its held-out RMSE within 5 % of the
 full-fidelity run, median over 3 seeds, and at most 1 GiB peak memory per
 worker.
