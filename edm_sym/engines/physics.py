@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -936,11 +936,11 @@ def physics_on_log(
         unwrapped = np.unwrap(by_role["angle_wrapped"])
     else:
         return phys
-    return inertia_on_data(phys, unwrapped, whole_out, ts, axis=axis)
+    return inertia_on_data(phys, unwrapped, whole_out, ts, axis=axis, options=options)
 
 
 def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts: float, *,
-                    axis: str = "rotary") -> Physics:
+                    axis: str = "rotary", options: PhysicsOptions | None = None) -> Physics:
     """``phys`` with its named inertia measured on the log's own motion.
 
     The inertia a model holds depends on the accelerations it is driven with:
@@ -963,13 +963,13 @@ def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts:
         The model's output over the whole log (the observer's lag in it).
     ts : float
     axis : str
+    options : PhysicsOptions, optional
+        Its ``max_harmonic``: the angle harmonics fitted beside the inertia.
 
     Returns
     -------
     Physics
     """
-    from dataclasses import replace
-
     from edm_sym.engines.plant.anchor import fit_anchor
 
     law = next((t for t in phys.terms if t.kind is TermKind.ACCELERATION), None)
@@ -980,7 +980,7 @@ def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts:
     g = phys.bandwidth if phys.bandwidth is not None else 1e12  # no observer: no lag
     fit = fit_anchor({"theta_uw": angle, "tau_ext": model_out}, g_rtob=g, ts=ts,
                      stribeck_velocity=vs,
-                     harmonics=range(1, PhysicsOptions().max_harmonic + 1) if axis == "rotary"
+                     harmonics=range(1, (options or PhysicsOptions()).max_harmonic + 1) if axis == "rotary"
                      else (), min_speed=phys.ranges.slowest)
     old, unit = law.parameters["inertia"]
     if not (math.isfinite(fit.inertia) and old != 0 and fit.inertia * old > 0):
