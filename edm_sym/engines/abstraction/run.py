@@ -59,7 +59,8 @@ from edm_sym.engines.abstraction.searches import (
     run_searches,
     search_seeds,
 )
-from edm_sym.engines.abstraction.seeding import angle_input, harmonic_rows, residual_harmonics
+from edm_sym.engines.abstraction.seeding import (angle_input, harmonic_rows, residual_harmonics,
+                                                 residual_stribeck, stribeck_rows, velocity_input)
 from edm_sym.engines.abstraction.worker import default_workers
 from edm_sym.engines.simulate import fitness, simulate_rows
 
@@ -221,12 +222,14 @@ class _Runner:
                  checkpoint: Path | None, time_limit: float | None,
                  callback: Callable[[GenerationInfo], bool | None] | None,
                  mask: np.ndarray | None = None, fidelities: Fidelities | None = None,
-                 periodic: int | None = None, starts: Sequence[int] = ()):
+                 periodic: int | None = None, velocity: int | None = None,
+                 starts: Sequence[int] = ()):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
         # Multi-fidelity evaluation (docs/abstraction.md#multi-fidelity-evaluation); None: full.
         self.fid = fidelities
         self.multi = MultiSteps(fidelities, rng) if fidelities is not None else None
         self.mask, self.periodic, self.starts = mask, periodic, tuple(starts)
+        self.velocity = velocity
         self._lam: np.ndarray | float = 1.0
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
         self.inputs = tuple(inputs)
@@ -328,8 +331,8 @@ class _Runner:
                 # gain 0): a step starts where the previous one ended.
                 pop.codes[0, m0:], pop.ps[0, m0:] = THROUGH, 0.0
                 pop.codes[0, m0:, -1], pop.ps[0, m0:, -1] = zero
-            if m0 < m and ga.harmonic_seeds and self.periodic is not None:
-                self._seed_harmonics(pop, seed, step, count, ops)
+            if m0 < m and (ga.harmonic_seeds or ga.stribeck_seeds):
+                self._seed_rows(pop, seed, step, count, ops)
         # Individual 0 is the seed as it is: the gain fit improves copies of it later.
         low = None
         if self.multi is not None:
@@ -341,10 +344,11 @@ class _Runner:
                          since_improvement=0, done=False, population=pop, fitness=fit,
                          history=[best], evaluations=p + extra, low=low)
 
-    def _seed_harmonics(self, pop: Population, seed: Population, step: StepConfig, count: int,
-                        ops: Operators) -> None:
-        """Give inherited individuals 1, 2 ... a harmonic of the seed's residual as their
-        first new row (:mod:`edm_sym.engines.abstraction.seeding`)."""
+    def _seed_rows(self, pop: Population, seed: Population, step: StepConfig, count: int,
+                   ops: Operators) -> None:
+        """Give inherited individuals 1, 2 ... as their first new row a harmonic of the seed's
+        residual over the angle, then a Stribeck hump over the velocity
+        (:mod:`edm_sym.engines.abstraction.seeding`)."""
         matrix = seed.matrix(0, self.inputs)
         comp = Compensator(matrix, self.ts, self.ranges, len(self.y) * self.ts)
         with np.errstate(all="ignore"):
@@ -352,11 +356,19 @@ class _Runner:
         if not np.all(np.isfinite(resid)):
             return
         w = np.broadcast_to(np.asarray(self._lam, dtype=float), resid.shape)
-        found = residual_harmonics(self.x[self.periodic], resid, w, step.ga.harmonic_seeds)
-        rows = harmonic_rows(found, self.ranges, step.n_elements, set(ops.allowed.tolist()))
+        allowed = set(ops.allowed.tolist())
+        ga, seeded = step.ga, []
+        if ga.harmonic_seeds and self.periodic is not None:
+            found = residual_harmonics(self.x[self.periodic], resid, w, ga.harmonic_seeds)
+            seeded += [(self.periodic, row) for row in
+                       harmonic_rows(found, self.ranges, step.n_elements, allowed)]
+        if ga.stribeck_seeds and self.velocity is not None:
+            humps = residual_stribeck(self.x[self.velocity], resid, w, ga.stribeck_seeds)
+            seeded += [(self.velocity, row) for row in
+                       stribeck_rows(humps, self.ranges, step.n_elements, allowed)]
         m0 = seed.codes.shape[1]
-        for i, (codes, ps) in enumerate(rows[:max(count - 1, 0)], start=1):
-            pop.inputs[i, m0] = self.periodic
+        for i, (inp, (codes, ps)) in enumerate(seeded[:max(count - 1, 0)], start=1):
+            pop.inputs[i, m0] = inp
             pop.codes[i, m0], pop.ps[i, m0] = codes, ps
 
     def _evaluate(self, pop: Population, ops: Operators, keep_first: bool = False
@@ -661,11 +673,12 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
     n = max(len(d) for d in logs) if logs else len(data)
     ranges = cfg.resolve_ranges(ts, n * ts)
     human = _human_rows(cfg, inputs, ranges)
+    roles = _roles(data, inputs)
     # Multi-fidelity evaluation on a long training log (docs/abstraction.md#multi-fidelity-evaluation).
     return _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                       human=human, hold=hold, n=n, starts=hold.training.starts,
                       fidelity=effective(cfg.fidelity, hold.n_train),
-                      periodic=angle_input(_roles(data, inputs), axis))
+                      periodic=angle_input(roles, axis), velocity=velocity_input(roles))
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
@@ -739,6 +752,8 @@ class _SearchJob:
     fidelity: str = "full"
     #: The input a ripple is a function of (:func:`seeding.angle_input`), or None.
     periodic: int | None = None
+    #: The input a Stribeck hump is a function of (:func:`seeding.velocity_input`), or None.
+    velocity: int | None = None
 
     @property
     def mask(self) -> np.ndarray | None:
@@ -791,7 +806,7 @@ class _SearchJob:
         runner = _Runner(cfg=cfg, x=x, y=y, t=t, ts=ts, ranges=self.ranges, human=self.human,
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
                          checkpoint=checkpoint, time_limit=time_limit, callback=callback,
-                         mask=self.mask, fidelities=fid, periodic=self.periodic,
+                         mask=self.mask, fidelities=fid, periodic=self.periodic, velocity=self.velocity,
                          starts=self.starts)
         reason = "completed"
         try:

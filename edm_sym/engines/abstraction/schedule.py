@@ -62,6 +62,7 @@ _GA_FIELDS: dict[str, tuple[str, float | None, float | None]] = {
     "restarts": ("int", 0, None),
     "reject_poles": ("bool", None, None),
     "harmonic_seeds": ("int", 0, 64),
+    "stribeck_seeds": ("int", 0, 64),
     "elements": ("names", None, None),
 }
 
@@ -136,6 +137,12 @@ class GaSettings:
         inherited individuals get as their first new row one of the strongest
         angle harmonics of the inherited model's residual
         (:mod:`edm_sym.engines.abstraction.seeding`); 0: never.
+    stribeck_seeds : int
+        When a step adds rows with a velocity input, this many inherited
+        individuals (after the harmonic ones) get as their first new row a
+        ``tanh`` of the velocity fitted to the inherited model's residual: with
+        the Coulomb row, a Stribeck hump (:mod:`edm_sym.engines.abstraction.seeding`);
+        0: never.
     elements : tuple of str or None
         Element names the GA may use; None: every registered element.
     """
@@ -163,6 +170,7 @@ class GaSettings:
     restarts: int = 0
     reject_poles: bool = True
     harmonic_seeds: int = 3
+    stribeck_seeds: int = 2
     elements: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:

@@ -1,4 +1,4 @@
-"""Harmonic seeds: new rows drawn from the residual's strongest angle harmonics.
+"""Seeds: new rows drawn from the residual's strongest angle harmonics and Stribeck humps.
 
 A ripple over the angle (cogging, a gear's mesh, a periodic load) needs a row
 ``A sin(k theta + phi)``: a gain of k on the angle, a sine with its phase and
@@ -20,6 +20,17 @@ and bred out like any other row, and pruning removes a row the held-out blocks
 do not need. Seeds are drawn on a rotary axis with an angle input only (a
 wrapped angle preferred; ``sin`` makes the unwrapped one alike). They take no
 random numbers, so a run stays a function of its seed.
+
+**Stribeck seeds** do the same for the hump of friction at low speed,
+``dF exp(-(v/v_s)^2) sign(v)``, which a random row meets as rarely (the
+family's misses were mostly the Stribeck peak, docs/benchmarks.md#bench_namingpy).
+No element chain is that law, but two rows make a close one:
+``dF sign(v) (1 - tanh(|v| / a))`` is a Coulomb row with its level raised by
+``dF`` and the row ``v -> tanh(1/a) -> gain(-dF)``. The residual is fitted on
+``1``, ``sign v``, ``v`` and ``tanh(v / a)`` over a grid of ``a``
+(:func:`residual_stribeck`); the ``ga.stribeck_seeds`` best ``a`` each give one
+inherited individual the ``tanh`` row, and the gain fit, which sets every
+row's scale by least squares, raises its Coulomb row.
 """
 
 from __future__ import annotations
@@ -31,10 +42,13 @@ import numpy as np
 
 from edm_sym.core.elements import BY_NAME, ParamRange
 
-__all__ = ["MAX_ORDER", "angle_input", "harmonic_rows", "residual_harmonics"]
+__all__ = ["MAX_ORDER", "STRIBECK_GRID", "angle_input", "harmonic_rows", "residual_harmonics",
+           "residual_stribeck", "stribeck_rows", "velocity_input"]
 
 #: Highest harmonic order looked for (cycles per revolution).
 MAX_ORDER = 10
+#: Stribeck velocities tried by :func:`residual_stribeck`.
+STRIBECK_GRID = 24
 
 
 def angle_input(roles: Sequence[str | None], axis: str) -> int | None:
@@ -109,5 +123,90 @@ def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[st
         ps = np.zeros(n_elements)
         codes[:3] = gain.code, sine.code, gain.code
         ps[:3] = g.encode(float(k)), s.encode(phase), g.encode(amp)
+        out.append((codes, ps))
+    return out
+
+
+def velocity_input(roles: Sequence[str | None]) -> int | None:
+    """The input a Stribeck hump is a function of: the velocity, or None without one."""
+    return list(roles).index("velocity") if "velocity" in roles else None
+
+
+def _stribeck_slopes(v: np.ndarray) -> np.ndarray:
+    """The grid of ``1 / v_s`` tried: ``v_s`` from the 5th to the 95th percentile of |v|."""
+    speed = np.abs(v[v != 0])
+    if speed.size < 8:
+        return np.empty(0)
+    low, high = np.percentile(speed, [5, 95])
+    if not (high > low > 0):
+        return np.empty(0)
+    return 1.0 / np.geomspace(low, high, STRIBECK_GRID)
+
+
+def residual_stribeck(v: np.ndarray, residual: np.ndarray, weights: np.ndarray, count: int
+                      ) -> list[tuple[float, float, float]]:
+    """The ``count`` best Stribeck humps of ``residual`` over the velocity ``v``.
+
+    For each slope ``k`` of a grid (:data:`STRIBECK_GRID` values, ``1/k`` from
+    the 5th to the 95th percentile of |v|) the residual is fitted by weighted
+    least squares on ``1``, ``sign v``, ``v`` and ``tanh(k v)``: the hump
+    ``dF sign(v) (1 - tanh(k |v|))`` is the ``sign`` and ``tanh`` columns
+    together, the first carried by the model's Coulomb row, whose gain the
+    gain fit sets. Slopes are ranked by the residual left; each one taken is
+    at least a factor 2 from those before it.
+
+    Returns
+    -------
+    list of (float, float, float)
+        ``(k, c, drop)``: the slope [1/unit of v], the gain of ``tanh(k v)``
+        [unit of the residual], and the share of the residual's weighted square
+        the fit removes; best first.
+    """
+    w = np.sqrt(np.maximum(np.asarray(weights, dtype=float), 0.0))
+    v = np.asarray(v, dtype=float)
+    keep = w > 0
+    if count <= 0 or np.count_nonzero(keep) <= 8:
+        return []
+    v, r, w = v[keep], np.asarray(residual, dtype=float)[keep], w[keep]
+    ks = _stribeck_slopes(v)
+    total = float(np.sum((r * w) ** 2))
+    if ks.size == 0 or not total > 0:
+        return []
+    fits = []
+    for k in ks:
+        basis = np.column_stack([np.ones_like(v), np.sign(v), v, np.tanh(k * v)])
+        coef, *_ = np.linalg.lstsq(basis * w[:, None], r * w, rcond=None)
+        left = float(np.sum(((r - basis @ coef) * w) ** 2))
+        if np.all(np.isfinite(coef)) and math.isfinite(left):
+            fits.append((left, float(k), float(coef[3])))
+    out: list[tuple[float, float, float]] = []
+    for left, k, c in sorted(fits):
+        if len(out) == count:
+            break
+        if all(abs(math.log(k / k0)) >= math.log(2.0) for k0, _, _ in out):
+            out.append((k, c, 1.0 - left / total))
+    return out
+
+
+def stribeck_rows(humps: Sequence[tuple[float, float, float]], ranges: dict[str, ParamRange],
+                  n_elements: int, allowed: set[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each hump as a row's genes ``(codes, ps)``: ``v -> tanh(k) -> gain(c)``.
+
+    A hump whose slope or gain lies outside its element's range, or a schedule
+    without ``tanh`` and ``gain`` (or with fewer than two elements a row),
+    gives no row.
+    """
+    gain, tanh, through = BY_NAME["gain"], BY_NAME["tanh"], BY_NAME["through"]
+    if n_elements < 2 or not {gain.code, tanh.code} <= allowed:
+        return []
+    g, t = ranges[gain.name], ranges[tanh.name]
+    out = []
+    for k, c, _ in humps:
+        if not (t.low <= k <= t.high and g.low <= c <= g.high):
+            continue
+        codes = np.full(n_elements, through.code, dtype=np.int64)
+        ps = np.zeros(n_elements)
+        codes[:2] = tanh.code, gain.code
+        ps[:2] = t.encode(k), g.encode(c)
         out.append((codes, ps))
     return out
