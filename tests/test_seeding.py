@@ -1,5 +1,5 @@
-"""Harmonic seeds: a step that adds rows seeds the residual's strongest angle harmonics
-(edm_sym.engines.abstraction.seeding, docs/abstraction.md#hierarchy-and-inheritance-figs-8-19)."""
+"""Seeds: a step that adds rows seeds the residual's strongest angle harmonics and Stribeck
+humps (edm_sym.engines.abstraction.seeding, docs/abstraction.md#hierarchy-and-inheritance-figs-8-19)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from edm_sym.core.elements import BY_NAME, default_ranges
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.result import dumps
 from edm_sym.engines.abstraction import Parallel, abstract, parse_config
-from edm_sym.engines.abstraction.seeding import angle_input, harmonic_rows, residual_harmonics
+from edm_sym.engines.abstraction.seeding import (angle_input, harmonic_rows, residual_harmonics,
+                                                 residual_stribeck, stribeck_rows, velocity_input)
 from edm_sym.engines.simulate import simulate_rows
 
 
@@ -92,3 +93,59 @@ def test_a_step_that_adds_a_row_meets_the_ripple_through_its_seed() -> None:
     assert seeded.steps[-1].fitness < 0.5 * plain.steps[-1].fitness
     # a function of the seed: the same bytes again
     assert dumps(run(3)) == dumps(seeded)
+
+
+def test_a_stribeck_hump_of_the_residual_is_found_at_its_velocity() -> None:
+    rng = np.random.default_rng(2)
+    v = rng.uniform(-12.0, 12.0, 20000)
+    for vs in (0.8, 3.0):
+        resid = 0.4 * np.exp(-(v / vs) ** 2) * np.sign(v) + rng.normal(0.0, 0.01, v.size)
+        (k, c, drop), second = residual_stribeck(v, resid, np.ones_like(v), count=2)
+        # 1 - tanh(|v| / a) matches exp(-(v / v_s)^2) best with a near 1.5 v_s
+        assert 1.0 / k == pytest.approx(1.5 * vs, rel=0.35)
+        assert c < 0 and drop > 0.95
+        assert abs(np.log(second[0] / k)) >= np.log(2.0) - 1e-12
+    # no hump: nothing the fit removes beyond the noise
+    flat = rng.normal(0.0, 0.01, v.size)
+    assert residual_stribeck(v, flat, np.ones_like(v), count=1)[0][2] < 0.01
+
+
+def test_a_stribeck_seed_row_is_the_tanh_it_was_made_from() -> None:
+    ranges = default_ranges(TS, 10.0)
+    allowed = {el.code for el in BY_NAME.values()}
+    (codes, ps), = stribeck_rows([(0.4, -0.3, 0.9)], ranges, 4, allowed)
+    row = Row(0, tuple(Gene(int(c), float(p)) for c, p in zip(codes, ps, strict=True)))
+    comp = Compensator(ElementMatrix(("omega",), (row,)), TS, ranges, 10.0)
+    v = np.linspace(-10.0, 10.0, 500)
+    out = simulate_rows(comp, [row], v[None, :])[0]
+    np.testing.assert_allclose(out, -0.3 * np.tanh(0.4 * v), rtol=1e-9, atol=1e-12)
+    assert stribeck_rows([(0.4, -0.3, 0.9)], ranges, 1, allowed) == []
+    assert stribeck_rows([(0.4, -0.3, 0.9)], ranges, 4, allowed - {BY_NAME["tanh"].code}) == []
+    assert stribeck_rows([(0.4, -30.0, 0.9)], ranges, 4, allowed) == []
+    assert velocity_input(["angle", "velocity"]) == 1 and velocity_input(["angle"]) is None
+
+
+def _stribeck_log() -> DataLog:
+    n = 8000
+    t = np.arange(n) * TS
+    omega = 6.0 * np.sin(2 * np.pi * 0.25 * t) * np.abs(np.sin(2 * np.pi * 0.05 * t))
+    rng = np.random.default_rng(3)
+    tau = (0.3 * np.sign(omega) + 0.35 * np.exp(-(omega / 1.0) ** 2) * np.sign(omega)
+           + 0.01 * omega + rng.normal(0.0, 0.005, n))
+    return DataLog({"t": t, "omega": omega, "tau": tau}, TS, "stribeck.csv")
+
+
+def test_a_step_that_adds_a_row_meets_the_stribeck_hump_through_its_seed() -> None:
+    log = _stribeck_log()
+
+    def run(seeds: int) -> object:
+        doc = {**DOC, "ga": {**DOC["ga"], "stribeck_seeds": seeds}}
+        return abstract(log, target="tau", inputs=["omega"],
+                        config=parse_config(doc, "t.toml"), seed=5, parallel=Parallel(workers=1))
+
+    seeded, plain = run(2), run(0)
+    tanh = BY_NAME["tanh"].code
+    assert any(g.code == tanh for r in seeded.steps[-1].matrix.rows for g in r.genes), \
+        "the seeded tanh row was bred out"
+    assert seeded.steps[-1].fitness < 0.7 * plain.steps[-1].fitness
+    assert dumps(run(2)) == dumps(seeded)
