@@ -275,3 +275,20 @@ def test_a_pipeline_list_of_no_logs_is_refused(tmp_path: Path, capsys) -> None:
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "pipeline.toml: data.abstraction: expected a log or a list" \
         in err, err
+
+
+@pytest.mark.slow
+def test_the_shipped_example_is_what_the_pipeline_makes(tmp_path: Path) -> None:
+    """`edm pipeline examples/auger/pipeline.toml` writes the committed files byte for byte:
+    the example is what this release makes (README.md, docs/benchmarks.md). Minutes."""
+    root = Path(__file__).resolve().parents[1]
+    example = tmp_path / "examples" / "auger"
+    example.mkdir(parents=True)
+    for name in ("pipeline.toml", "abstraction.toml"):
+        (example / name).write_bytes((root / "examples" / "auger" / name).read_bytes())
+    assert main(["pipeline", str(example / "pipeline.toml"), "--quiet"]) == 0
+    for name in ("result.json", "lugre.json", "evaluation.json"):
+        assert (example / name).read_bytes() == (root / "examples" / "auger" / name).read_bytes(), name
+    made, shipped = tmp_path / "generated" / "auger", root / "generated" / "auger"
+    for name in ("edm_comp.c", "edm_comp.h", "edm_comp.py", "edm_comp_report.tex"):
+        assert (made / name).read_bytes() == (shipped / name).read_bytes(), name
