@@ -336,14 +336,63 @@ def test_describe_names_the_axis_parameter(result) -> None:
     ("prefix: expected a C identifier, found '9x'", "--prefix: expected a C identifier, found '9x'"),
     ('x: use real="float" or real="double"', "x: use --real float or --real double"),
     ("x: narrow the input's range (input_range)", "x: narrow the input's range (--input-range)"),
+    ("names: expected unique names", "--columns: expected unique names"),
+    ("x: (or one named by `time_column`) or the option `ts=SECONDS`",
+     "x: (or one named by --time-column) or the option --ts SECONDS"),
+    ("x: `resample=True` resamples it", "x: --resample resamples it"),
+    ('x: select run.mat:data with names="NAME,NAME,..." (7 names)',
+     "x: select run.mat:data with --columns NAME,NAME,... (7 names)"),
     # Not a parameter, or not where a parameter is named: left as it is.
     ("result.json: prefix: x", "result.json: prefix: x"), ("inputs: omega: y", "inputs: omega: y"),
     ("a ClassifyOptions.for_axis(axis) call", "a ClassifyOptions.for_axis(axis) call"),
+    ("log.csv: ts: x", "log.csv: ts: x"), ("x: `omega` and `q=1`", "x: `omega` and `q=1`"),
 ])
 def test_a_command_prints_the_option_that_gives_a_parameter(message, printed) -> None:
     from edm_sym.core.errors import as_options
 
     assert as_options(message) == printed
+
+
+@pytest.mark.parametrize("where,printed", [
+    ("log.csv: ts", "log.csv: --ts"),
+    ("run.mat:data: ts", "run.mat:data: --ts"),
+    # A name alone is the first field (as_options); other places are left as they are:
+    # a column, a scalar of the log, a key of a file.
+    ("ts", "ts"), ("log.csv: column 't'", "log.csv: column 't'"),
+    ("log.csv: observer_bandwidth", "log.csv: observer_bandwidth"),
+    ("cfg.toml: axis", "cfg.toml: axis"), ("log.csv: ts.x", "log.csv: ts.x"),
+])
+def test_a_command_prints_the_option_a_log_was_read_with(where, printed) -> None:
+    from edm_sym.core.errors import where_as_options
+
+    assert where_as_options(where) == printed
+
+
+def test_a_log_read_without_a_sample_time_names_ts_and_the_command_its_option(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from edm_sym.application.cli import main
+
+    path = tmp_path / "no_t.csv"
+    path.write_text("omega\n1\n2\n")
+    with pytest.raises(DataFormatError) as info:
+        edm_sym.load_data(path)
+    said = str(info.value)
+    assert "`ts=SECONDS`" in said and "`time_column`" in said and "--" not in said
+    with pytest.raises(DataFormatError) as info:
+        edm_sym.load_data(path, ts=5e3)
+    assert info.value.where == "no_t.csv: ts"
+    # The command says the same in its options' words.
+    observe = ["observe", str(path), "--position", "omega", "--force", "f", "--nominal-inertia",
+               "1", "-o", str(tmp_path / "o.csv")]
+    capsys.readouterr()
+    assert main(observe) == 2
+    assert capsys.readouterr().err == (
+        "edm: no_t.csv: column 't': expected a time column 't' (or one named by --time-column) "
+        "or the option --ts SECONDS, found neither\n")
+    assert main([*observe, "--ts", "5e3"]) == 2
+    assert capsys.readouterr().err == ("edm: no_t.csv: --ts: expected a sample time from "
+                                       "1e-09 s to 1000 s, found 5000 s\n")
+    assert not (tmp_path / "o.csv").exists()
 
 
 @pytest.mark.parametrize("name", ["decode", "describe", "export"])

@@ -49,13 +49,13 @@ def test_decimation_filters_keeps_the_time_stamps_and_is_recorded() -> None:
 def test_a_bad_factor_is_refused(factor) -> None:
     with pytest.raises(DataFormatError) as info:
         decimate(_log(), factor)
-    assert info.value.where == "--decimate"
+    assert info.value.where == "factor"
 
 
 def test_a_log_too_short_to_filter_is_refused_naming_the_file() -> None:
     with pytest.raises(DataFormatError) as info:
         decimate(_log(20), 11)
-    assert info.value.where == "fast.csv: --decimate"
+    assert info.value.where == "fast.csv: factor"
 
 
 def test_edm_abstract_decimates_and_records_it(tmp_path: Path) -> None:
@@ -86,7 +86,7 @@ def test_a_target_sample_time_gives_its_whole_factor(target: float, factor: int)
 def test_a_target_that_is_no_whole_multiple_is_refused_naming_the_file(target: float) -> None:
     with pytest.raises(DataFormatError) as info:
         decimation_factor(_log(), target)
-    assert info.value.where == "fast.csv: --decimate-to"
+    assert info.value.where == "fast.csv: target"
     assert "expected a whole multiple of the log's sample time 0.0001 s" in info.value.problem
 
 
@@ -116,6 +116,9 @@ def test_edm_abstract_decimates_each_log_to_a_target_sample_time(tmp_path: Path)
 @pytest.mark.parametrize("extra,where", [
     (["--decimate-to", "0.00025"], "a.csv: --decimate-to: expected a whole multiple"),
     (["--decimate-to", "0.001", "--decimate", "10"], "--decimate-to: expected either"),
+    # The library names its parameter (factor); the command its option.
+    (["--decimate", "0"], "edm: --decimate: expected an integer >= 1, found 0"),
+    (["--decimate", "500"], "edm: a.csv: --decimate: expected at least 1000 samples"),
 ])
 def test_edm_abstract_refuses_a_target_it_cannot_reach(tmp_path: Path, capsys, extra: list[str],
                                                         where: str) -> None:

@@ -213,7 +213,7 @@ def test_npz_and_mat_are_read(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("scale, ts, where", [
     (1e-310, None, "column 't'"), (1e306, None, "column 't'"),
-    (None, 1e-320, "--ts"), (None, 1e308, "--ts"),
+    (None, 1e-320, "ts"), (None, 1e308, "ts"),
 ])
 def test_a_sample_time_beyond_what_the_models_hold_is_refused(tmp_path: Path, scale, ts,
                                                                where) -> None:

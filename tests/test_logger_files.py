@@ -67,7 +67,7 @@ def test_a_file_whose_samples_sit_in_a_matrix_is_refused_with_what_it_holds(tmp_
                               "the file holds ")
     assert "data (a 200x7 matrix)" in problem and "Iz (5 samples)" in problem
     assert "Kp (a scalar)" in problem
-    assert "select run.mat:data with --columns NAME,NAME,... (7 names)" in problem
+    assert 'select run.mat:data with names="NAME,NAME,..." (7 names)' in problem
 
 
 def test_a_matrix_without_names_or_with_too_few_is_refused(tmp_path: Path) -> None:
@@ -76,10 +76,10 @@ def test_a_matrix_without_names_or_with_too_few_is_refused(tmp_path: Path) -> No
         load_data(f"{path}:data")
     assert info.value.where == "run.mat:data"
     assert info.value.problem == ("expected the names of the columns of a 200x7 matrix "
-                                  "(--columns NAME,NAME,...), found none")
+                                  '(names="NAME,NAME,..."), found none')
     with pytest.raises(DataFormatError) as info:
         load_data(f"{path}:data", names="t,ref,theta")
-    assert info.value.problem == "expected 3 columns as --columns names, found a 200x7 matrix"
+    assert info.value.problem == "expected 3 columns as `names` names, found a 200x7 matrix"
     with pytest.raises(DataFormatError) as info:
         load_data(f"{path}:nothing", names="t,ref,theta")
     assert info.value.where == "run.mat:nothing"
@@ -170,11 +170,11 @@ def test_columns_without_a_matrix_are_refused(tmp_path: Path) -> None:
     path.write_text("t,x\n0,1\n0.001,2\n")
     with pytest.raises(DataFormatError) as info:
         load_data(path, names="a,b")
-    assert info.value.where == "--columns"
+    assert info.value.where == "names"
     mat = _mat(tmp_path / "run.mat", t=np.arange(10) * TS, x=np.arange(10.0))
     with pytest.raises(DataFormatError) as info:
         load_data(f"{mat}:t", names="a")
-    assert info.value.where == "--columns"
+    assert info.value.where == "names"
 
 
 def test_the_cli_simulates_a_selected_matrix_and_refuses_a_hidden_one(

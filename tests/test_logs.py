@@ -75,20 +75,25 @@ def test_roles_from_options_and_a_table_merge_with_options_on_top() -> None:
     assert both.inputs == ("qm", "dqm")
 
 
-@pytest.mark.parametrize(("items", "time", "expect"), [
-    (["x=velocity", "x=position"], None, "--role x: expected one role per column, found "
-                                         "'velocity' and 'position'"),
-    (["a=target", "b=target"], None, "--role b: expected one column with the role 'target', "
-                                     "found it given twice ('a' and 'b')"),
-    (["s=time"], "t", "--role s: expected one column with the role 'time'"),
-    (["x=speed"], None, "--role x: expected a role of time, target, position"),
-    (["x"], None, "--role: expected COL=ROLE"),
+@pytest.mark.parametrize(("items", "time", "said", "printed"), [
+    (["x=velocity", "x=position"], None, "roles['x']: expected one role per column, found "
+     "'velocity' and 'position'", "--role x: expected one role per column"),
+    (["a=target", "b=target"], None, "roles['b']: expected one column with the role 'target', "
+     "found it given twice ('a' and 'b')", "--role b: expected one column with the role"),
+    (["s=time"], "t", "roles['s']: expected one column with the role 'time'",
+     "--role s: expected one column with the role 'time'"),
+    (["x=speed"], None, "roles['x']: expected a role of time, target, position",
+     "--role x: expected a role of time, target, position"),
+    (["x"], None, "roles: expected COL=ROLE", "--role: expected COL=ROLE"),
 ])
-def test_a_role_given_twice_or_unknown_is_refused(items: list, time: str | None,
-                                                  expect: str) -> None:
-    with pytest.raises(DataFormatError) as err:
+def test_a_role_given_twice_or_unknown_is_refused(items: list, time: str | None, said: str,
+                                                  printed: str) -> None:
+    with pytest.raises(DataFormatError) as err:  # a Python caller: the parameter
         ColumnRoles.parse(items, time_column=time)
-    assert expect in str(err.value)
+    assert said in str(err.value) and "--" not in str(err.value)
+    with pytest.raises(DataFormatError) as err:  # a command: its option
+        ColumnRoles.parse(items, time_column=time, where="--role")
+    assert printed in str(err.value)
 
 
 def test_the_schema_knows_every_role() -> None:
@@ -111,7 +116,7 @@ def test_a_named_time_column_gives_the_sample_time_and_names_itself_in_errors(
     assert list(log.times) == pytest.approx([10.0, 10.002, 10.004])
     # Without the option, the log has no time column at all.
     with pytest.raises(DataFormatError, match=r"expected a time column 't' \(or one named by "
-                                              r"--time-column\) or the option --ts"):
+                                              r"`time_column`\) or the option `ts=SECONDS`"):
         load_data(path)
 
 
@@ -357,5 +362,5 @@ def test_describe_accepts_clock_drift_and_says_so(linear_result: Path, tmp_path:
     drifted["time_s"] = c["t"] * 1.01
     far = write_csv(tmp_path / "far.csv", drifted)
     with pytest.raises(DataFormatError, match=r"far.csv: sample time: expected 0.001 s as in "
-                                              r"r.json .* found 0.00101 s; --resample"):
+                                              r"r.json .* found 0.00101 s; `resample=True`"):
         edm_sym.describe(linear_result, far)

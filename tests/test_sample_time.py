@@ -57,7 +57,7 @@ def test_a_mismatch_beyond_the_drift_tolerance_is_refused_naming_both_and_resamp
     with pytest.raises(DataFormatError) as info:
         match_sample_time(log, first.ts, model="r.json")
     msg = str(info.value)
-    assert f"{first.ts:g}" in msg and f"{log.ts:g}" in msg and "--resample" in msg
+    assert f"{first.ts:g}" in msg and f"{log.ts:g}" in msg and "`resample=True`" in msg
     assert "second.csv" in msg and "\n" not in msg
 
 
@@ -137,7 +137,7 @@ def test_a_log_without_time_takes_the_models_sample_time_and_gets_a_time_column(
 def test_a_log_without_time_and_without_a_model_still_needs_ts(tmp_path: Path) -> None:
     p = tmp_path / "no_t.csv"
     p.write_text("omega\n1\n2\n")
-    with pytest.raises(DataFormatError, match=r"no_t.csv: column 't'.*--ts"):
+    with pytest.raises(DataFormatError, match=r"no_t.csv: column 't'.*`ts=SECONDS`"):
         load_data(p)
 
 

@@ -154,8 +154,9 @@ def _read_logs(args: argparse.Namespace, config, columns, names,  # noqa: ANN001
 
     def decimated(log):  # noqa: ANN001, ANN202
         if period is not None:  # each log's own factor: logs of several rates meet at one
-            return decimate(log, decimation_factor(log, period), where="--decimate-to")
-        return decimate(log, factor) if factor is not None else log
+            return decimate(log, decimation_factor(log, period, where="--decimate-to"),
+                            where="--decimate-to")
+        return decimate(log, factor, where="--decimate") if factor is not None else log
 
     logs = [decimated(log) for log in logs]
     for log in logs:
@@ -303,7 +304,7 @@ def resolve_columns(args: argparse.Namespace, config):  # noqa: ANN001, ANN201
     from edm_sym.core.result import target_name_problem
 
     given = ColumnRoles.parse(getattr(args, "role", None) or (),
-                              time_column=getattr(args, "time_column", None))
+                              time_column=getattr(args, "time_column", None), where="--role")
     columns = given.over(getattr(config, "columns", None))
     target = args.target or columns.target
     if target is None:

@@ -19,7 +19,15 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from edm_sym.core.errors import TOO_DEEP, EdmError, ExternalToolError, ToolMissingError, as_options
+from edm_sym.core.errors import (
+    TOO_DEEP,
+    DataFormatError,
+    EdmError,
+    ExternalToolError,
+    ToolMissingError,
+    as_options,
+    where_as_options,
+)
 from edm_sym.core.fileio import check_outputs
 
 
@@ -109,7 +117,8 @@ def _columns(args: argparse.Namespace):  # noqa: ANN202
     """The column roles the options give (a ColumnRoles; empty without options)."""
     from edm_sym.core.data import ColumnRoles
 
-    return ColumnRoles.parse(getattr(args, "role", None) or (), time_column=args.time_column)
+    return ColumnRoles.parse(getattr(args, "role", None) or (), time_column=args.time_column,
+                             where="--role")
 
 
 def _add_version(parser: argparse.ArgumentParser) -> None:
@@ -777,8 +786,12 @@ def _dispatch(argv: Sequence[str] | None, parser: argparse.ArgumentParser) -> in
         if os.environ.get("EDM_DEBUG"):
             traceback.print_exc()
         # ValueError here comes from validation inside the library: bad input. The library
-        # names its parameters; the command names the options that give them.
-        line = as_options(" ".join(str(exc).split()))
+        # names its parameters; the command names the options that give them, also where a
+        # log's error names one after the file (log.csv: ts).
+        text = str(exc)
+        if isinstance(exc, DataFormatError):
+            text = f"{where_as_options(exc.where)}: {exc.problem}"
+        line = as_options(" ".join(text.split()))
         print(line if isinstance(exc, UsageError) else f"{parser.prog}: {line}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

@@ -83,7 +83,8 @@ class ColumnRoles:
     roles : mapping of str to str
         Column -> role, in the order given.
     where : str
-        Where they were given, for messages (``"--role"``, ``"cfg.toml: columns"``).
+        Where they were given, for messages: the parameter (``"roles"``), a
+        command's option (``"--role"``) or a table (``"cfg.toml: columns"``).
     loose : frozenset of str
         Columns whose role applies only when a log has them: the roles a model
         file records (a second log of the axis may lack its target); the
@@ -96,7 +97,7 @@ class ColumnRoles:
     """
 
     roles: Mapping[str, str] = field(default_factory=dict)
-    where: str = "--role"
+    where: str = "roles"
     loose: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
@@ -115,8 +116,10 @@ class ColumnRoles:
 
     @classmethod
     def parse(cls, items: Iterable[str] = (), *, time_column: str | None = None,
-              where: str = "--role") -> ColumnRoles:
-        """Roles from ``COL=ROLE`` strings (``--role``) and a ``--time-column``.
+              where: str = "roles") -> ColumnRoles:
+        """Roles from ``COL=ROLE`` strings (``--role``) and a ``time_column`` (``--time-column``).
+
+        ``where`` names them in messages (a command passes ``"--role"``).
 
         Raises
         ------
@@ -127,7 +130,7 @@ class ColumnRoles:
         roles: dict[str, str] = {}
         if time_column is not None:
             if not time_column.strip():
-                raise DataFormatError("--time-column", "expected a column name, found nothing")
+                raise DataFormatError("time_column", "expected a column name, found nothing")
             roles[time_column.strip()] = "time"
         for item in items:
             col, sep, role = str(item).rpartition("=")
@@ -204,8 +207,11 @@ class ColumnRoles:
 
 
 def _at(where: str, col: str) -> str:
-    """``--role qm`` for an option, ``cfg.toml: columns.qm`` for a table."""
-    return f"{where} {col}" if where.startswith("--") else f"{where}.{col}"
+    """``--role qm`` for an option, ``roles['qm']`` for a parameter, ``cfg.toml: columns.qm``
+    for a table."""
+    if where.startswith("--"):
+        return f"{where} {col}"
+    return f"{where}[{col!r}]" if where.isidentifier() else f"{where}.{col}"
 
 
 def _add_role(roles: dict[str, str], col: str, role: str, where: str) -> None:
@@ -482,13 +488,13 @@ def load_data(
                                                                  names))
         else:
             if names is not None:
-                raise DataFormatError("--columns", f"expected a matrix selected to name the columns "
+                raise DataFormatError("names", f"expected a matrix selected to name the columns "
                                       f"of ({path.name}:NAME), found {path.name} whole")
             arrays, scalars, skipped = _read_arrays(name, tree, hint=selection_hint(path.name, tree))
             note = _hidden(name, tree, arrays)
     else:
         if names is not None:
-            raise DataFormatError("--columns", f"expected a file of named arrays "
+            raise DataFormatError("names", f"expected a file of named arrays "
                                   f"({', '.join(SELECTABLE)}) to select a matrix in, found {name}")
         # The sizes first (line ends and the header's cells): a log that cannot fit is refused
         # before its values are parsed.
@@ -693,14 +699,14 @@ def _sample_time(
     row_offset: int,
 ) -> float:
     if ts is not None and not (math.isfinite(ts) and ts > 0):
-        raise DataFormatError(f"{name}: --ts", f"expected a positive sample time, found {ts}")
+        raise DataFormatError(f"{name}: ts", f"expected a positive sample time, found {ts}")
     if ts is not None:
-        check_sample_time(f"{name}: --ts", ts)
+        check_sample_time(f"{name}: ts", ts)
     if time is None:
         if ts is None:
             raise DataFormatError(f"{name}: column {DEFAULT_TIME!r}",
                                   f"expected a time column {DEFAULT_TIME!r} (or one named by "
-                                  "--time-column) or the option --ts SECONDS, found neither")
+                                  "`time_column`) or the option `ts=SECONDS`, found neither")
         return float(ts)
     t = columns[time]
     if len(t) < 2:
@@ -728,7 +734,7 @@ def _sample_time(
     step = float(t[-1] - t[0]) / (len(t) - 1)
     check_sample_time(f"{name}: column {time!r}", step, "the step of the time stamps")
     if ts is not None and abs(ts - step) > TIME_RTOL * step:
-        raise DataFormatError(f"{name}: --ts",
+        raise DataFormatError(f"{name}: ts",
                               f"expected the step of column {time!r} ({step:g} s), found {ts:g}")
     return step
 
@@ -772,7 +778,7 @@ def match_sample_time(data: DataLog, ts: float, *, model: str, resample: bool = 
     where = f"{data.source}: sample time"
     if not resample:
         raise DataFormatError(where, f"expected {ts:g} s as in {model} (within {TIME_RTOL:g} relative), "
-                              f"found {data.ts:g} s; --resample resamples the log onto the model's grid")
+                              f"found {data.ts:g} s; `resample=True` resamples the log onto the model's grid")
     from fractions import Fraction
 
     from scipy import signal
@@ -825,7 +831,7 @@ def join_logs(logs: Sequence[DataLog], names: Sequence[str]) -> DataLog:
         if abs(log.ts - first.ts) > TIME_RTOL * first.ts:
             raise DataFormatError(f"{log.source}: sample time",
                                   f"expected {first.ts:g} s as in {first.source} (the logs of one "
-                                  f"abstraction share it; --decimate or resample), found {log.ts:g} s")
+                                  f"abstraction share it; `decimate` or resample), found {log.ts:g} s")
         if (log.time_column is None) != (time is None):
             raise DataFormatError(f"{log.source}: column {time or log.time_column!r}",
                                   f"expected {'a' if time else 'no'} time column as in "
@@ -852,7 +858,7 @@ DECIMATE_FILTER = ("FIR, Hamming window, 20 K + 1 taps, corner at the new Nyquis
                    "zero phase, ends extended as lines (scipy.signal.resample_poly)")
 
 
-def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog:
+def decimate(log: DataLog, factor: int, *, where: str = "factor") -> DataLog:
     """Every ``factor``-th sample of ``log``, each column low-pass filtered first.
 
     The anti-alias filter is the FIR of :func:`scipy.signal.decimate`
@@ -863,6 +869,8 @@ def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog
     time column is taken as it is at the kept samples; a wrapped angle (role
     ``position_wrapped``) is unwrapped, filtered and wrapped again, so its
     jumps are not smeared.
+
+    ``where`` names the factor in messages (a command passes its option, ``"--decimate"``).
 
     Raises
     ------
@@ -907,8 +915,10 @@ def decimate(log: DataLog, factor: int, *, where: str = "--decimate") -> DataLog
                    dict(log.roles), decimation=log.decimation * factor)
 
 
-def decimation_factor(log: DataLog, target: float, *, where: str = "--decimate-to") -> int:
+def decimation_factor(log: DataLog, target: float, *, where: str = "target") -> int:
     """The factor K that takes ``log`` to the sample time ``target`` (``K = target / ts``).
+
+    ``where`` names the target in messages (a command passes its option, ``"--decimate-to"``).
 
     Raises
     ------

@@ -108,7 +108,8 @@ class BudgetWarning(UserWarning):
 #: The command-line option (docs/cli.md) that gives each parameter of the Python API an
 #: error may name. The library names the parameter (``prefix: expected a C identifier``,
 #: ``use real="float"``), as a Python caller passed it; a command prints the option
-#: (:func:`as_options`).
+#: (:func:`as_options`). ``decimate`` is the function :func:`edm_sym.core.data.decimate`,
+#: which a command's ``--decimate`` calls.
 OPTIONS: Mapping[str, str] = MappingProxyType({
     "prefix": "--prefix",
     "real": "--real",
@@ -119,15 +120,29 @@ OPTIONS: Mapping[str, str] = MappingProxyType({
     "validation_share": "--validation-share",
     "searches": "--searches",
     "observer_bandwidth": "--observer-bandwidth",
+    "ts": "--ts",
+    "names": "--columns",
+    "time_column": "--time-column",
+    "roles": "--role",
+    "resample": "--resample",
+    "decimate": "--decimate",
 })
 
-# The three ways a message names a parameter: its first field (``prefix: ...``), a value
-# in a hint (``real="float"``), one input's range (``input_range={"omega": (LO, HI)}``);
-# and the bare name in parentheses (``(input_range)``).
+#: The parameters an error names after the file they were given for (``log.csv: ts``):
+#: how a log is read. There a command prints their options too (:func:`where_as_options`);
+#: another name after a file is one of its keys or scalars (``cfg.toml: axis``,
+#: ``log.csv: observer_bandwidth``) and stays as it is.
+LOG_PARAMETERS = frozenset({"ts", "names", "time_column", "roles", "resample"})
+
+# The ways a message names a parameter: its first field (``prefix: ...``), a value in a
+# hint (``real="float"``), one input's range (``input_range={"omega": (LO, HI)}``); the
+# bare name in parentheses (``(input_range)``); and the name in backquotes, alone, with a
+# placeholder or set true: `time_column`, `ts=SECONDS`, `resample=True`.
 _FIRST = re.compile(r"^(\w+):")
 _VALUE = re.compile(r"\b(\w+)=\"([^\"]*)\"")
 _RANGE = re.compile(r"\binput_range=\{\"([^\"]+)\": \(LO, HI\)\}")
 _BARE = re.compile(r"(?<![\w.])\((\w+)\)")
+_QUOTED = re.compile(r"`(\w+)(?:=([^`]*))?`")
 
 
 def as_options(message: str) -> str:
@@ -136,7 +151,9 @@ def as_options(message: str) -> str:
 
     ``prefix: expected a C identifier`` becomes ``--prefix: expected a C identifier``,
     ``use real="float"`` becomes ``use --real float``, ``input_range={"omega": (LO, HI)}``
-    becomes ``--input-range omega=LO:HI``; other text is left as it is.
+    becomes ``--input-range omega=LO:HI``; a name in backquotes becomes its option
+    (`time_column` ``--time-column``), with its placeholder (`ts=SECONDS` ``--ts SECONDS``)
+    or alone when set true (`resample=True` ``--resample``); other text is left as it is.
     """
     def first(m: re.Match[str]) -> str:
         return f"{OPTIONS[m[1]]}:" if m[1] in OPTIONS else m[0]
@@ -147,6 +164,23 @@ def as_options(message: str) -> str:
     def bare(m: re.Match[str]) -> str:
         return f"({OPTIONS[m[1]]})" if m[1] in OPTIONS else m[0]
 
+    def quoted(m: re.Match[str]) -> str:
+        if m[1] not in OPTIONS:
+            return m[0]
+        return OPTIONS[m[1]] if m[2] in (None, "True") else f"{OPTIONS[m[1]]} {m[2]}"
+
     message = _FIRST.sub(first, message, count=1)
     message = _RANGE.sub(lambda m: f"{OPTIONS['input_range']} {m[1]}=LO:HI", message)
-    return _BARE.sub(bare, _VALUE.sub(value, message))
+    return _QUOTED.sub(quoted, _BARE.sub(bare, _VALUE.sub(value, message)))
+
+
+def where_as_options(where: str) -> str:
+    """The place of an error about a log as a command prints it: the parameter named after
+    the file (:data:`LOG_PARAMETERS`, the last ``": "``-separated part) as its option.
+
+    ``log.csv: ts`` becomes ``log.csv: --ts``; ``log.csv: column 't'`` and
+    ``log.csv: observer_bandwidth`` (a scalar of the log) are left as they are. A name
+    alone (``ts``) is the message's first field, which :func:`as_options` maps.
+    """
+    head, sep, last = where.rpartition(": ")
+    return f"{head}{sep}{OPTIONS[last]}" if sep and last in LOG_PARAMETERS else where

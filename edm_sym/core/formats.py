@@ -4,7 +4,7 @@ A file is read into a tree: a MATLAB struct or an HDF5 group is a mapping of
 its fields, an array a leaf. ``FILE:SEL[,SEL...]`` selects parts of it
 (:func:`split_spec`): a struct (its 1-D fields become columns), a field
 (``run.omega``, one column named ``omega``), or a 2-D matrix whose columns the
-caller names (``--columns t,ref,theta``). A file read without a selection gives
+caller names (``names="t,ref,theta"``, a command's ``--columns``). A file read without a selection gives
 its top-level 1-D arrays, as before; one whose samples sit in a matrix or a
 struct is refused with what it holds and how to select it (:func:`contents`).
 """
@@ -180,7 +180,7 @@ def selection_hint(file: str, tree: Tree) -> str:
     for key, value in tree.items():
         if is_matrix(value):
             k = min(np.shape(value))
-            hints.append(f"{file}:{key} with --columns NAME,NAME,... ({k} names)")
+            hints.append(f"{file}:{key} with names=\"NAME,NAME,...\" ({k} names)")
         elif isinstance(value, Mapping) and value:
             hints.append(f"{file}:{key} (its fields) or {file}:{key}.FIELD")
     return "; select " + " or ".join(hints) if hints else ""
@@ -222,13 +222,13 @@ def select(name: str, file: str, tree: Tree, selection: str, names: Sequence[str
         elif is_matrix(node):
             if names is None:
                 raise DataFormatError(f"{file}:{part}", f"expected the names of the columns of "
-                                      f"{describe(node)} (--columns NAME,NAME,...), found none")
+                                      f"{describe(node)} (names=\"NAME,NAME,...\"), found none")
             out.update(_matrix_columns(f"{file}:{part}", np.asarray(node), names))
             used_names = True
         else:
             out[label] = node
     if names is not None and not used_names:
-        raise DataFormatError("--columns", f"expected a matrix selected to name the columns of "
+        raise DataFormatError("names", f"expected a matrix selected to name the columns of "
                               f"({file}:NAME), found {selection!r}")
     return out
 
@@ -237,19 +237,22 @@ def _matrix_columns(where: str, arr: np.ndarray, names: Sequence[str]) -> Tree:
     k = len(names)
     if len(set(names)) != k:
         twice = next(n for n in names if list(names).count(n) > 1)
-        raise DataFormatError("--columns", f"expected unique names, found {twice!r} twice")
+        raise DataFormatError("names", f"expected unique names, found {twice!r} twice")
     if arr.shape[1] == k:
         cols = arr.T
     elif arr.shape[0] == k:
         cols = arr
     else:
-        raise DataFormatError(where, f"expected {k} columns as --columns names, found "
+        raise DataFormatError(where, f"expected {k} columns as `names` names, found "
                               f"{describe(arr)}")
     return {n: np.ascontiguousarray(c) for n, c in zip(names, cols, strict=True)}
 
 
-def parse_names(text: str | Sequence[str] | None, where: str = "--columns") -> tuple[str, ...] | None:
+def parse_names(text: str | Sequence[str] | None, where: str = "names") -> tuple[str, ...] | None:
     """The column names of a matrix: ``"t,ref,theta"`` or a list of them (None: not given).
+
+    ``where`` names them in messages: the parameter ``names`` of :func:`edm_sym.load_data`
+    (a command's ``--columns``).
 
     Raises
     ------

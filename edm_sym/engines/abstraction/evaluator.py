@@ -131,6 +131,21 @@ class Evaluation:
     fitted: list | None = None
 
 
+@dataclass(frozen=True)
+class Dispatched:
+    """What :meth:`Evaluator._dispatch` found for a batch of individuals, whose rows are
+    the lines of a table."""
+
+    #: Shape (count,): each individual's eq. 8 (read where it was to be scored).
+    fitness: np.ndarray
+    #: Per individual its row scales (None without ``free``).
+    scales: list
+    #: With ``local``: per table line its row outputs; else None.
+    rows: list[np.ndarray] | None
+    #: Per individual ``(eq. 8, genes)`` of its gain-fit candidate (NaN: it has none).
+    fitted: list
+
+
 class Evaluator:
     """Fitness (eq. 8) of many individuals at once, with cached rows.
 
@@ -506,8 +521,8 @@ class Evaluator:
                 if self.reject_poles:
                     poles.append(self.pole_rows(utab, ukeys))
 
-            fit, sc, outs, fits = self._dispatch(utab, ukeys, members, score, sub_free, rows,
-                                                 aside, gains)
+            done = self._dispatch(utab, ukeys, members, score, sub_free, rows, aside, gains)
+            fit, fits = done.fitness, done.fitted
             if poles:
                 pole = poles[0][members].any(axis=1)
                 fit = np.where(pole, np.inf, fit)
@@ -520,11 +535,12 @@ class Evaluator:
             for a, k in enumerate(send):
                 if score[a]:
                     out[k] = fit[a]
-                    scales[k] = sc[a] if want_scales else None
+                    scales[k] = done.scales[a] if want_scales else None
                     fitted[k] = None if gains is None else fits[a]
                     self._memo[ikeys[k]] = (out[k], scales[k], want_scales, fitted[k])
             if rows:
-                row_outputs = [(keys[k * m:(k + 1) * m], [outs[members[a, j]] for j in range(m)])
+                row_outputs = [(keys[k * m:(k + 1) * m],
+                                [done.rows[members[a, j]] for j in range(m)])
                                for a, k in enumerate(send)]
         if gains is not None:
             # The candidates count as individuals evaluated, their rows as rows asked for.
@@ -542,13 +558,14 @@ class Evaluator:
     def _dispatch(self, table: np.ndarray, keys: list[bytes], members: np.ndarray,
                   score: np.ndarray, free: np.ndarray | None, local: bool,
                   aside: Callable[[], None] = lambda: None, gains: bool | None = None
-                  ) -> tuple[np.ndarray, list, list[np.ndarray] | None, list]:
-        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local).
+                  ) -> Dispatched:
+        """Evaluate individuals given as rows of ``table``; their fitness, scales, rows (local)
+        (a :class:`Dispatched`).
 
         ``aside()`` is work of this process that needs no result: it runs
         while the other lanes work (once their pieces are sent). With
         ``gains`` (and ``free``) the lanes also evaluate the gain-fit
-        candidates; the last value returned is, per individual, its
+        candidates; :attr:`Dispatched.fitted` holds, per individual, its
         candidate's eq. 8 (NaN: none) and the genes it changes.
 
         With shared stores every lane reads every row, so ``local`` (rows
@@ -643,7 +660,7 @@ class Evaluator:
             rows = [None] * len(keys)
             for line, s in zip(lines, res.slots, strict=True):
                 rows[line] = self._local.own.rows[s]
-        return fitness, scales, rows, fitted
+        return Dispatched(fitness, scales, rows, fitted)
 
     def _chunk(self, table: np.ndarray, members: np.ndarray, score: np.ndarray,
                free: np.ndarray | None, slots: np.ndarray | None, missing: np.ndarray | None,
