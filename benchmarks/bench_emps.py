@@ -37,7 +37,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from edm_sym.core.data import DataLog, load_data
-from edm_sym.engines.abstraction import abstract, load_config
+from edm_sym.engines.abstraction import Parallel, abstract, load_config
 from edm_sym.engines.observer import (
     ObserverOptions,
     fit_reference_model,
@@ -105,7 +105,8 @@ def run(time_limit: float | None = None, seed: int = 1, path: Path = EMPS,
     cfg = load_config(config) if config is not None else None
     axis = (cfg.axis if cfg is not None else None) or "linear"
     result = abstract(train, target="tau_ext", inputs=["q", "qd", "qdd"], config=cfg,
-                      seed=seed, time_limit=time_limit, axis=axis, workers=workers)
+                      seed=seed, time_limit=time_limit, axis=axis,
+                      parallel=Parallel(workers=workers))
     seconds = time.perf_counter() - t0
     train_res = c_tr["tau_ext"] - simulate(result, train).total
     test_res = (test_view.columns["tau_ext"] - simulate(result, test_view).total)[scored]

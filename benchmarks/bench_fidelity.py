@@ -75,7 +75,7 @@ def child(spec: dict) -> None:
     """One run, in this process: prints its figures as one JSON line."""
     from edm_sym import load_data
     from edm_sym.core.result import save_result
-    from edm_sym.engines.abstraction import abstract
+    from edm_sym.engines.abstraction import Parallel, abstract
     from edm_sym.engines.abstraction.schedule import parse_config
 
     doc: dict = {"fidelity": spec["fidelity"]}
@@ -86,7 +86,7 @@ def child(spec: dict) -> None:
     last: dict = {}
     cpu0, wall0 = _cpu(), time.monotonic()
     result = abstract(data, target="tau_ext", inputs=INPUTS, config=cfg, seed=spec["seed"],
-                      workers=spec["workers"], time_limit=spec.get("time_limit"),
+                      parallel=Parallel(workers=spec["workers"]), time_limit=spec.get("time_limit"),
                       callback=lambda info: last.update(info=info))
     wall, cpu = time.monotonic() - wall0, _cpu() - cpu0
     save_result(result, spec["result"])

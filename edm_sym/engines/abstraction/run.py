@@ -59,8 +59,14 @@ from edm_sym.engines.abstraction.searches import (
     run_searches,
     search_seeds,
 )
-from edm_sym.engines.abstraction.seeding import (angle_input, harmonic_rows, residual_harmonics,
-                                                 residual_stribeck, stribeck_rows, velocity_input)
+from edm_sym.engines.abstraction.seeding import (
+    angle_input,
+    harmonic_rows,
+    residual_harmonics,
+    residual_stribeck,
+    stribeck_rows,
+    velocity_input,
+)
 from edm_sym.engines.abstraction.worker import default_workers
 from edm_sym.engines.simulate import fitness, simulate_rows
 
