@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import SMALL, friction_log, run
 
 from edm_sym.application.cli import main
 from edm_sym.core import budget
@@ -23,6 +24,7 @@ from edm_sym.core.budget import (
     format_seconds,
 )
 from edm_sym.core.errors import BudgetError, BudgetWarning
+from edm_sym.engines.abstraction import Parallel
 from edm_sym.engines.abstraction.run import check_budget
 from edm_sym.engines.abstraction.schedule import parse_config
 
@@ -204,3 +206,59 @@ def test_restarts_count_in_the_time_estimate() -> None:
     check_budget(parse_config({"ga": {"restarts": 1}}), 800, 1, workers=1)
     with pytest.raises(BudgetError, match="CPU time"):
         check_budget(parse_config({"ga": {"restarts": 10**6}}), 800, 1, workers=1)
+
+
+# -- a run of multi fidelity (docs/abstraction.md#multi-fidelity-evaluation) -------------------
+
+def test_a_long_log_is_estimated_at_multi_fidelity() -> None:
+    # auto runs multi above AUTO_SAMPLES: two evaluators, the whole log's on a few individuals,
+    # the windows' on short rows, so less memory and less time than the same run at full.
+    from edm_sym.engines.abstraction.fidelity import AUTO_SAMPLES
+
+    n = 8 * AUTO_SAMPLES
+    auto = check_budget(parse_config({}), n, 4, workers=2, ts=1e-3)
+    full = check_budget(parse_config({"fidelity": "full"}), n, 4, workers=2, ts=1e-3)
+    forced = check_budget(parse_config({"fidelity": "multi"}), n, 4, workers=2, ts=1e-3)
+    assert auto == forced
+    assert auto.memory < full.memory and auto.seconds < full.seconds
+    assert "multi fidelity" in auto.detail and "multi" not in full.detail
+    # Longer windows (more samples, longer warm-ups) cost more; at most as much as the log.
+    longer = check_budget(parse_config({"multi_fidelity": {"samples": 64_000}}), n, 4,
+                          workers=2, ts=1e-3)
+    assert auto.memory < longer.memory
+    # Not past AUTO_SAMPLES: auto is full fidelity, estimated as before.
+    short = AUTO_SAMPLES
+    assert (check_budget(parse_config({}), short, 4, workers=2, ts=1e-3)
+            == check_budget(parse_config({"fidelity": "full"}), short, 4, workers=2, ts=1e-3))
+
+
+def test_a_run_refused_at_full_fidelity_fits_at_multi(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(budget, "available_memory", lambda: None)  # the figures first
+    n = 400_000
+    full = check_budget(parse_config({"fidelity": "full"}), n, 4, workers=2, ts=1e-3)
+    multi = check_budget(parse_config({"fidelity": "auto"}), n, 4, workers=2, ts=1e-3)
+    between = (full.memory + multi.memory) // 2
+    monkeypatch.setattr(budget, "available_memory", lambda: between)
+    with pytest.raises(BudgetError, match="of memory"):
+        check_budget(parse_config({"fidelity": "full"}), n, 4, workers=2, ts=1e-3)
+    check_budget(parse_config({"fidelity": "auto"}), n, 4, workers=2, ts=1e-3)
+
+
+def test_abstract_checks_the_fidelity_it_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Through abstract(): the same config and log, refused up front at full fidelity and run
+    # at multi fidelity, with the log's sample time and its training samples.
+    log, _ = friction_log(4.0)
+    base = {**SMALL, "validation": {"share": 0.0}}  # the GA fits all 4 000 samples
+    full = {**base, "fidelity": "full"}
+    multi = {**base, "fidelity": "multi",
+             "multi_fidelity": {"samples": 800, "windows": 4, "warm_up": 0.05}}
+    monkeypatch.setattr(budget, "available_memory", lambda: None)
+    sizes = [check_budget(parse_config(d), len(log), 2, workers=1, ts=log.ts)
+             for d in (full, multi)]
+    assert sizes[1].memory < sizes[0].memory
+    monkeypatch.setattr(budget, "available_memory",
+                        lambda: (sizes[0].memory + sizes[1].memory) // 2)
+    with pytest.raises(BudgetError, match="test.toml: needs about .* of memory"):
+        run(log, full, seed=1, parallel=Parallel(workers=1))
+    res = run(log, multi, seed=1, parallel=Parallel(workers=1))
+    assert res.provenance["fidelity"]["mode"] == "multi"

@@ -176,3 +176,132 @@ def test_promotion_takes_the_lowest_within_the_margin() -> None:
     assert promoted(low, 0.4, s) == []
     assert promoted(low, 0.4, s, always=(0,)) == [0]
     assert promoted(low, None, s, least=3) == [1, 2, 5]
+
+
+# -- multi fidelity with dask, an interrupt, a weighting that moves the windows --------------------
+
+MULTI_RUN = {**WHOLE, "fidelity": "multi", "multi_fidelity": MULTI}
+
+
+def test_multi_on_a_dask_cluster_gives_the_bytes_of_one_process(long_log) -> None:  # noqa: ANN001
+    # docs/abstraction.md#multi-fidelity-evaluation: "a seed gives the same result.json
+    # whatever the workers", a dask cluster's among them; both evaluators use the cluster.
+    distributed = pytest.importorskip("distributed")
+    want = dumps(run(long_log, MULTI_RUN, seed=7, parallel=Parallel(workers=1)))
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        held: list[int] = []
+
+        def look(info: GenerationInfo) -> None:
+            if info.generation == 1 and not held:
+                # Each cluster worker holds the run's data: the whole log's and the windows'.
+                counts = client.run(lambda: len(__import__(
+                    "edm_sym.engines.abstraction.worker", fromlist=["_WORKERS"])._WORKERS))
+                held.extend(sorted(counts.values()))
+
+        res = run(long_log, MULTI_RUN, seed=7, parallel=Parallel(scheduler=client), callback=look)
+        assert res.provenance["fidelity"]["mode"] == "multi"
+        assert dumps(res) == want
+        assert held == [2, 2]
+        # Any executor (unpinned lanes): the same bytes again.
+        res = run(long_log, MULTI_RUN, seed=7,
+                  parallel=Parallel(executor=client.get_executor(), workers=2))
+        assert dumps(res) == want
+
+
+def test_an_interrupt_of_multi_returns_whole_log_scores_and_resumes(long_log,  # noqa: ANN001
+                                                                   tmp_path: Path) -> None:
+    # As at full fidelity (tests/test_abstraction.py): Ctrl-C in a callback ends the run at
+    # the generation boundary with the best so far, and --resume gives the uninterrupted bytes.
+    want = dumps(run(long_log, MULTI_RUN, seed=4, parallel=Parallel(workers=1)))
+    ckpt = tmp_path / "c"
+    count = [0]
+
+    def hook(info: GenerationInfo) -> None:
+        count[0] += 1
+        if count[0] == 10:  # step 2 (7 boundaries a step), generation 2
+            raise KeyboardInterrupt
+
+    # Two workers: the interrupt shuts both evaluators' processes down.
+    part = run(long_log, MULTI_RUN, seed=4, parallel=Parallel(workers=2), checkpoint=ckpt,
+               callback=hook)
+    assert part.provenance["stop_reason"] == "interrupted" and ckpt.exists()
+    assert [s.step for s in part.steps] == [1, 2] and part.steps[-1].generations == 2
+    # The step in progress reports its best by the whole log, not by the windows.
+    comp = part.compensator
+    for step in part.steps:
+        assert step.history[-1] == pytest.approx(step.fitness, rel=1e-9)
+        assert step.fitness == pytest.approx(_whole_log_fitness(comp, step.matrix, long_log),
+                                             rel=1e-9)
+    again = run(long_log, MULTI_RUN, seed=4, parallel=Parallel(workers=1), checkpoint=ckpt,
+                resume=True)
+    assert dumps(again) == want and not ckpt.exists()
+
+
+#: Step 1 fits the velocity steps (0-4 s), step 2 the whole log, the chirp (4-8 s) four
+#: times as much: the second step's windows are not the first's.
+MOVING = {**MULTI_RUN, "step": [
+    {"n_rows": 2, "n_elements": 3, "weighting": {"windows": [[0.0, 4.0, 1.0]], "otherwise": 0.0}},
+    {"n_rows": 3, "n_elements": 3, "weighting": {"windows": [[4.0, 8.0, 1.0]],
+                                                  "otherwise": 0.25}}]}
+
+
+def test_a_weighting_that_moves_the_windows_scores_each_step_with_its_own(
+        long_log, monkeypatch: pytest.MonkeyPatch) -> None:  # noqa: ANN001
+    from edm_sym.engines.abstraction.ga import Population
+    from edm_sym.engines.abstraction.multi import MultiSteps
+
+    cfg = parse_config(MOVING, "test.toml")
+    t, y = long_log.columns["t"], long_log.columns["tau_ext"]
+    x = long_log.stack(["omega", "alpha"])
+    lams = [np.broadcast_to(s.weighting.weights(t, y), y.shape) for s in cfg.steps]
+    plans = [plan_windows(lam, len(y), long_log.ts, FidelitySettings(**MULTI)) for lam in lams]
+    assert plans[0] != plans[1]
+    assert np.all(t[plans[0].index[plans[0].scored]] < 4.0)
+    # Every individual judged, as the windows' evaluator left it (gain-fitted), and its scores.
+    judged: list = []
+    real = MultiSteps.judge
+
+    def judge(self, pop, ops, reference, **kw):  # noqa: ANN001, ANN202
+        full, low, made = real(self, pop, ops, reference, **kw)
+        judged.append((self.fid.plan, pop.take(np.arange(len(pop))), low.copy(), full.copy()))
+        return full, low, made
+
+    monkeypatch.setattr(MultiSteps, "judge", judge)
+    res = run(long_log, MOVING, seed=5, parallel=Parallel(workers=1))
+    assert res.provenance["stop_reason"] == "completed"
+    # Each step judges on its own windows: step 1's first, then step 2's.
+    k = [plans.index(p) for p, *_ in judged]
+    assert k == sorted(k) and set(k) == {0, 1}
+    comp = res.compensator
+
+    def eq8(pop: Population, i: int, xs: np.ndarray, ys: np.ndarray, lam) -> float:  # noqa: ANN001
+        matrix = pop.matrix(i, ["omega", "alpha"])
+        rows = simulate_rows(replace(comp, matrix=matrix), matrix.rows, xs)
+        return float(fitness(ys - rows.sum(axis=0), lam))
+
+    checked = [0, 0]
+    for plan, pop, low, full in judged[::4]:
+        s = plans.index(plan)
+        w = plan.weights(lams[s])
+        idx = plan.index
+        for i in np.flatnonzero(np.isfinite(low))[:3].tolist():
+            # The windows' eq. 8 is the step's Lambda on the windows (step 2's: not Lambda = 1).
+            assert low[i] == pytest.approx(eq8(pop, i, x[:, idx], y[idx], w), rel=1e-7)
+            if s == 1:
+                assert low[i] != pytest.approx(eq8(pop, i, x[:, idx], y[idx],
+                                                   plan.weights(1.0)), rel=1e-3)
+            checked[s] += 1
+        for i in np.flatnonzero(np.isfinite(full))[:2].tolist():
+            assert full[i] == pytest.approx(eq8(pop, i, x, y, lams[s]), rel=1e-7)
+    assert min(checked) > 0
+    # A step best's fitness is its whole-log eq. 8 with the step's own weighting.
+    for step, lam in zip(res.steps, lams, strict=True):
+        assert step.history[-1] == pytest.approx(step.fitness, rel=1e-9)
+        matrix = step.matrix
+        rows = simulate_rows(replace(comp, matrix=matrix), matrix.rows, x)
+        assert step.fitness == pytest.approx(float(fitness(y - rows.sum(axis=0), lam)), rel=1e-9)
+    # Deterministic: the same seed gives the same bytes (with two workers too).
+    monkeypatch.undo()
+    assert dumps(run(long_log, MOVING, seed=5, parallel=Parallel(workers=2))) == dumps(res)

@@ -402,7 +402,7 @@ class _PipelineRun:
         self.config = load_config(pipe.config) if pipe.config else None
         if not self.keep_result:
             check_budget(self.config or default_config(), len(self.abst), len(pipe.inputs),
-                         time_limit=pipe.time_limit)
+                         time_limit=pipe.time_limit, ts=float(self.abst.ts))
         if self.reuse and not self.keep_result:
             # A checkpoint --reuse cannot continue is refused before the LuGre identification
             # (whether it is of this run is known once the abstraction has the training samples).

@@ -8,7 +8,8 @@ message (docs/cli.md#sizes-that-cannot-fit):
 * the abstraction (``edm abstract``, ``edm pipeline``, ``EDMRegressor``):
   its peak memory (the row store and caches, a generation's rows, the data)
   against the memory this machine has available, and the least CPU time the
-  schedule needs against :data:`TIME_LIMIT_SECONDS`;
+  schedule needs against :data:`TIME_LIMIT_SECONDS`, at the fidelity the run
+  will have (a run of multi fidelity: its two evaluators);
 * the reference simulator (``edm simulate``): its row outputs against the
   available memory;
 * reading a log (every command): the file, its text and its columns against
@@ -120,8 +121,35 @@ class StepSize:
     generations: int
 
 
+@dataclass(frozen=True)
+class MultiFidelitySize:
+    """The sizes of a multi-fidelity run's two evaluators (docs/abstraction.md#multi-fidelity-evaluation).
+
+    Attributes
+    ----------
+    window_samples : int
+        Samples of the low-fidelity signal, the windows with their warm-ups (at most
+        the training log's).
+    promote : int
+        The most new individuals of a generation scored on the whole training log.
+    full_batch : int
+        Rows of the whole log's evaluator's largest batch (a few promoted individuals).
+    """
+
+    window_samples: int
+    promote: int
+    full_batch: int
+
+
+def _evaluator_memory(cache_bytes: int, batch: int, row: int, workers: int) -> int:
+    """One evaluator's peak: its shared row store (twice its largest batch's rows, at least
+    its cache), each worker's prefix cache (half its cache) and a batch's row outputs."""
+    return max(cache_bytes, (2 * batch + 16) * row) + workers * cache_bytes // 2 + batch * row
+
+
 def abstraction_estimate(steps: Sequence[StepSize], *, n_samples: int, n_inputs: int,
-                         cache_bytes: int, workers: int, time_limit: float | None) -> Estimate:
+                         cache_bytes: int, workers: int, time_limit: float | None,
+                         multi: MultiFidelitySize | None = None) -> Estimate:
     """Peak memory and least CPU time of an abstraction run.
 
     Memory: the shared row store (twice the largest generation's rows, at
@@ -131,6 +159,14 @@ def abstraction_estimate(steps: Sequence[StepSize], *, n_samples: int, n_inputs:
     sample (no cache hits), at :data:`ELEMENT_SAMPLES_PER_SECOND`; each step
     runs its initial population and its least generations, or, with a time
     limit, only step 1's initial population is sure to run.
+
+    With ``multi`` (a run of multi fidelity) the run has two evaluators, each
+    sized as above: the whole log's, with a quarter of the cache and batches
+    of ``multi.full_batch`` rows of ``n_samples``, and the windows', with
+    half the cache and a generation's rows of ``multi.window_samples``
+    samples; the data is counted once more on the windows. A generation
+    simulates every individual on the windows and ``multi.promote`` of them
+    (at most the population) on the whole log.
 
     Parameters
     ----------
@@ -145,14 +181,25 @@ def abstraction_estimate(steps: Sequence[StepSize], *, n_samples: int, n_inputs:
         Processes evaluating the population.
     time_limit : float, optional
         The run's wall-time limit [s].
+    multi : MultiFidelitySize, optional
+        The run's multi-fidelity sizes; None: a run of full fidelity.
     """
     n = max(1, int(n_samples))
     batch = max(s.population * s.n_rows for s in steps)
     genes = max(s.population * s.n_rows * (1 + 2 * s.n_elements) for s in steps)
     row = 8 * n
-    memory = (max(cache_bytes, (2 * batch + 16) * row) + workers * cache_bytes // 2
-              + batch * row + 32 * genes + (n_inputs + 4) * row)
-    per_gen = [s.population * s.n_rows * s.n_elements * n for s in steps]
+    if multi is None:
+        memory = _evaluator_memory(cache_bytes, batch, row, workers)
+        per_gen = [s.population * s.n_rows * s.n_elements * n for s in steps]
+    else:
+        low = max(1, min(n, int(multi.window_samples)))
+        memory = (_evaluator_memory(cache_bytes // 4, multi.full_batch, row, workers)
+                  + _evaluator_memory(cache_bytes // 2, batch, 8 * low, workers)
+                  + (n_inputs + 2) * 8 * low)
+        per_gen = [s.n_rows * s.n_elements * (s.population * low
+                                              + min(s.population, multi.promote) * n)
+                   for s in steps]
+    memory += 32 * genes + (n_inputs + 4) * row
     if time_limit is not None:
         element_samples = per_gen[0]
     else:
@@ -162,6 +209,10 @@ def abstraction_estimate(steps: Sequence[StepSize], *, n_samples: int, n_inputs:
     s = steps[big]
     detail = (f"step[{big}]: population {s.population} x {s.n_rows} rows x {s.n_elements} "
               f"elements x {n} samples a generation")
+    if multi is not None:
+        detail = (f"step[{big}], multi fidelity: population {s.population} x {s.n_rows} rows x "
+                  f"{s.n_elements} elements x {low} samples of windows a generation, "
+                  f"{min(s.population, multi.promote)} of them x {n} samples")
     return Estimate(int(memory), seconds, detail)
 
 

@@ -125,6 +125,17 @@ def effective(mode: str, n_samples: int) -> str:
     return mode
 
 
+def window_samples(settings: FidelitySettings, n: int, ts: float | None) -> int:
+    """The most samples of the low-fidelity signal :func:`plan_windows` lays out on a
+    training log of ``n`` samples: ``windows`` windows and their warm-ups, at most ``n``
+    (``ts`` None: the warm-ups' length unknown, ``n``)."""
+    if ts is None or not ts > 0:
+        return int(n)
+    length = max(1, math.ceil(settings.samples / settings.windows))
+    warm = int(round(settings.warm_up / ts))
+    return int(min(n, settings.windows * (length + warm)))
+
+
 @dataclass(frozen=True)
 class WindowPlan:
     """The low-fidelity part: windows of the training log laid end to end.

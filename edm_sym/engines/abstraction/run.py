@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from edm_sym.core.budget import Estimate, MultiFidelitySize, StepSize, abstraction_estimate, check
 from edm_sym.core.data import DataLog, join_logs
 from edm_sym.core.elements import BY_NAME, ParamRange, all_elements
 from edm_sym.core.errors import TARGET_AS_INPUT, ConfigError, DataFormatError, NumericsWarning
@@ -46,7 +47,7 @@ from edm_sym.engines.abstraction.checkpoint import (
     save_checkpoint,
 )
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
-from edm_sym.engines.abstraction.fidelity import effective
+from edm_sym.engines.abstraction.fidelity import effective, window_samples
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_holdout
 from edm_sym.engines.abstraction.local_search import tune_parameters
@@ -571,7 +572,8 @@ def abstract(
     hold = _holdout(data, cfg, target=target, inputs=inputs, validate=validate, logs=logs,
                     validation_share=validation_share)
     # The sizes first (config alone), then whether the log can support them.
-    check_budget(cfg, hold.n_train, len(inputs), workers=parallel.workers, time_limit=time_limit)
+    check_budget(cfg, hold.n_train, len(inputs), workers=parallel.workers, time_limit=time_limit,
+                 ts=float(data.ts))
     _require_samples(data, hold.n_train if hold.mask is None
                      else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
     check_data(data, target, inputs, logs=logs)
@@ -793,11 +795,9 @@ class _SearchJob:
             # The whole log's evaluator scores a few promoted individuals at once: a quarter
             # of the cache, at least room for two such batches; the windows' evaluator, whose
             # rows are short, half (docs/abstraction.md#multi-fidelity-evaluation).
-            full_batch = max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1,
-                                            1 + s.n_elements) for s in cfg.steps)
             evaluator = Evaluator(x, y, ts, self.ranges, executor=parallel.executor,
                                   workers=parallel.workers, cache_bytes=cache // 4,
-                                  max_batch_rows=full_batch, client=parallel.scheduler,
+                                  max_batch_rows=_whole_log_batch(cfg), client=parallel.scheduler,
                                   starts=self.starts)
             fid = Fidelities(evaluator, x, y, ts, self.ranges, cfg.multi_fidelity,
                              executor=parallel.executor, workers=parallel.workers,
@@ -844,6 +844,14 @@ class _SearchJob:
                                     history=tuple(r.history), generations=r.generations,
                                     evaluations=r.evaluations, weighting=r.weighting))
         return steps, reason
+
+
+def _whole_log_batch(cfg: AbstractionConfig) -> int:
+    """Rows of the largest batch the whole log's evaluator of a multi-fidelity run takes:
+    a step's promoted individuals (its elites, at first) and the inherited model, or a
+    local search's candidates."""
+    return max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1, 1 + s.n_elements)
+               for s in cfg.steps)
 
 
 def _roles(data: DataLog, inputs: Sequence[str]) -> list[str | None]:
@@ -962,8 +970,14 @@ def _require_samples(data: DataLog, n_train: int, cfg: AbstractionConfig, *,
 
 
 def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
-                 workers: int | None = None, time_limit: float | None = None) -> None:
+                 workers: int | None = None, time_limit: float | None = None,
+                 ts: float | None = None) -> Estimate:
     """Refuse a run that cannot fit this machine, before it starts (:mod:`edm_sym.core.budget`).
+
+    The run is estimated at the fidelity it will have (``fidelity.effective``
+    of the config's ``fidelity`` and ``n_samples``): a run of multi fidelity
+    as its two evaluators are sized (:func:`_whole_log_batch`, the windows of
+    ``[multi_fidelity]``; docs/cli.md#sizes-that-cannot-fit).
 
     Parameters
     ----------
@@ -976,26 +990,37 @@ def check_budget(cfg: AbstractionConfig, n_samples: int, n_inputs: int, *,
         Processes (default: every usable core).
     time_limit : float, optional
         The run's wall-time limit [s]: then only the first generation must fit the time limit.
+    ts : float, optional
+        Sample time [s]: the length of a multi-fidelity run's warm-ups (None: the windows
+        are taken as long as the log).
+
+    Returns
+    -------
+    Estimate
+        The figures checked.
 
     Raises
     ------
     BudgetError
         Naming the config and the largest step, with the estimate and the limit.
     """
-    from edm_sym.core.budget import StepSize, abstraction_estimate, check
-
     # A step runs at least one block (or its patience), and each restart as much again.
     sizes = [StepSize(s.ga.population, s.n_rows, s.n_elements,
                       (1 + s.ga.restarts) * (min(s.ga.generations, s.ga.patience)
                                              if s.ga.patience else s.ga.generations))
              for s in cfg.steps]
+    multi = None
+    if effective(cfg.fidelity, int(n_samples)) == "multi":
+        multi = MultiFidelitySize(window_samples(cfg.multi_fidelity, int(n_samples), ts),
+                                  cfg.multi_fidelity.promote, _whole_log_batch(cfg))
     est = abstraction_estimate(sizes, n_samples=n_samples, n_inputs=n_inputs,
                                cache_bytes=int(cfg.cache_mb * 2**20),
                                workers=int(workers) if workers else default_workers(),
-                               time_limit=time_limit)
+                               time_limit=time_limit, multi=multi)
     check(est, cfg.source, "use a smaller population or matrix, or a shorter log",
           time_hint="use a smaller population or matrix, fewer generations (or patience), "
                     "a shorter log or a time limit")
+    return est
 
 
 def _reference_fitness(matrix: ElementMatrix, ts: float, ranges: dict[str, ParamRange],
