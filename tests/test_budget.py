@@ -24,6 +24,7 @@ from edm_sym.core.budget import (
     format_seconds,
 )
 from edm_sym.core.errors import BudgetError, BudgetWarning
+from edm_sym.core.result import load_result
 from edm_sym.engines.abstraction import Parallel
 from edm_sym.engines.abstraction.run import check_budget
 from edm_sym.engines.abstraction.schedule import parse_config
@@ -196,7 +197,8 @@ def test_simulate_refuses_rows_that_do_not_fit(monkeypatch, tmp_path: Path, caps
     out = tmp_path / "sim.csv"
     assert main(["simulate", str(EXAMPLE), "plant:auger/evaluation", "-o", str(out)]) == 2
     err = _err(capsys)
-    assert re.search(r"plant:auger/evaluation: needs about [\d.]+ MiB of memory \(3 rows x \d+ "
+    rows = len(load_result(EXAMPLE).matrix.rows)
+    assert re.search(rf"plant:auger/evaluation: needs about [\d.]+ MiB of memory \({rows} rows x \d+ "
                      r"samples\), more than the 4 KiB", err), err
     assert not out.exists()
 

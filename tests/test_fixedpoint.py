@@ -109,9 +109,9 @@ def test_a_sign_a_rounding_flips_is_a_switching_event() -> None:
 
 @pytest.mark.parametrize(("real", "goal"), [("q31", 1e-3), ("q15", 2e-2)])
 def test_example_meets_its_goal_on_its_recorded_log(real: str, goal: float) -> None:
-    # The q15 relay reads omega in Q7.8 (LSB 0.0039 rad/s) against a threshold of 0.0105
-    # rad/s: on the log it switches where the unrounded velocity misses the threshold by
-    # a fraction of an LSB. Under the switching rule the build meets the goal there, and
+    # The q15 relay reads omega in Q7.8 (LSB 0.0039 rad/s) against a threshold of about
+    # 0.011 rad/s: on the log it switches where the unrounded velocity misses the threshold
+    # by a fraction of an LSB. Under the switching rule the build meets the goal there, and
     # the events are the relay's.
     from edm_sym.application.exporting import recorded_log
     from edm_sym.engines.fixedpoint import build
@@ -126,11 +126,19 @@ def test_example_meets_its_goal_on_its_recorded_log(real: str, goal: float) -> N
     assert name == "plant:auger/abstraction" and b.log.samples == x.shape[-1]
     assert b.log.measured < goal * b.log.rms
     assert b.log.measured < 0.2 * goal * b.log.rms  # room to spare
-    relay = "rows[0].elements[0] (hysteresis)"
+    k = _relay_row(comp)
+    relay = f"rows[{k}].elements[0] (hysteresis)"
     assert {e.where for e in b.log.events} <= {relay}
     if real == "q15":
-        assert [e.samples for e in b.log.events] == [75, 7]
+        assert b.log.events and all(e.samples >= 1 for e in b.log.events)
         assert b.log.raw > 1.0  # what the switching events cost without the rule
+
+
+def _relay_row(comp) -> int:  # noqa: ANN001
+    """The example's Coulomb row: the one that starts with a relay."""
+    rows = [k for k, r in enumerate(comp.matrix.rows) if r.genes[0].element.is_relay]
+    assert len(rows) == 1, "the shipped example has one relay row"
+    return rows[0]
 
 
 def test_the_rule_feeds_a_first_switching_element_the_build_s_input() -> None:
@@ -149,14 +157,17 @@ def test_the_rule_feeds_a_first_switching_element_the_build_s_input() -> None:
                           None)
     d = design(comp, WORDS["q15"], ranges)
     x = excitation(ins, ranges, d.sample_time, 4000)
-    x[2, 100:140] = 0.0104  # omega just under the threshold 0.0104647: rounded, it is over
+    k = _relay_row(comp)
+    row = comp.matrix.rows[k]
+    threshold = comp.value(row.genes[0])
+    x[row.input, 100:140] = 0.99 * threshold  # omega just under the threshold ...
     u = input_ints(d, x)
+    seen = to_real(u[row.input], d.input_fracs[row.input])
+    assert seen[100] > threshold  # ... and over it as the build rounds it
     _, _, per = run_fixed(d, u, stages=True)
     ref = reference(d, comp, x, u, per)
-    row = comp.matrix.rows[0]
-    seen = to_real(u[row.input], d.input_fracs[row.input])
-    np.testing.assert_array_equal(ref.stages[0][-1], simulate_row(comp, row, seen))
-    assert ref.events and ref.events[0].where.startswith("rows[0].elements[0] (hysteresis")
+    np.testing.assert_array_equal(ref.stages[k][-1], simulate_row(comp, row, seen))
+    assert ref.events and ref.events[0].where.startswith(f"rows[{k}].elements[0] (hysteresis")
     assert not np.array_equal(ref.total, ref.raw)
 
 

@@ -75,11 +75,11 @@ def test_describe_names_the_inertia_only_with_the_bandwidth() -> None:
     assert log.scalars["observer_bandwidth"] == 150.0
     bare = dataclasses.replace(log, scalars={})
     kinds = lambda d: [[t.term.kind for t in r.terms] for r in d.rows]  # noqa: E731
-    assert kinds(edm_sym.describe(result, bare))[1] == ["viscous"]
     given = edm_sym.describe(result, bare, observer_bandwidth=150.0)
-    assert kinds(given)[1] == ["viscous", "acceleration"]
+    k = kinds(given).index(["viscous", "acceleration"])
+    assert kinds(edm_sym.describe(result, bare))[k] == ["viscous"]
     assert kinds(given) == kinds(edm_sym.describe(result, log))
-    flags = [f.code for f in given.rows[1].flags]
+    flags = [f.code for f in given.rows[k].flags]
     assert "joint" in flags
 
 

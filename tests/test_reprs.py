@@ -35,8 +35,10 @@ def test_the_shipped_result_fits_on_a_screen() -> None:
     lines = repr(res).splitlines()
     assert len(lines) == 1 + len(res.matrix.rows) and max(map(len, lines)) < 120
     # Four inputs by name would make the header too wide: their number (rows name theirs).
-    assert lines[0].startswith("EdmResult(target 'tau_ext', 4 inputs, 4x3 matrix")
-    assert "through" not in repr(res) and lines[3].startswith("  row 3: theta_uw -> sin_phase(")
+    m, n = len(res.matrix.rows), len(res.matrix.rows[0].genes)  # shown n x m, as the paper
+    assert lines[0].startswith(f"EdmResult(target 'tau_ext', 4 inputs, {n}x{m} matrix")
+    assert "through" not in repr(res)
+    assert lines[2].startswith("  row 2: theta_uw -> sin_phase(")
     legacy = edm_sym.load_result(ROOT / "tests" / "golden" / "legacy_auger_result.json")
     legacy_lines = repr(legacy).splitlines()
     assert max(map(len, legacy_lines)) < 120 and "shift(5.879 samples)" in legacy_lines[5]
