@@ -110,6 +110,14 @@ def test_rows_that_cancel_are_negligible(tmp_path: Path, log: DataLog) -> None:
         assert row["contribution"] > 0.5  # each alone is large
         assert "cancels" in codes and "negligible" in codes and row["terms"] == []
         assert f"row {other}" in next(f["message"] for f in row["flags"] if f["code"] == "cancels")
+    # The closing summary of edm abstract reads the same rule: both rows, and only them.
+    from edm_sym.application.summary import negligible_rows
+
+    lines = negligible_rows(load_result(tmp_path / "cancel.json"), log)
+    assert [line.split(" (")[0] for line in lines] == ["row 1", "row 2"]
+    assert "cancels with row 2" in lines[0] and "cancels with row 1" in lines[1]
+    tiny = _write(_set(_doc(), 0, 1, "gain", -0.00064), tmp_path / "tiny.json")
+    assert [line.split(" (")[0] for line in negligible_rows(load_result(tiny), log)] == ["row 1"]
 
 
 def test_negligible_static_term_is_left_out(tmp_path: Path, log: DataLog) -> None:

@@ -27,15 +27,10 @@ from typing import IO, Any
 import numpy as np
 
 from edm_sym.core.bounds import bound_summary
-from edm_sym.core.fitness import rms
 from edm_sym.core.units import axis_units
 
 __all__ = ["fitness_line", "negligible_rows", "physics_line", "physics_of", "print_summary", "result_flags",
            "with_physics"]
-
-#: A row below this share of the target's RMS is negligible (as in ``edm describe``).
-NEGLIGIBLE = 0.01
-
 
 def fitness_line(result: Any) -> str:
     """``fitness (weighted eq. 8): training 0.0421 N m, validation 0.0433 N m``.
@@ -69,7 +64,9 @@ def fitness_line(result: Any) -> str:
 
 
 def negligible_rows(result: Any, log: Any) -> list[str]:
-    """The rows whose output is below :data:`NEGLIGIBLE` of the target's RMS on ``log``.
+    """The rows ``edm describe`` calls negligible on ``log``: below 1 % of the target's RMS,
+    alone or with a row they cancel (:func:`edm_sym.engines.symbolic.significance.row_shares`,
+    the one place of the rule).
 
     Parameters
     ----------
@@ -83,24 +80,31 @@ def negligible_rows(result: Any, log: Any) -> list[str]:
         One line per negligible row (none when the target is all zero).
     """
     from edm_sym.engines.simulate import simulate_rows
+    from edm_sym.engines.symbolic.significance import SignificanceOptions, row_shares
 
     comp = result.compensator
     logs = list(log) if isinstance(log, list | tuple) else [log]  # several: each from rest
     target = np.concatenate([d.column(result.target, role="target column") for d in logs])
-    ref = rms(target)
-    if not ref > 0:
-        return []
     with np.errstate(all="ignore"):
         outputs = np.concatenate([simulate_rows(comp, comp.matrix.rows, d.stack(comp.matrix.inputs))
                                   for d in logs], axis=1)
+    shares = row_shares(outputs, target)
+    if shares is None:
+        return []
     source = " + ".join(d.source for d in logs)
+    threshold = 100 * SignificanceOptions().threshold
     out = []
-    for j, y in enumerate(outputs):
-        share = rms(y) / ref
-        if share < NEGLIGIBLE:
-            out.append(f"row {j + 1} ({comp.matrix.inputs[comp.matrix.rows[j].input]}) is "
-                       f"negligible: {100 * share:.4g} % of the target's RMS on "
-                       f"{source} (threshold {100 * NEGLIGIBLE:g} %)")
+    for j, row in enumerate(shares):
+        if not row.negligible:
+            continue
+        name = f"row {j + 1} ({comp.matrix.inputs[comp.matrix.rows[j].input]}) is negligible"
+        if 100 * row.share < threshold:
+            out.append(f"{name}: {100 * row.share:.4g} % of the target's RMS on {source} "
+                       f"(threshold {threshold:g} %)")
+        else:
+            k, both = min(row.cancels, key=lambda c: c[1])
+            out.append(f"{name}: it cancels with row {k + 1}, together {100 * both / row.ref:.4g} % "
+                       f"of the target's RMS on {source} (threshold {threshold:g} %)")
     return out
 
 

@@ -176,6 +176,56 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
+@dataclass(frozen=True)
+class RowShare:
+    """What a row contributes on the data (:func:`row_shares`): the negligible-row rule."""
+
+    #: The RMS of the row's output, and of the target.
+    rms: float
+    ref: float
+    #: The rows it cancels with: ``(k, RMS of the pair's sum)``, k zero-based.
+    cancels: tuple[tuple[int, float], ...]
+    #: Below the threshold alone, or in a cancelling pair whose sum is.
+    negligible: bool
+
+    @property
+    def share(self) -> float:
+        """The row's RMS over the target's."""
+        return self.rms / self.ref
+
+
+def row_shares(outputs: np.ndarray, target: np.ndarray,
+               options: SignificanceOptions | None = None) -> tuple[RowShare, ...] | None:
+    """The negligible-row rule, the one place it is decided (``edm describe``, the report
+    and the closing summary of ``edm abstract`` all read it).
+
+    A row is negligible when its output's RMS is below ``options.threshold``
+    of the target's, or when it cancels with another row (the RMS of their sum
+    below ``options.cancel_ratio`` of the smaller of the two) and the pair's
+    sum is below the threshold. None when the target's RMS is 0 (nothing to
+    measure against).
+    """
+    opts = options or SignificanceOptions()
+    ref = _rms(np.asarray(target, dtype=float))
+    if not ref > 0:
+        return None
+    rms = [_rms(y) for y in outputs]
+    out = []
+    for j in range(len(rms)):
+        negligible = rms[j] / ref < opts.threshold
+        cancels = []
+        for k in range(len(rms)):
+            small = min(rms[j], rms[k])
+            if k == j or not small > 0:
+                continue
+            both = _rms(outputs[j] + outputs[k])
+            if both < opts.cancel_ratio * small:
+                cancels.append((k, both))
+                negligible = negligible or both / ref < opts.threshold
+        out.append(RowShare(rms[j], ref, tuple(cancels), negligible))
+    return tuple(out)
+
+
 def _pct(share: float) -> str:
     return f"{100 * share:.4g} %"
 
@@ -317,31 +367,24 @@ def judge_rows(
     """
     opts = options or SignificanceOptions()
     bounds = bound_flags(model.compensator, margin=opts.bound_margin)
-    measured = outputs is not None and target is not None
-    ref = _rms(np.asarray(target, dtype=float)) if measured else 0.0
-    if measured and not ref > 0:
-        measured = False
-    rms = [_rms(y) for y in outputs] if measured else [None] * len(model.rows)
+    shares = row_shares(outputs, target, opts) if outputs is not None and target is not None \
+        else None
+    measured = shares is not None
+    ref = shares[0].ref if shares else 0.0
     out = []
     for row in model.rows:
         j = row.index
         flags: list[Flag] = []
-        share = rms[j] / ref if measured else None
+        share = shares[j].share if measured else None
         if not measured:
             flags.append(Flag("unmeasured", "no data with the target: contribution not measured"))
-        negligible = share is not None and share < opts.threshold
+        negligible = measured and shares[j].negligible
         if measured:
-            for k in range(len(model.rows)):
-                small = min(rms[j], rms[k])
-                if k == j or not small > 0:
-                    continue
-                both = _rms(outputs[j] + outputs[k])
-                if both < opts.cancel_ratio * small:
-                    force = axis_units(model.axis).force
-                    flags.append(Flag("cancels", f"cancels with row {k + 1}: together "
-                                      f"{both:.4g} {force} RMS ({_pct(both / ref)} of the target's "
-                                      f"RMS), alone {rms[j]:.4g} and {rms[k]:.4g} {force}"))
-                    negligible = negligible or both / ref < opts.threshold
+            force = axis_units(model.axis).force
+            for k, both in shares[j].cancels:
+                flags.append(Flag("cancels", f"cancels with row {k + 1}: together "
+                                  f"{both:.4g} {force} RMS ({_pct(both / ref)} of the target's "
+                                  f"RMS), alone {shares[j].rms:.4g} and {shares[k].rms:.4g} {force}"))
         row_bounds = tuple(b for b in bounds if b.row == j)
         flags += [Flag("at_bound", b.message()) for b in row_bounds]
         n_delay = _delay_samples(row)
@@ -366,7 +409,8 @@ def judge_rows(
             terms = _judge_terms(row, x, ref if measured else None, row_bounds, opts, flags,
                                  (outputs[j], a) if measured else None,
                                  axis_units(model.axis).inertia)
-        out.append(JudgedRow(j, share, tuple(terms), tuple(flags), rms[j], row_bounds))
+        out.append(JudgedRow(j, share, tuple(terms), tuple(flags),
+                             shares[j].rms if measured else None, row_bounds))
     options = classify or ClassifyOptions.for_axis(model.axis)
     out = _joint_spatial(model, _joint(model, out, options), options)
     return _joint_inertia(model, out, inertia, ref if measured else 0.0, opts)
