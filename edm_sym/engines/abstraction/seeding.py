@@ -103,6 +103,15 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
             if amp[i] > 0]
 
 
+def _row(n_elements: int, genes: Sequence[tuple[int, float]]) -> tuple[np.ndarray, np.ndarray]:
+    """A row's ``(codes, ps)``: ``genes`` first, ``through`` after them."""
+    codes = np.full(n_elements, BY_NAME["through"].code, dtype=np.int64)
+    ps = np.zeros(n_elements)
+    for i, (code, p) in enumerate(genes):
+        codes[i], ps[i] = code, p
+    return codes, ps
+
+
 def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[str, ParamRange],
                   n_elements: int, allowed: set[int]) -> list[tuple[np.ndarray, np.ndarray]]:
     """Each harmonic as a row's genes ``(codes, ps)`` of length ``n_elements``.
@@ -111,7 +120,7 @@ def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[st
     schedule without ``gain`` and ``sin_phase`` (or with fewer than three
     elements a row), gives no row.
     """
-    gain, sine, through = BY_NAME["gain"], BY_NAME["sin_phase"], BY_NAME["through"]
+    gain, sine = BY_NAME["gain"], BY_NAME["sin_phase"]
     if n_elements < 3 or not {gain.code, sine.code} <= allowed:
         return []
     g, s = ranges[gain.name], ranges[sine.name]
@@ -119,10 +128,8 @@ def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[st
     for k, amp, phase in harmonics:
         if not (g.low <= k <= g.high and g.low <= amp <= g.high):
             continue
-        codes = np.full(n_elements, through.code, dtype=np.int64)
-        ps = np.zeros(n_elements)
-        codes[:3] = gain.code, sine.code, gain.code
-        ps[:3] = g.encode(float(k)), s.encode(phase), g.encode(amp)
+        codes, ps = _row(n_elements, [(gain.code, g.encode(float(k))), (sine.code, s.encode(phase)),
+                                      (gain.code, g.encode(amp))])
         out.append((codes, ps))
     return out
 
@@ -196,7 +203,7 @@ def stribeck_rows(humps: Sequence[tuple[float, float, float]], ranges: dict[str,
     without ``tanh`` and ``gain`` (or with fewer than two elements a row),
     gives no row.
     """
-    gain, tanh, through = BY_NAME["gain"], BY_NAME["tanh"], BY_NAME["through"]
+    gain, tanh = BY_NAME["gain"], BY_NAME["tanh"]
     if n_elements < 2 or not {gain.code, tanh.code} <= allowed:
         return []
     g, t = ranges[gain.name], ranges[tanh.name]
@@ -204,9 +211,6 @@ def stribeck_rows(humps: Sequence[tuple[float, float, float]], ranges: dict[str,
     for k, c, _ in humps:
         if not (t.low <= k <= t.high and g.low <= c <= g.high):
             continue
-        codes = np.full(n_elements, through.code, dtype=np.int64)
-        ps = np.zeros(n_elements)
-        codes[:2] = tanh.code, gain.code
-        ps[:2] = t.encode(k), g.encode(c)
+        codes, ps = _row(n_elements, [(tanh.code, t.encode(k)), (gain.code, g.encode(c))])
         out.append((codes, ps))
     return out
