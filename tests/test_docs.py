@@ -254,3 +254,12 @@ def test_version_is_printed(entry: str, capsys: pytest.CaptureFixture) -> None:
         getattr(cli, entry)(["--version"])
     assert info.value.code == 0
     assert capsys.readouterr().out.strip().endswith(__version__)
+
+
+def test_the_module_map_names_every_module_of_the_search() -> None:
+    """docs/architecture.md#module-map-enginesabstraction lists each module of the search."""
+    text = (ROOT / "docs" / "architecture.md").read_text("utf-8")
+    section = text.split("## Module map: `engines/abstraction/`", 1)[1].split("\n## ", 1)[0]
+    modules = sorted(p.name for p in (ROOT / "edm_sym" / "engines" / "abstraction").glob("*.py")
+                     if p.name != "__init__.py")
+    assert modules and [m for m in modules if f"| `{m}` |" not in section] == []
