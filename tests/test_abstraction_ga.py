@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -206,3 +208,16 @@ def test_gain_fit_turns_a_through_into_a_gain_and_skips_optimal_rows() -> None:
     fit = np.array([np.sqrt(np.mean((y - np.sign(x)) ** 2))])
     idx, cand = _gain_fit(pop, [np.sign(x)], y, fit, n, ranges)
     assert len(idx) == 0 and len(cand) == 0
+
+
+def test_the_local_search_runs_every_local_search_generations_without_improvement() -> None:
+    from edm_sym.engines.abstraction.ga import Progress
+
+    ga = GaSettings(local_search=3, patience=0, generations=50, continue_mode="no")
+    prog, ran = Progress.start(1.0), []
+    for gen in range(1, 11):
+        prog = prog.after(ga, 0.5 if gen == 1 else prog.ref_best)  # improves once, then stalls
+        ran.append(prog.stagnant(ga))
+    assert [g for g, r in zip(range(1, 11), ran, strict=True) if r] == [4, 7, 10]
+    assert not prog.stagnant(GaSettings(local_search=0))
+    assert replace(prog, since_improvement=1, done=True).stagnant(ga)  # a step ending stalled

@@ -283,3 +283,9 @@ class Progress:
                 done = True
         return replace(self, generation=gen, blocks=blocks, block_start_best=block_start,
                        ref_best=ref, since_improvement=since, done=done)
+
+    def stagnant(self, ga: GaSettings) -> bool:
+        """Whether the local search runs now: every ``local_search`` generations without
+        improvement, and when a step ends without one (full and multi fidelity alike)."""
+        return bool(ga.local_search and self.since_improvement and (
+            self.done or self.since_improvement % ga.local_search == 0))

@@ -202,8 +202,7 @@ class MultiSteps:
         before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
                           cur.since_improvement)
         prog = before.after(ga, best)
-        if ga.local_search and prog.since_improvement and (
-                prog.done or prog.since_improvement % ga.local_search == 0):
+        if prog.stagnant(ga):
             # Stagnation: the best individual tuned on the low-fidelity part, the tuned copy
             # scored on the whole training log; where it is better there, it takes the place
             # of the worst by low fidelity, so the original stays.

@@ -400,8 +400,7 @@ class _Runner:
         before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
                           cur.since_improvement)
         prog = before.after(ga, best)
-        if ga.local_search and prog.since_improvement and (
-                prog.done or prog.since_improvement % ga.local_search == 0):
+        if prog.stagnant(ga):
             # Stagnation: tune the best individual's parameters; the result takes the
             # place of the worst individual, so the original stays in the population.
             k = int(np.argmin(new_fit))
