@@ -144,7 +144,12 @@ def test_windows_start_at_the_log_and_spread_over_the_fitted_samples() -> None:
     warm = plan.index[~plan.scored]
     assert warm.tolist() == [i for s0 in (3300, 6600, 9900) for i in range(s0 - 10, s0)]
     w = plan.weights(1.0)
-    assert np.all(w[~plan.scored] == 0) and np.allclose(w[plan.scored], 430 / 400)
+    # The first window (the log's first 100 samples, simulated as the log does) weighs as in
+    # the log; the 300 samples of the later windows stand for the other 9 900.
+    assert plan.start == 100 and plan.n == n
+    first = plan.index < 100
+    assert np.all(w[~plan.scored] == 0) and np.allclose(w[first], 430 / n)
+    assert np.allclose(w[plan.scored & ~first], 430 / n * 9_900 / 300)
     # Held-out samples (Lambda 0) are never a window's start; windows lie on the fitted ones.
     lam = np.ones(n)
     lam[:5000] = 0.0
@@ -152,9 +157,28 @@ def test_windows_start_at_the_log_and_spread_over_the_fitted_samples() -> None:
     lam[-100:] = 0.0
     plan = plan_windows(lam, n, 1e-3, s)
     assert plan.index[plan.scored].min() == 5000 and plan.index.max() == n - 101
+    assert plan.start == 0  # the log's start is held out: no window starts there
     w = plan.weights(lam)
-    scale = len(plan.index) / np.count_nonzero(plan.scored)
-    assert np.array_equal(w, np.where(plan.scored, lam[plan.index] * scale, 0.0))
+    scale = len(plan.index) / n * lam.sum() / lam[plan.index[plan.scored]].sum()
+    assert np.allclose(w, np.where(plan.scored, lam[plan.index] * scale, 0.0))
+
+
+def test_the_windows_estimate_the_whole_log_and_its_start_as_it_weighs() -> None:
+    # A residual with a start-from-rest transient: the windows' eq. 8 is the whole log's
+    # when the rest is stationary, with or without held-out blocks; weighing the first
+    # window as one in four would count the transient 25 times over.
+    s = FidelitySettings(samples=400, windows=4, warm_up=0.01, margin=0.0, promote=1)
+    n = 10_000
+    residual = np.full(n, 0.1)
+    residual[:50] = 3.0
+    lam = np.ones(n)
+    lam[2_000:3_000] = 0.0
+    for weights in (1.0, lam):
+        plan = plan_windows(weights, n, 1e-3, s)
+        low = fitness(residual[plan.index], plan.weights(weights))
+        assert low == pytest.approx(fitness(residual, weights), rel=1e-12)
+        uniform = np.where(plan.scored, 1.0, 0.0) * len(plan.index) / np.count_nonzero(plan.scored)
+        assert fitness(residual[plan.index], uniform) > 2 * fitness(residual, weights)
 
 
 def test_elites_are_ranked_by_whole_log_and_the_rest_by_low_fidelity() -> None:

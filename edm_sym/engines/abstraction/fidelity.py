@@ -8,8 +8,9 @@ after ``warm_up`` seconds of the log before it, which carry its rows'
 state and are not scored. The windows are laid end to end as one signal
 (:class:`WindowPlan`), so the row kernel runs them as it runs a log; the
 first window starts at the log's first sample, from rest, as the log does.
-Its eq. 8 (each scored sample with the step's Lambda, scaled so the value
-estimates the whole log's) ranks them.
+Its eq. 8 ranks them: each scored sample with the step's Lambda, weighed so
+the value is a stratified estimate of the whole log's (the first window's
+samples as in the log, the others for the rest of it: :meth:`WindowPlan.weights`).
 
 A new individual whose low-fidelity eq. 8 is at most ``1 + margin`` times
 the largest low-fidelity eq. 8 among the current elites **may enter the
@@ -70,7 +71,7 @@ class FidelitySettings:
     """
 
     samples: int = 16_000
-    windows: int = 16
+    windows: int = 64
     warm_up: float = 0.2
     margin: float = 0.02
     promote: int = 4
@@ -146,24 +147,49 @@ class WindowPlan:
         The training log's samples that make the low-fidelity signal, in order.
     scored : numpy.ndarray
         Per sample of ``index``: scored (True) or warm-up (False).
+    n : int
+        Samples of the training log.
+    start : int
+        The log's first samples the low-fidelity signal simulates exactly as
+        the log does (from rest, no jump before them): the first span when it
+        starts at the log's start, else 0. They stand for themselves in eq. 8;
+        the other scored samples stand for the rest of the log.
     """
 
     index: np.ndarray
     scored: np.ndarray
+    n: int = 0
+    start: int = 0
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, WindowPlan) and np.array_equal(self.index, other.index)
-                and np.array_equal(self.scored, other.scored))
+                and np.array_equal(self.scored, other.scored) and self.n == other.n
+                and self.start == other.start)
 
     __hash__ = None  # type: ignore[assignment]
 
     def weights(self, full: np.ndarray | float) -> np.ndarray:
-        """Lambda on the low-fidelity signal: the whole log's on the scored samples, 0 on
-        the warm-ups, scaled by ``len / scored`` so eq. 8 (a mean over every sample)
-        estimates the whole log's."""
+        """Lambda on the low-fidelity signal, so that eq. 8 (a mean over every sample)
+        estimates the whole log's: a stratified estimate of the log's mean.
+
+        The log's first ``start`` samples (simulated exactly, from rest) weigh as
+        they do in the log, ``len / n`` times Lambda. The other scored samples
+        stand for the rest of the log: their Lambda is scaled so that together
+        they weigh what Lambda weighs over the rest of the log (times ``len /
+        n``), so a constant residual scores exactly its whole-log eq. 8. The
+        warm-ups weigh 0. Without ``n`` (0), every scored sample stands for an
+        equal share of the log.
+        """
         lam = np.asarray(full, dtype=float)
         out = np.where(self.scored, lam[self.index] if lam.ndim else lam, 0.0)
-        return out * (len(self.index) / max(1, int(np.count_nonzero(self.scored))))
+        length = len(self.index)
+        if not self.n:
+            return out * (length / max(1, int(np.count_nonzero(self.scored))))
+        first = self.index < self.start
+        mass = float(np.sum(lam[self.start:])) if lam.ndim else float(lam) * (self.n - self.start)
+        sampled = float(np.sum(out[~first]))
+        rest = mass / sampled if sampled > 0 else 0.0
+        return out * np.where(first, 1.0, rest) * (length / self.n)
 
 
 def plan_windows(weights: np.ndarray | float, n: int, ts: float,
@@ -218,7 +244,8 @@ def plan_windows(weights: np.ndarray | float, n: int, ts: float,
     out_scored = np.concatenate(scored)
     for _, hi, start in spans:
         out_scored |= (out_index >= start) & (out_index < hi)
-    return WindowPlan(out_index, out_scored)
+    start = int(index[0][-1]) + 1 if len(index[0]) and int(index[0][0]) == 0 else 0
+    return WindowPlan(out_index, out_scored, n=int(n), start=start)
 
 
 def rank_multi(full: np.ndarray, low: np.ndarray, keys: Sequence[bytes], elites: int
