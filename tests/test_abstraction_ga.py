@@ -221,28 +221,3 @@ def test_the_local_search_runs_every_local_search_generations_without_improvemen
     assert [g for g, r in zip(range(1, 11), ran, strict=True) if r] == [4, 7, 10]
     assert not prog.stagnant(GaSettings(local_search=0))
     assert replace(prog, since_improvement=1, done=True).stagnant(ga)  # a step ending stalled
-
-
-def test_a_new_lowest_low_fidelity_score_keeps_a_step_going() -> None:
-    from edm_sym.engines.abstraction.ga import Progress
-
-    # The whole-log best stalls after generation 1; the windows' lowest score keeps
-    # improving until generation 30.
-    ga = GaSettings(patience=10, generations=20, continue_mode="improving", max_blocks=5)
-    # Without low-fidelity scores: patience ends the step 10 generations after the last
-    # improvement; with them, 10 generations after the windows' last one.
-    prog, ends = Progress.start(1.0), []
-    for gen in range(1, 61):
-        prog = prog.after(ga, 0.5)
-        if prog.done:
-            ends.append(gen)
-            break
-    prog_low, ends_low = Progress.start(1.0, 2.0), []
-    for gen in range(1, 61):
-        prog_low = prog_low.after(ga, 0.5, 2.0 - 0.01 * min(gen, 30))
-        if prog_low.done:
-            ends_low.append(gen)
-            break
-    assert ends == [11] and ends_low == [40]
-    # A full-fidelity step (no low) keeps the rule it always had.
-    assert Progress.start(1.0).after(ga, 0.5) == Progress.start(1.0).after(ga, 0.5, None)

@@ -15,7 +15,6 @@ from __future__ import annotations
 import glob
 import hashlib
 import json
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,10 +51,6 @@ class StepState:
     #: With multi-fidelity evaluation: each individual's low-fidelity eq. 8 (``fitness``
     #: is then its eq. 8 on the whole training log, ``inf`` where it was not scored there).
     low: np.ndarray | None = None
-    #: With multi-fidelity evaluation: the stopping rule's lowest low-fidelity eq. 8 at the
-    #: block's start and at the last improvement (:class:`~edm_sym.engines.abstraction.ga.Progress`).
-    block_start_low: float = math.inf
-    ref_low: float = math.inf
 
 
 @dataclass
@@ -117,8 +112,7 @@ def dumps(state: RunState) -> str:
             "history": cur.history, "evaluations": cur.evaluations,
             "restarts": cur.restarts,
             # Multi-fidelity only: a run of full fidelity writes the checkpoint it always did.
-            **({"low": cur.low.tolist(), "block_start_low": cur.block_start_low,
-                "ref_low": cur.ref_low} if cur.low is not None else {}),
+            **({"low": cur.low.tolist()} if cur.low is not None else {}),
         },
     }
     doc["sha256"] = _digest(doc)
@@ -250,9 +244,7 @@ def load_checkpoint(path: str | Path, fingerprint: str,
             fitness=np.array(c["fitness"], dtype=float),
             history=[float(h) for h in c["history"]], evaluations=int(c["evaluations"]),
             restarts=int(c.get("restarts", 0)),
-            low=np.array(c["low"], dtype=float) if c.get("low") is not None else None,
-            block_start_low=float(c.get("block_start_low", math.inf)),
-            ref_low=float(c.get("ref_low", math.inf)))
+            low=np.array(c["low"], dtype=float) if c.get("low") is not None else None)
         return RunState(doc["fingerprint"], doc["rng_state"], finished, current,
                         dict(identity or doc.get("identity") or {}))
     except (KeyError, TypeError, ValueError) as exc:

@@ -235,9 +235,6 @@ class Progress:
         Generations since that improvement.
     done : bool
         Whether the rule says stop.
-    block_start_low, ref_low : float
-        With multi-fidelity evaluation, the same two for the lowest
-        low-fidelity eq. 8 the step has seen (``inf``: not tracked).
     """
 
     generation: int = 0
@@ -246,17 +243,13 @@ class Progress:
     ref_best: float = math.inf
     since_improvement: int = 0
     done: bool = False
-    block_start_low: float = math.inf
-    ref_low: float = math.inf
 
     @staticmethod
-    def start(best: float, low: float | None = None) -> Progress:
-        """The progress after the initial population, whose best fitness is ``best``
-        (and whose lowest low-fidelity eq. 8 is ``low``, with multi fidelity)."""
-        lo = math.inf if low is None else low
-        return Progress(block_start_best=best, ref_best=best, block_start_low=lo, ref_low=lo)
+    def start(best: float) -> Progress:
+        """The progress after the initial population, whose best fitness is ``best``."""
+        return Progress(block_start_best=best, ref_best=best)
 
-    def after(self, ga: GaSettings, best: float, low: float | None = None) -> Progress:
+    def after(self, ga: GaSettings, best: float) -> Progress:
         """The progress after one more generation whose best fitness is ``best``.
 
         Parameters
@@ -267,11 +260,6 @@ class Progress:
         best : float
             Best fitness after the generation (never above the previous best:
             the elites are kept).
-        low : float, optional
-            With multi-fidelity evaluation: the lowest low-fidelity eq. 8 of the
-            generation's population. A new lowest one counts as an improvement
-            too: the search still improves where it ranks, before a promoted
-            individual carries it to the whole log.
 
         Returns
         -------
@@ -280,27 +268,21 @@ class Progress:
             without a relative improvement of ``min_improvement``, or after a
             block of G_max generations when ``continue`` says so.
         """
-        keep = 1.0 - ga.min_improvement
         gen = self.generation + 1
         ref, since = self.ref_best, self.since_improvement + 1
-        ref_low, block_low = self.ref_low, self.block_start_low
-        if best < ref * keep:
+        if best < ref * (1.0 - ga.min_improvement):
             ref, since = best, 0
-        if low is not None and low < ref_low * keep:
-            ref_low, since = low, 0
         blocks, block_start = self.blocks, self.block_start_best
         done = bool(ga.patience and since >= ga.patience)
         if gen % ga.generations == 0:
             blocks += 1
-            improved = best < block_start * keep or (low is not None and low < block_low * keep)
+            improved = best < block_start * (1.0 - ga.min_improvement)
             block_start = best
-            block_low = block_low if low is None else min(low, ref_low)
             if (ga.continue_mode == "no" or blocks >= ga.max_blocks
                     or (ga.continue_mode == "improving" and not improved)):
                 done = True
         return replace(self, generation=gen, blocks=blocks, block_start_best=block_start,
-                       ref_best=ref, since_improvement=since, done=done,
-                       block_start_low=block_low, ref_low=ref_low)
+                       ref_best=ref, since_improvement=since, done=done)
 
     def stagnant(self, ga: GaSettings) -> bool:
         """Whether the local search runs now: every ``local_search`` generations without

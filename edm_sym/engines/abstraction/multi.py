@@ -140,12 +140,6 @@ class Fidelities:
             self.low.abort()
 
 
-def lowest(low: np.ndarray) -> float:
-    """The lowest finite low-fidelity eq. 8 of a population (``inf``: none)."""
-    finite = low[np.isfinite(low)]
-    return float(np.min(finite)) if finite.size else math.inf
-
-
 def _reference(full: np.ndarray, low: np.ndarray) -> float | None:
     """The largest low-fidelity eq. 8 among elites scored on the whole log (None: none)."""
     known = np.isfinite(full)
@@ -206,9 +200,8 @@ class MultiSteps:
         new_low = np.concatenate([rlow[:e], klow])
         best = float(np.min(new_fit))
         before = Progress(cur.generation, cur.blocks, cur.block_start_best, cur.ref_best,
-                          cur.since_improvement, block_start_low=cur.block_start_low,
-                          ref_low=cur.ref_low)
-        prog = before.after(ga, best, lowest(new_low))
+                          cur.since_improvement)
+        prog = before.after(ga, best)
         if prog.stagnant(ga):
             # Stagnation: the best individual tuned on the low-fidelity part, the tuned copy
             # scored on the whole training log; where it is better there, it takes the place
@@ -226,22 +219,21 @@ class MultiSteps:
                         tuned.inputs[0], tuned.codes[0], tuned.ps[0])
                     new_fit[worst], new_low[worst] = tfit, tlow
                     best = tfit
-                    prog = before.after(ga, best, lowest(new_low))
+                    prog = before.after(ga, best)
         restarts = cur.restarts
         if prog.done and restarts < ga.restarts:
             restarts += 1
             new_pop, new_fit, new_low, used = self._restart(new_pop, new_fit, new_low, ops)
             extra += used
             best = float(np.min(new_fit))
-            prog = replace(Progress.start(best, lowest(new_low)), generation=prog.generation)
+            prog = replace(Progress.start(best), generation=prog.generation)
         return StepState(step=cur.step, generation=prog.generation, blocks=prog.blocks,
                          block_start_best=prog.block_start_best, ref_best=prog.ref_best,
                          since_improvement=prog.since_improvement,
                          done=prog.done, population=new_pop, fitness=new_fit,
                          history=[*cur.history, best],
                          evaluations=cur.evaluations + len(kids) + extra, restarts=restarts,
-                         low=new_low, block_start_low=prog.block_start_low,
-                         ref_low=prog.ref_low)
+                         low=new_low)
 
     def _restart(self, pop: Population, fit: np.ndarray, low: np.ndarray, ops: Operators
                  ) -> tuple[Population, np.ndarray, np.ndarray, int]:

@@ -51,7 +51,7 @@ from edm_sym.engines.abstraction.fidelity import effective, window_samples
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
 from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_holdout
 from edm_sym.engines.abstraction.local_search import tune_parameters
-from edm_sym.engines.abstraction.multi import Fidelities, MultiSteps, evaluate_fitted, lowest
+from edm_sym.engines.abstraction.multi import Fidelities, MultiSteps, evaluate_fitted
 from edm_sym.engines.abstraction.parallel import Parallel
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.searches import (
@@ -347,11 +347,9 @@ class _Runner:
         else:
             fit, extra = self._evaluate(pop, ops, keep_first=seed is not None)
         best = float(np.min(fit))
-        lo = lowest(low) if low is not None else math.inf
         return StepState(step=k, generation=0, blocks=0, block_start_best=best, ref_best=best,
                          since_improvement=0, done=False, population=pop, fitness=fit,
-                         history=[best], evaluations=p + extra, low=low,
-                         block_start_low=lo, ref_low=lo)
+                         history=[best], evaluations=p + extra, low=low)
 
     def _seed_rows(self, pop: Population, seed: Population, step: StepConfig, count: int,
                    ops: Operators) -> None:
