@@ -158,8 +158,8 @@ class WindowPlan:
 
     index: np.ndarray
     scored: np.ndarray
-    n: int = 0
-    start: int = 0
+    n: int
+    start: int
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, WindowPlan) and np.array_equal(self.index, other.index)
@@ -177,14 +177,11 @@ class WindowPlan:
         stand for the rest of the log: their Lambda is scaled so that together
         they weigh what Lambda weighs over the rest of the log (times ``len /
         n``), so a constant residual scores exactly its whole-log eq. 8. The
-        warm-ups weigh 0. Without ``n`` (0), every scored sample stands for an
-        equal share of the log.
+        warm-ups weigh 0.
         """
         lam = np.asarray(full, dtype=float)
         out = np.where(self.scored, lam[self.index] if lam.ndim else lam, 0.0)
         length = len(self.index)
-        if not self.n:
-            return out * (length / max(1, int(np.count_nonzero(self.scored))))
         first = self.index < self.start
         mass = float(np.sum(lam[self.start:])) if lam.ndim else float(lam) * (self.n - self.start)
         sampled = float(np.sum(out[~first]))
