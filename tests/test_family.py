@@ -256,3 +256,16 @@ def test_the_benchmark_reads_both_namings_alike() -> None:
                 {"spatial": {"cycles_per_revolution": 4.0, "amplitude": 0.2}}):
         named = {**bench.named_physics(whole), **bad}
         assert not bench.compare(named, truth)["pass"], bad
+
+
+def test_a_hump_below_the_slowest_plateau_is_not_identified_by_least_squares() -> None:
+    """The benchmark's identifiability check: least squares with v_s scanned on the
+    training log finds a hump above the staircase's slowest plateau (draw 501, v_s 2.9
+    rad/s) and misses one at it (draw 607, v_s 1.52 rad/s; the plateau is pi/2)."""
+    bench = _bench()
+    seen = bench.anchor_stribeck(draw_plant(501), 1)
+    hidden = bench.anchor_stribeck(draw_plant(607), 1)
+    assert abs(seen) < 0.05
+    assert abs(hidden) > bench.STRIBECK_TOLERANCE
+    assert "stribeck" not in draw_plant(700).truth
+    assert bench.anchor_stribeck(draw_plant(700), 1) is None
