@@ -27,6 +27,13 @@ log, divided by
   engineer who knew the parameters would predict; the presliding at
   reversals is outside it).
 
+Whether the excitation identifies a Stribeck hump at all: the engineer's
+least squares on the run's own training log with the Stribeck velocity
+scanned, not given (:func:`anchor_stribeck`). A hump at or below the
+staircase's slowest plateau misses its peak there too; the summary gives the
+pass share over the other runs beside the share over all of them (the pass
+criterion is the same for every run).
+
 Draws 0-3 are the tuning draws (rules may be tuned on them), draws 100-111 the
 measured ones; the summary gives each set separately: the share of runs with
 all physics within tolerance, per parameter the relative error median
