@@ -216,7 +216,8 @@ def anchor_stribeck(fp: FamilyPlant, seed: int) -> float | None:
     :func:`~edm_sym.engines.plant.anchor.fit_anchor` with the Stribeck
     velocity scanned over :data:`STRIBECK_SCAN` (not given): whether the
     abstraction excitation identifies the hump at all. A hump at or below the
-    staircase's slowest plateau (pi/2 rad/s) is seen only on its flank, and
+    staircase's slowest plateau (pi/2 rad/s,
+    :data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`) is seen only on its flank, and
     least squares with the right regressors misses its peak too. None when the
     plant has no Stribeck hump.
     """
@@ -251,14 +252,14 @@ def summary(runs: list[dict], label: str) -> dict:
            "ratio_truth": _spread([r["ratio_truth"] for r in ok]),
            "ratio_static": _spread([r["ratio_static"] for r in ok])}
     # Humps the excitation does not identify: least squares with v_s scanned misses them too.
-    hidden = [r for r in ok if abs(r.get("anchor_stribeck") or 0.0) > STRIBECK_TOLERANCE]
-    seen = [r for r in ok if r not in hidden]
-    out["unidentified_stribeck"] = len(hidden)
+    seen = [r for r in ok if abs(r.get("anchor_stribeck") or 0.0) <= STRIBECK_TOLERANCE]
+    hidden = len(ok) - len(seen)
+    out["unidentified_stribeck"] = hidden
     out["pass_identified"] = f"{sum(r['pass'] for r in seen)}/{len(seen)}"
     print(f"{label}: {out['pass']}/{len(runs)} runs with all physics within tolerance"
           + (f" ({out['failed_to_run']} did not run)" if out["failed_to_run"] else ""))
     print(f"  Stribeck humps the least squares with v_s scanned misses by over "
-          f"{STRIBECK_TOLERANCE:.0%} too: {len(hidden)} runs; the others: "
+          f"{STRIBECK_TOLERANCE:.0%} too: {hidden} runs; the others: "
           f"{out['pass_identified']} pass")
     for name, text in out["errors"].items():
         print(f"  |relative error| {name}: {text}")
