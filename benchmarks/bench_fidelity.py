@@ -11,7 +11,10 @@ CPU ratios are robust on a shared machine), their ratios against the first
 20 000-sample run of the same seed, individuals scored per second, the
 share of them scored on the whole training log, the peak resident memory
 of every process that evaluated (the workers), and the held-out RMSE with
-its ratio to the full-fidelity run of the same seed and length.
+its ratio to the full-fidelity run of the same seed and length; then, per
+run type, median [min-max] over seeds (the held-out RMSE itself as well as
+its ratio: single searches spread widely, and the medians of the two
+fidelities compare them apart from which seed went well).
 
     python benchmarks/bench_fidelity.py [--seeds 1,2,3] [--workers 2]
         [--runs 20000:full,80000:full,80000:multi,320000:full,320000:multi]
@@ -179,7 +182,8 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{samples:>7} {fidelity:>5}: wall x{_spread([r['wall_ratio'] for r in rows])}, "
               f"CPU x{_spread([r['cpu_ratio'] for r in rows])}, full-log share "
               f"{_spread([r['full_log'] / max(1, r['scored']) for r in rows])}, held-out RMSE "
-              f"x{_spread([r['rmse_ratio'] for r in rows if r['rmse_ratio']])} of full, peak RSS "
+              f"{_spread([r['held_out_rmse'] for r in rows])} "
+              f"(x{_spread([r['rmse_ratio'] for r in rows if r['rmse_ratio']])} of full), peak RSS "
               f"{_spread([max(r['peak_rss']) / 2**30 for r in rows if r['peak_rss']])} GiB")
     if args.out:
         Path(args.out).write_text(json.dumps(table, indent=1) + "\n", encoding="utf-8")
