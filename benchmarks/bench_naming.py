@@ -32,7 +32,10 @@ least squares on the run's own training log with the Stribeck velocity
 scanned, not given (:func:`anchor_stribeck`). A hump at or below the
 staircase's slowest plateau misses its peak there too; the summary gives the
 pass share over the other runs beside the share over all of them (the pass
-criterion is the same for every run).
+criterion is the same for every run). It also counts the Stribeck peaks
+within tolerance apart for humps at most :data:`LOW_HUMP` times the slowest
+plateau and above it (:func:`stribeck_by_speed`): the search misses the low
+ones far more often.
 
 Draws 0-3 are the tuning draws (rules may be tuned on them), draws 100-111 the
 measured ones; the summary gives each set separately: the share of runs with
@@ -80,6 +83,9 @@ TOLERANCES = (("coulomb", "level", 0.10), ("stribeck", "peak", STRIBECK_TOLERANC
               ("spatial", "amplitude", 0.20))
 #: The Stribeck velocities [rad/s] the engineer's least squares scans (:func:`anchor_stribeck`).
 STRIBECK_SCAN = tuple(float(v) for v in np.geomspace(0.3, 30.0, 80))
+#: A hump whose true Stribeck velocity is at most this many times the staircase's slowest
+#: plateau is a low one (:func:`stribeck_by_speed`).
+LOW_HUMP = 1.3
 #: Parameters that add up when several terms name the same kind.
 ADDITIVE = {"level", "coefficient", "inertia", "peak"}
 
@@ -238,6 +244,31 @@ def _spread(values: list[float]) -> str:
     return f"{statistics.median(values):.3g} [{min(values):.3g}-{max(values):.3g}]"
 
 
+def stribeck_by_speed(runs: list[dict]) -> tuple[str, str, float]:
+    """The Stribeck peak within tolerance, counted apart for low and other humps.
+
+    Over the runs whose plant has a hump: ``(low, high, bound)``, each count
+    as ``"passed/runs"``, where a low hump's true Stribeck velocity is at most
+    ``bound`` = :data:`LOW_HUMP` times the staircase's slowest plateau
+    (:data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`). A missing
+    peak counts as outside the tolerance.
+    """
+    from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS
+
+    bound = LOW_HUMP * min(abs(v) for v in STAIRCASE_LEVELS if v)
+    counts = {True: [0, 0], False: [0, 0]}
+    for r in runs:
+        hump = r.get("truth", {}).get("stribeck")
+        if "error" in r or not hump:
+            continue
+        err = r["errors"].get("stribeck.peak")
+        c = counts[hump["stribeck_velocity"] <= bound]
+        c[0] += err is not None and abs(err) <= STRIBECK_TOLERANCE
+        c[1] += 1
+    return (f"{counts[True][0]}/{counts[True][1]}", f"{counts[False][0]}/{counts[False][1]}",
+            bound)
+
+
 def summary(runs: list[dict], label: str) -> dict:
     """Pass share, per-parameter relative errors and RMSE ratios over a set of runs."""
     ok = [r for r in runs if "error" not in r]
@@ -256,11 +287,15 @@ def summary(runs: list[dict], label: str) -> dict:
     hidden = len(ok) - len(seen)
     out["unidentified_stribeck"] = hidden
     out["pass_identified"] = f"{sum(r['pass'] for r in seen)}/{len(seen)}"
+    low, high, bound = stribeck_by_speed(ok)
+    out["stribeck_low"], out["stribeck_high"] = low, high
     print(f"{label}: {out['pass']}/{len(runs)} runs with all physics within tolerance"
           + (f" ({out['failed_to_run']} did not run)" if out["failed_to_run"] else ""))
     print(f"  Stribeck humps the least squares with v_s scanned misses by over "
           f"{STRIBECK_TOLERANCE:.0%} too: {hidden} runs; the others: "
           f"{out['pass_identified']} pass")
+    print(f"  Stribeck peak within {STRIBECK_TOLERANCE:.0%}: {low} runs with a hump at v_s <= "
+          f"{bound:.3g} rad/s ({LOW_HUMP:g}x the slowest plateau), {high} above")
     for name, text in out["errors"].items():
         print(f"  |relative error| {name}: {text}")
     print(f"  RMSE / true law (noise floor): {out['ratio_truth']}")

@@ -269,3 +269,22 @@ def test_a_hump_below_the_slowest_plateau_is_not_identified_by_least_squares() -
     assert abs(hidden) > bench.STRIBECK_TOLERANCE
     assert "stribeck" not in draw_plant(700).truth
     assert bench.anchor_stribeck(draw_plant(700), 1) is None
+
+
+def test_the_benchmark_counts_low_and_other_humps_apart() -> None:
+    """Stribeck peaks within tolerance, counted for humps at most 1.3x the slowest
+    plateau (pi/2 rad/s) and above it; a missing peak fails, a plant without a hump
+    and a run that did not run are not counted."""
+    bench = _bench()
+
+    def run(vs: float | None, err: float | None) -> dict:
+        truth = {"coulomb": {"level": 0.3}}
+        if vs is not None:
+            truth["stribeck"] = {"peak": 0.4, "stribeck_velocity": vs}
+        return {"truth": truth, "errors": {"stribeck.peak": err}}
+
+    runs = [run(1.6, 0.05), run(1.9, -0.3), run(2.0, None), run(2.1, 0.19), run(4.0, 0.25),
+            run(None, None), {"error": "did not run"}]
+    low, high, bound = bench.stribeck_by_speed(runs)
+    assert math.isclose(bound, 1.3 * math.pi / 2)
+    assert (low, high) == ("1/3", "1/2")
