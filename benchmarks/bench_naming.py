@@ -256,17 +256,16 @@ def stribeck_by_speed(runs: list[dict]) -> tuple[str, str, float]:
     from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS
 
     bound = LOW_HUMP * min(abs(v) for v in STAIRCASE_LEVELS if v)
-    counts = {True: [0, 0], False: [0, 0]}
+    low: list[bool] = []
+    high: list[bool] = []
     for r in runs:
         hump = r.get("truth", {}).get("stribeck")
         if "error" in r or not hump:
             continue
         err = r["errors"].get("stribeck.peak")
-        c = counts[hump["stribeck_velocity"] <= bound]
-        c[0] += err is not None and abs(err) <= STRIBECK_TOLERANCE
-        c[1] += 1
-    return (f"{counts[True][0]}/{counts[True][1]}", f"{counts[False][0]}/{counts[False][1]}",
-            bound)
+        within = err is not None and abs(err) <= STRIBECK_TOLERANCE
+        (low if hump["stribeck_velocity"] <= bound else high).append(within)
+    return f"{sum(low)}/{len(low)}", f"{sum(high)}/{len(high)}", bound
 
 
 def summary(runs: list[dict], label: str) -> dict:
