@@ -188,9 +188,9 @@ def _report(result: EdmResult, output: Path, data, phys) -> int:  # noqa: ANN001
         member = par["front"][par["selected"] - 1]
         print(f"parsimony: complexity {par['search_complexity']} -> {member['complexity']} "
               f"(front member {par['selected']} of {len(par['front'])}, {par['select']})")
-        line = start_line(par)
-        if line:
-            print(line)
+        for line in (start_line(par), clock_line(par)):
+            if line:
+                print(line)
     line = searches_line(result.provenance, par)
     if line:
         print(line)
@@ -243,6 +243,19 @@ def start_line(par: dict) -> str | None:
            else f"the lowest whole-log RMSE of {len(cands)} candidates")
     return (f"search's model: step {c['step']} best{', refitted' if c['refitted'] else ''} "
             f"(whole-log RMSE {q(c['whole_rmse'])}{held}; {why})")
+
+
+def clock_line(par: dict) -> str | None:
+    """The rows the search's model lost as functions of a clock, in one line (None: none)."""
+    rows = par.get("clock_rows")
+    if not rows:
+        return None
+    names = sorted({r["row"]["input"] for r in rows})
+    changes = ", ".join("--" if r["change"] is None else f"{100 * r['change']:.2g} %" for r in rows)
+    return (f"clock rows: {len(rows)} row(s) on {', '.join(names)} dropped from the search's "
+            f"model: each changes by {changes} of the target's RMS when the angle is shifted "
+            "by whole turns, so it reads the run's time, not the axis "
+            "(docs/abstraction.md#clocks-rows-that-read-time-from-the-angle)")
 
 
 def searches_line(provenance: dict, par: dict) -> str | None:

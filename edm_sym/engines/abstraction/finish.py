@@ -11,21 +11,25 @@ whole-log RMSE, the held-out part deciding a tie), and
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
-from edm_sym.core.matrix import Compensator
-from edm_sym.core.result import StepRecord
+import numpy as np
+
+from edm_sym.core.matrix import Compensator, ElementMatrix
+from edm_sym.core.result import StepRecord, matrix_to_json
+from edm_sym.engines.abstraction.clocks import Passenger, passengers
 from edm_sym.engines.abstraction.holdout import Holdout, Scorer, fragile_rows
 from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
-from edm_sym.engines.abstraction.prune import apply_parsimony
+from edm_sym.engines.abstraction.prune import apply_parsimony, refit_gains
 from edm_sym.engines.abstraction.schedule import AbstractionConfig
 
 
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
            cfg: AbstractionConfig, select: str | None = None, *,
-           candidates_in: Sequence[Candidate] | None = None
+           candidates_in: Sequence[Candidate] | None = None,
+           clocks: Mapping[int, float] | None = None
            ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
     """After the search: choose the search's model, prune it, score the exported one.
 
@@ -45,6 +49,11 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         each made its own,
         :func:`~edm_sym.engines.abstraction.searches.search_candidates`, and
         each names its search). Each of ``start_candidates`` then names its ``search``.
+    clocks : mapping of int to float, optional
+        The angle inputs that are a clock of a training log, and the shift that
+        tests a row (:func:`~edm_sym.engines.abstraction.clocks.clock_shifts`):
+        every candidate loses the rows that read time from them
+        (:func:`without_passengers`) before the choice and the pruning.
 
     Returns
     -------
@@ -53,6 +62,7 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     """
     scorer = Scorer(hold, cfg.steps[steps[-1].step - 1].weighting, cfg.parsimony.criterion)
     start_step, refitted, refit = steps[-1].step, False, 0
+    clock_rows: list[dict[str, Any]] = []
     candidates: list[dict[str, Any]] = []
     if cfg.parsimony.from_step_bests:
         # The step best with the lowest plain RMSE over the whole log: Step 4's eq. 16
@@ -68,23 +78,62 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         cands = (list(candidates_in) if candidates_in is not None
                  else step_candidates(steps, comp, hold, max_evaluations=refit,
                                       reject_poles=cfg.steps[-1].ga.reject_poles))
+        dropped = []
+        for q, c in enumerate(cands):
+            m, found = without_passengers(replace(comp, matrix=c.matrix), scorer, clocks)
+            cands[q] = replace(c, matrix=m.matrix) if found else c
+            dropped.append(_clock_rows(c.matrix, found))
         sound = [q for q, c in enumerate(cands)
                  if not fragile_rows(replace(comp, matrix=c.matrix), hold.training.x)]
         pool = sound or list(range(len(cands)))
         q, candidates = start_candidate([replace(comp, matrix=cands[q].matrix) for q in pool],
                                         scorer, cfg.parsimony.tie)
         start = cands[pool[q]]
+        clock_rows = dropped[pool[q]]
         comp, start_step, refitted = replace(comp, matrix=start.matrix), start.step, start.refitted
         for c, r in zip(candidates, pool, strict=True):
             c.update(step=cands[r].step, refitted=cands[r].refitted)
             if candidates_in is not None:
                 c["search"] = cands[r].search
+    else:
+        origin = comp.matrix
+        comp, found = without_passengers(comp, scorer, clocks)
+        clock_rows = _clock_rows(origin, found)
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
                                       refit=refit, refitted=refitted)
     if parsimony and candidates:
         parsimony["start_tie"] = cfg.parsimony.tie
         parsimony["start_candidates"] = candidates
+    if parsimony and clock_rows:
+        parsimony["clock_rows"] = clock_rows
     return comp, parsimony, scorer.report(comp)
+
+
+def without_passengers(comp: Compensator, scorer: Scorer, clocks: Mapping[int, float] | None
+                       ) -> tuple[Compensator, list[Passenger]]:
+    """``comp`` without the rows that read time from a clock, its row gains refitted on the
+    training part (:mod:`~edm_sym.engines.abstraction.clocks`); and those rows. A model
+    made of nothing else is left as it is (the naming calls its rows a clock)."""
+    if not clocks:
+        return comp, []
+    part = scorer.parts["training"]
+    y = part.y[part.sl]
+    target_rms = float(np.sqrt(np.mean(y * y)))
+    found = passengers(comp, comp.matrix, part.x, part.starts, dict(clocks), part.sl, target_rms)
+    if not found or len(found) == len(comp.matrix.rows):
+        return comp, []
+    gone = {p.row for p in found}
+    m = ElementMatrix(comp.matrix.inputs,
+                      tuple(r for j, r in enumerate(comp.matrix.rows) if j not in gone))
+    refit = refit_gains(comp, m, scorer)
+    return replace(comp, matrix=refit if refit is not None else m), found
+
+
+def _clock_rows(matrix: ElementMatrix, found: Sequence[Passenger]) -> list[dict[str, Any]]:
+    """result.json's ``parsimony.clock_rows``: each dropped row, its input and its change."""
+    rows = matrix_to_json(matrix)["rows"]
+    return [{"row": rows[p.row], "shift": p.shift,
+             "change": p.change if math.isfinite(p.change) else None} for p in found]
 
 
 def start_candidate(comps: Sequence[Compensator], scorer: Scorer, tie: float

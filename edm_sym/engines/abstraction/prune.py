@@ -137,7 +137,7 @@ def _merge(comp: Compensator, rj: Row, rk: Row) -> Row | None:
     return Row(rj.input, genes)
 
 
-def _refit(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix | None:
+def refit_gains(comp: Compensator, m: ElementMatrix, scorer: Scorer) -> ElementMatrix | None:
     """Row gains by weighted least squares on the training part (None: nothing to refit)."""
     part = scorer.parts["training"]
     sl = part.sl
@@ -239,7 +239,7 @@ def relieve_bounds(comp: Compensator, scorer: Scorer, tolerance: float
         rows = list(comp.matrix.rows)
         rows[flag.row] = Row(row.input, genes)
         m = ElementMatrix(comp.matrix.inputs, rows)
-        options = [m] + [r for r in (_refit(comp, m, scorer),
+        options = [m] + [r for r in (refit_gains(comp, m, scorer),
                                      _rescaled(comp, m, flag.row, flag.col)) if r is not None]
         # A refit may put the parameter (a gain) back on its bound: that is no move.
         options = [c for c in options if not any(
@@ -288,7 +288,7 @@ def prune(comp: Compensator, scorer: Scorer, *, start: str = "search") -> list[M
                 best = cand
         if best is None:
             break
-        refit = _refit(comp, best.matrix, scorer)
+        refit = refit_gains(comp, best.matrix, scorer)
         if refit is not None and refit not in seen:
             r = Member(refit, complexity(comp, refit), scorer.criterion(_with(comp, refit)),
                        best.change + ", gains refitted")

@@ -46,6 +46,7 @@ from edm_sym.engines.abstraction.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
+from edm_sym.engines.abstraction.clocks import clock_shifts, is_clock
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.fidelity import effective, window_samples
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
@@ -711,8 +712,11 @@ def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
         # and no pruning (these take a minute on a long log); --resume finishes the run.
         fin = replace(cfg, parsimony=replace(cfg.parsimony, prune=False))
         made = None
+    # Rows that read time from a clock (the unwrapped angle of a one-way run) are no physics.
+    clocks = clock_shifts(job.hold.training.x, job.hold.training.starts, _roles(data, job.inputs),
+                          axis)
     comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, job.hold, fin, select,
-                                                     made)
+                                                     made, clocks)
     steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
@@ -892,6 +896,9 @@ def check_inputs(target: str, inputs: Sequence[str]) -> tuple[str, ...]:
 def clock_inputs(data: DataLog, inputs: Sequence[str]) -> list[tuple[str, float, float]]:
     """The inputs that only rise or only fall over the log: ``(name, first, last)``.
 
+    :func:`~edm_sym.engines.abstraction.clocks.is_clock` decides (a retreat of
+    at most 1 % of the travel, jitter at the start from rest, is allowed).
+
     Within such a log the input is a clock, like the time column: the unwrapped
     angle of a run that turns one way. A model of it explains the run's time
     (the start from rest, a warm-up), not the axis, unless it repeats over the
@@ -902,8 +909,7 @@ def clock_inputs(data: DataLog, inputs: Sequence[str]) -> list[tuple[str, float,
         col = np.asarray(data.column(name, role="input column"), dtype=float)
         if col.size < 3 or (data.role_of(name) or "") == "position_wrapped":
             continue
-        d = np.diff(col)
-        if col[-1] != col[0] and (np.all(d >= 0) or np.all(d <= 0)):
+        if is_clock(col):
             out.append((name, float(col[0]), float(col[-1])))
     return out
 

@@ -1,0 +1,114 @@
+"""Clocks: one-way angles, and the rows that read time from them.
+
+docs/abstraction.md#clocks-rows-that-read-time-from-the-angle
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import TS
+
+from edm_sym.core.data import DataLog, join_logs
+from edm_sym.core.elements import default_ranges
+from edm_sym.core.matrix import Compensator, make_matrix
+from edm_sym.engines.abstraction.clocks import RETREAT, clock_shifts, is_clock, passengers
+from edm_sym.engines.abstraction.finish import without_passengers
+from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
+from edm_sym.engines.abstraction.weighting import Weighting
+
+INPUTS = ("theta_uw", "omega")
+N = 3000  # one run of 3 s
+
+
+def compensator(rows: list, n_samples: int = N) -> Compensator:
+    """A matrix from rows of (input, [(element, value a or None), ...])."""
+    ranges = default_ranges(TS, n_samples * TS)
+    enc = [(inp, [(name, 0.0 if a is None else ranges[name].encode(a)) for name, a in genes])
+           for inp, genes in rows]
+    return Compensator(make_matrix(INPUTS, enc), TS, ranges, n_samples * TS)
+
+
+def one_way_run(speed: float, n: int = N) -> tuple[np.ndarray, np.ndarray]:
+    """A run from rest to ``speed`` [rad/s] in 0.3 s, one way: angle and velocity."""
+    t = np.arange(n) * TS
+    omega = speed * np.clip(t / 0.3, 0.0, 1.0)
+    theta = np.concatenate([[0.0], np.cumsum(omega[:-1]) * TS])
+    return theta, omega
+
+
+RIPPLE = ("theta_uw", [("gain", 7.0), ("sin_amp", 0.05), ("lpf", 200.0)])
+VELOCITY_FROM_ANGLE = ("theta_uw", [("derivative", 1.0), ("tanh", 5.0), ("sin_amp", 0.3)])
+DIRECTION = ("theta_uw", [("tanh", 100.0), ("gain", 0.2), ("through", None)])
+RAMP = ("theta_uw", [("gain", 0.01), ("lpf", 50.0), ("through", None)])
+COULOMB = ("omega", [("tanh", 100.0), ("gain", 0.3), ("through", None)])
+
+
+def test_a_one_way_angle_is_a_clock_despite_jitter_at_the_start() -> None:
+    theta, _ = one_way_run(-5.0)
+    assert is_clock(theta)
+    jitter = theta.copy()
+    jitter[5:8] += [1e-5, -1e-5, 2e-5]  # encoder counts back and forth at the start
+    assert is_clock(jitter)
+    back = np.concatenate([theta, theta[::-1]])  # there and back
+    assert not is_clock(back)
+    assert not is_clock(theta + 1.0 * (np.arange(N) > N // 2) * (theta[-1] - theta[0]) * -2 * RETREAT)
+    assert not is_clock(np.zeros(N))
+
+
+def test_only_an_angle_that_is_a_clock_of_some_log_is_tested_and_by_whole_turns() -> None:
+    a, wa = one_way_run(8.0)
+    b = np.sin(np.arange(N) * TS) * 3.0  # back and forth
+    x = np.array([np.concatenate([b, a]), np.concatenate([np.cos(b), wa])])
+    shifts = clock_shifts(x, (N,), ["angle", "velocity"], "rotary")
+    assert list(shifts) == [0]
+    span = float(np.ptp(x[0]))
+    assert shifts[0] == pytest.approx(2 * math.pi * math.ceil(span / (2 * math.pi)))
+    assert shifts[0] >= span
+    assert clock_shifts(x, (N,), ["angle", "velocity"], "linear") == {0: pytest.approx(span)}
+    assert clock_shifts(x[:, :N], (), ["angle", "velocity"], "rotary") == {}  # no one-way log
+    assert clock_shifts(x, (N,), ["angle_wrapped", "velocity"], "rotary") == {}
+
+
+def test_rows_that_read_time_from_the_angle_are_passengers_and_physics_is_not() -> None:
+    runs = [one_way_run(s) for s in (4.0, -6.0, 10.0)]
+    x = np.array([np.concatenate([r[0] for r in runs]), np.concatenate([r[1] for r in runs])])
+    starts = (N, 2 * N)
+    comp = compensator([RIPPLE, VELOCITY_FROM_ANGLE, DIRECTION, RAMP, COULOMB])
+    shifts = clock_shifts(x, starts, ["angle", "velocity"], "rotary")
+    found = passengers(comp, comp.matrix, x, starts, shifts, slice(None), target_rms=0.3)
+    assert [p.row for p in found] == [2, 3]
+    assert all(p.change >= 0.01 for p in found)
+    assert passengers(comp, comp.matrix, x, starts, {}, slice(None), target_rms=0.3) == []
+
+
+def _log(runs: list[tuple[np.ndarray, np.ndarray]], tau: list[np.ndarray], k: int) -> DataLog:
+    theta, omega = runs[k]
+    return DataLog({"theta_uw": theta, "omega": omega, "tau_ext": tau[k]}, TS, f"run{k}.csv",
+                   f"{k:064x}")
+
+
+def test_a_passenger_leaves_the_model_and_the_gains_take_its_share() -> None:
+    """A direction-of-travel row stands in for part of the Coulomb level of one-way runs: it
+    goes, and the Coulomb row's gain is refitted to the whole level."""
+    speeds = (4.0, -6.0, 10.0, -3.0)
+    runs = [one_way_run(s) for s in speeds]
+    tau = [0.5 * np.tanh(100.0 * w) for _, w in runs]
+    x = np.array([np.concatenate([r[0] for r in runs]), np.concatenate([r[1] for r in runs])])
+    logs = [_log(runs, tau, k) for k in range(len(runs))]
+    data = join_logs(logs, ["tau_ext", *INPUTS])
+    hold = plan_holdout(data, target="tau_ext", inputs=INPUTS,
+                        settings=ValidationSettings(layout="end"), logs=logs)
+    scorer = Scorer(hold, Weighting())
+    comp = compensator([DIRECTION, COULOMB])
+    shifts = clock_shifts(x, hold.training.starts, ["angle", "velocity"], "rotary")
+    clean, found = without_passengers(comp, scorer, shifts)
+    assert [p.row for p in found] == [0]
+    assert [comp.matrix.inputs[r.input] for r in clean.matrix.rows] == ["omega"]
+    gain = clean.value(clean.matrix.rows[0].genes[1])
+    assert gain == pytest.approx(0.5, rel=0.02)
+    # Nothing but passengers: the model stays as it is.
+    only, none = without_passengers(compensator([DIRECTION]), scorer, shifts)
+    assert none == [] and len(only.matrix.rows) == 1
