@@ -6,6 +6,7 @@ docs/abstraction.md#clocks-rows-that-read-time-from-the-angle
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from edm_sym.engines.abstraction.clocks import RETREAT, clock_shifts, is_clock, 
 from edm_sym.engines.abstraction.finish import without_passengers
 from edm_sym.engines.abstraction.holdout import Scorer, ValidationSettings, plan_holdout
 from edm_sym.engines.abstraction.weighting import Weighting
+from edm_sym.engines.simulate import simulate_row
 
 INPUTS = ("theta_uw", "omega")
 N = 3000  # one run of 3 s
@@ -43,6 +45,7 @@ RIPPLE = ("theta_uw", [("gain", 7.0), ("sin_amp", 0.05), ("lpf", 200.0)])
 VELOCITY_FROM_ANGLE = ("theta_uw", [("derivative", 1.0), ("tanh", 5.0), ("sin_amp", 0.3)])
 DIRECTION = ("theta_uw", [("tanh", 100.0), ("gain", 0.2), ("through", None)])
 RAMP = ("theta_uw", [("gain", 0.01), ("lpf", 50.0), ("through", None)])
+START = ("theta_uw", [("atan", 0.5), ("sin_phase", math.pi / 2), ("gain", 0.2)])  # cos(atan)
 COULOMB = ("omega", [("tanh", 100.0), ("gain", 0.3), ("through", None)])
 
 
@@ -112,3 +115,47 @@ def test_a_passenger_leaves_the_model_and_the_gains_take_its_share() -> None:
     # Nothing but passengers: the model stays as it is.
     only, none = without_passengers(compensator([DIRECTION]), scorer, shifts)
     assert none == [] and len(only.matrix.rows) == 1
+
+
+def test_the_search_model_and_its_record_lose_the_clock_rows() -> None:
+    """finish(): a row of the start from rest through the angle fits every run, held-out
+    blocks included, so pruning keeps it; as a clock row it goes, and result.json and the
+    closing summary say which row went and why."""
+    import json
+    from importlib import resources
+
+    import jsonschema
+
+    from edm_sym.application.abstract_cli import clock_line
+    from edm_sym.core.result import StepRecord
+    from edm_sym.engines.abstraction import parse_config
+    from edm_sym.engines.abstraction.finish import finish
+
+    speeds = (4.0, -6.0, 10.0, -3.0)
+    runs = [one_way_run(s) for s in speeds]
+    comp = compensator([START, ("omega", [("tanh", 100.0), ("gain", 0.5), ("through", None)])])
+    tau = [simulate_row(comp, comp.matrix.rows[0], th) + simulate_row(comp, comp.matrix.rows[1], w)
+           for th, w in runs]  # the planted model is the truth
+    logs = [_log(runs, tau, k) for k in range(len(runs))]
+    data = join_logs(logs, ["tau_ext", *INPUTS])
+    cfg = parse_config({"ga": {"population": 16, "generations": 4, "continue": "no"},
+                        "step": [{"n_rows": 2, "n_elements": 3}],
+                        "parsimony": {"refit": 0}}, "test.toml")
+    cfg = replace(cfg, validation=replace(cfg.validation, unit="N m"))
+    hold = plan_holdout(data, target="tau_ext", inputs=INPUTS, settings=cfg.validation, logs=logs)
+    steps = [StepRecord(1, comp.matrix, 0.0, ())]
+    shifts = clock_shifts(hold.training.x, hold.training.starts, ["angle", "velocity"], "rotary")
+    out, record, _ = finish(steps, comp, hold, cfg, clocks=shifts)
+    assert [out.matrix.inputs[r.input] for r in out.matrix.rows] == ["omega"]
+    (gone,) = record["clock_rows"]
+    assert gone["row"]["input"] == "theta_uw"
+    assert gone["shift"] == pytest.approx(shifts[0]) and gone["change"] > 0.01
+    schema = json.loads(resources.files("edm_sym.schema").joinpath("result.schema.json")
+                        .read_text("utf-8"))
+    jsonschema.validate(record, {**schema["properties"]["parsimony"], "$defs": schema["$defs"]})
+    line = clock_line(record)
+    assert line.startswith("clock rows: 1 row(s) on theta_uw dropped")
+    # Judged by the held-out blocks alone, the start from rest earns its row.
+    same, plain, _ = finish(steps, comp, hold, cfg)
+    assert "clock_rows" not in plain and clock_line(plain) is None
+    assert [same.matrix.inputs[r.input] for r in same.matrix.rows] == ["theta_uw", "omega"]
