@@ -154,7 +154,9 @@ def test_the_search_model_and_its_record_lose_the_clock_rows() -> None:
                         .read_text("utf-8"))
     jsonschema.validate(record, {**schema["properties"]["parsimony"], "$defs": schema["$defs"]})
     line = clock_line(record)
-    assert line.startswith("clock rows: 1 row(s) on theta_uw dropped")
+    assert line.startswith("clock rows: 1 of 1 candidates for the search's model lost 1 row(s) in all; "
+                           "the chosen one lost 1 on theta_uw")
+    assert record["start_candidates"][0]["clock_rows"] == 1
     # Judged by the held-out blocks alone, the start from rest earns its row.
     same, plain, _ = finish(steps, comp, hold, cfg)
     assert "clock_rows" not in plain and clock_line(plain) is None

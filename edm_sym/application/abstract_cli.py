@@ -246,15 +246,27 @@ def start_line(par: dict) -> str | None:
 
 
 def clock_line(par: dict) -> str | None:
-    """The rows the search's model lost as functions of a clock, in one line (None: none)."""
-    rows = par.get("clock_rows")
-    if not rows:
+    """The rows the candidates for the search's model lost as functions of a clock, in one
+    line (None: none)."""
+    rows = par.get("clock_rows") or []
+    cands = par.get("start_candidates") or []
+    lost = [c for c in cands if c.get("clock_rows")]
+    if not (rows or lost):
         return None
-    names = sorted({r["row"]["input"] for r in rows})
-    changes = ", ".join("--" if r["change"] is None else f"{100 * r['change']:.2g} %" for r in rows)
-    return (f"clock rows: {len(rows)} row(s) on {', '.join(names)} dropped from the search's "
-            f"model: each changes by {changes} of the target's RMS when the angle is shifted "
-            "by whole turns, so it reads the run's time, not the axis "
+    parts = []
+    if lost:
+        parts.append(f"{len(lost)} of {len(cands)} candidates for the search's model lost "
+                     f"{sum(c['clock_rows'] for c in lost)} row(s) in all")
+    if rows:
+        names = ", ".join(sorted({r["row"]["input"] for r in rows}))
+        changes = ", ".join("--" if r["change"] is None else f"{100 * r['change']:.2g} %"
+                            for r in rows)
+        parts.append(f"the chosen one lost {len(rows)} on {names} (each changes by {changes} of the "
+                     "target's RMS when the angle is shifted by whole turns)")
+    else:
+        parts.append("the chosen one lost none")
+    return ("clock rows: " + "; ".join(parts) + ": a function of an angle that only moves one "
+            "way reads the run's time, not the axis "
             "(docs/abstraction.md#clocks-rows-that-read-time-from-the-angle)")
 
 

@@ -93,6 +93,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         comp, start_step, refitted = replace(comp, matrix=start.matrix), start.step, start.refitted
         for c, r in zip(candidates, pool, strict=True):
             c.update(step=cands[r].step, refitted=cands[r].refitted)
+            if dropped[r]:
+                c["clock_rows"] = len(dropped[r])
             if candidates_in is not None:
                 c["search"] = cands[r].search
     else:
