@@ -161,3 +161,23 @@ def test_the_search_model_and_its_record_lose_the_clock_rows() -> None:
     same, plain, _ = finish(steps, comp, hold, cfg)
     assert "clock_rows" not in plain and clock_line(plain) is None
     assert [same.matrix.inputs[r.input] for r in same.matrix.rows] == ["theta_uw", "omega"]
+
+
+def test_without_pruning_the_search_model_keeps_its_clock_rows() -> None:
+    from edm_sym.core.result import StepRecord
+    from edm_sym.engines.abstraction import parse_config
+    from edm_sym.engines.abstraction.finish import finish
+
+    runs = [one_way_run(s) for s in (4.0, -6.0)]
+    tau = [0.5 * np.tanh(100.0 * w) for _, w in runs]
+    logs = [_log(runs, tau, k) for k in range(len(runs))]
+    data = join_logs(logs, ["tau_ext", *INPUTS])
+    cfg = parse_config({"ga": {"population": 16, "generations": 4, "continue": "no"},
+                        "step": [{"n_rows": 2, "n_elements": 3}],
+                        "parsimony": {"refit": 0, "prune": False}}, "test.toml")
+    hold = plan_holdout(data, target="tau_ext", inputs=INPUTS, settings=cfg.validation, logs=logs)
+    comp = compensator([DIRECTION, COULOMB])
+    shifts = clock_shifts(hold.training.x, hold.training.starts, ["angle", "velocity"], "rotary")
+    assert shifts
+    out, record, _ = finish([StepRecord(1, comp.matrix, 0.0, ())], comp, hold, cfg, clocks=shifts)
+    assert out.matrix == comp.matrix and record == {}

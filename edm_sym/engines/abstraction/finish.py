@@ -53,7 +53,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         The angle inputs that are a clock of a training log, and the shift that
         tests a row (:func:`~edm_sym.engines.abstraction.clocks.clock_shifts`):
         every candidate loses the rows that read time from them
-        (:func:`without_passengers`) before the choice and the pruning.
+        (:func:`without_passengers`) before the choice and the pruning; without
+        pruning (``--no-prune``, an interrupted run) they keep them.
 
     Returns
     -------
@@ -64,6 +65,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     start_step, refitted, refit = steps[-1].step, False, 0
     clock_rows: list[dict[str, Any]] = []
     candidates: list[dict[str, Any]] = []
+    if not cfg.parsimony.prune:
+        clocks = None  # --no-prune (and an interrupted run) keep the search's model as it is
     if cfg.parsimony.from_step_bests:
         # The step best with the lowest plain RMSE over the whole log: Step 4's eq. 16
         # weighting, say, may buy large torques with reversals and the cold start, which
