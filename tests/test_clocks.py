@@ -61,15 +61,14 @@ def test_a_one_way_angle_is_a_clock_despite_jitter_at_the_start() -> None:
     assert not is_clock(np.zeros(N))
 
 
-def test_only_an_angle_that_is_a_clock_of_some_log_is_tested_and_by_whole_turns() -> None:
+def test_only_an_angle_that_is_a_clock_of_some_log_is_tested_and_by_one_turn() -> None:
     a, wa = one_way_run(8.0)
     b = np.sin(np.arange(N) * TS) * 3.0  # back and forth
     x = np.array([np.concatenate([b, a]), np.concatenate([np.cos(b), wa])])
     shifts = clock_shifts(x, (N,), ["angle", "velocity"], "rotary")
     assert list(shifts) == [0]
     span = float(np.ptp(x[0]))
-    assert shifts[0] == pytest.approx(2 * math.pi * math.ceil(span / (2 * math.pi)))
-    assert shifts[0] >= span
+    assert shifts[0] == pytest.approx(2 * math.pi)  # one revolution
     assert clock_shifts(x, (N,), ["angle", "velocity"], "linear") == {0: pytest.approx(span)}
     assert clock_shifts(x[:, :N], (), ["angle", "velocity"], "rotary") == {}  # no one-way log
     assert clock_shifts(x, (N,), ["angle_wrapped", "velocity"], "rotary") == {}
@@ -181,3 +180,75 @@ def test_without_pruning_the_search_model_keeps_its_clock_rows() -> None:
     assert shifts
     out, record, _ = finish([StepRecord(1, comp.matrix, 0.0, ())], comp, hold, cfg, clocks=shifts)
     assert out.matrix == comp.matrix and record == {}
+
+
+def test_a_ripple_found_a_little_off_a_whole_number_of_cycles_is_no_passenger() -> None:
+    runs = [one_way_run(s) for s in (20.0, -30.0)]  # 9 and 13 revolutions
+    x = np.array([np.concatenate([r[0] for r in runs]), np.concatenate([r[1] for r in runs])])
+    comp = compensator([("theta_uw", [("gain", 7.0002), ("sin_amp", 0.1), ("through", None)])])
+    shifts = clock_shifts(x, (N,), ["angle", "velocity"], "rotary")
+    assert passengers(comp, comp.matrix, x, (N,), shifts, slice(None), target_rms=0.1) == []
+
+
+def test_the_operators_never_draw_a_barred_input_and_draw_as_before_without() -> None:
+    from edm_sym.engines.abstraction.ga import Operators
+    from edm_sym.engines.abstraction.schedule import GaSettings
+
+    ga = GaSettings(input_mutation_rate=0.5)
+    plain, barred = Operators(ga, 4), Operators(ga, 4, barred=(1,))
+    pop = barred.random_population(np.random.default_rng(1), 200, 4, 3)
+    assert set(np.unique(pop.inputs)) == {0, 2, 3}
+    barred.mutate(np.random.default_rng(2), pop)
+    assert 1 not in pop.inputs
+    a = plain.random_population(np.random.default_rng(3), 50, 3, 2)
+    b = Operators(ga, 4, barred=()).random_population(np.random.default_rng(3), 50, 3, 2)
+    c = np.random.default_rng(3).integers(4, size=150)
+    np.testing.assert_array_equal(a.inputs, b.inputs)
+    np.testing.assert_array_equal(a.inputs.ravel(), c)
+
+
+def test_an_angle_that_is_a_clock_of_every_log_is_barred_when_velocity_and_wrap_are_there() -> None:
+    from edm_sym.engines.abstraction.clocks import barred_inputs
+
+    runs = [one_way_run(s) for s in (4.0, -6.0)]
+    theta = np.concatenate([r[0] for r in runs])
+    omega = np.concatenate([r[1] for r in runs])
+    x = np.array([np.mod(theta, 2 * np.pi), theta, omega])
+    full = ["angle_wrapped", "angle", "velocity"]
+    assert barred_inputs(x, (N,), full, "rotary") == (1,)
+    assert barred_inputs(x, (N,), ["angle_wrapped", "angle", None], "rotary") == ()  # no velocity
+    assert barred_inputs(x[1:], (N,), full[1:], "rotary") == ()  # no wrapped angle
+    assert barred_inputs(x[1:], (N,), full[1:], "linear") == (0,)
+    two_way = x.copy()
+    two_way[1, :N] = np.sin(np.arange(N) * TS)  # the first log goes there and back
+    assert barred_inputs(two_way, (N,), full, "rotary") == ()
+
+
+def test_abstract_leaves_a_clock_of_every_run_out_of_the_search_rows(tmp_path) -> None:
+    import warnings
+
+    from edm_sym.core.errors import ClockWarning
+    from edm_sym.core.result import load_result, save_result
+    from edm_sym.engines.abstraction import abstract, parse_config
+
+    logs = []
+    for k, speed in enumerate((4.0, -6.0, 10.0)):
+        theta, omega = one_way_run(speed, 1500)
+        tau = 0.3 * np.tanh(50.0 * omega) + 0.01 * omega + 0.05 * np.sin(3 * theta)
+        logs.append(DataLog({"theta_w": np.mod(theta, 2 * np.pi), "theta_uw": theta,
+                             "omega": omega, "tau_ext": tau}, TS, f"run{k}.csv", f"{k:064x}"))
+    cfg = parse_config({"ga": {"population": 16, "generations": 3, "continue": "no"},
+                        "step": [{"n_rows": 2, "n_elements": 2}, {"n_rows": 3, "n_elements": 2}]},
+                       "test.toml")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        res = abstract(logs, target="tau_ext", inputs=["theta_w", "theta_uw", "omega"], config=cfg,
+                       seed=1)
+    barred = [str(w.message) for w in seen if issubclass(w.category, ClockWarning)
+              and "leave it out" in str(w.message)]
+    assert len(barred) == 1 and "'theta_uw'" in barred[0]
+    assert res.provenance["clock_inputs"] == ["theta_uw"]
+    save_result(res, tmp_path / "r.json")  # valid against the schema
+    assert load_result(tmp_path / "r.json").provenance["clock_inputs"] == ["theta_uw"]
+    for step in res.steps:
+        assert {res.inputs[r.input] for r in step.matrix.rows} <= {"theta_w", "omega"}

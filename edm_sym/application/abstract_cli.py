@@ -262,7 +262,7 @@ def clock_line(par: dict) -> str | None:
         changes = ", ".join("--" if r["change"] is None else f"{100 * r['change']:.2g} %"
                             for r in rows)
         parts.append(f"the chosen one lost {len(rows)} on {names} (each changes by {changes} of the "
-                     "target's RMS when the angle is shifted by whole turns)")
+                     "target's RMS when the angle is shifted by a turn)")
     else:
         parts.append("the chosen one lost none")
     return ("clock rows: " + "; ".join(parts) + ": a function of an angle that only moves one "

@@ -16,9 +16,10 @@ make a run two-way). A wrapped angle never counts.
 
 **Passenger** (:func:`passengers`): a row on an angle input that is a clock in
 at least one training log, whose output changes when the angle is shifted
-by whole revolutions beyond its range (on a linear axis: by its range). A
+by one revolution either way (on a linear axis: by its range). A
 derivative of the angle and a ripple that repeats over a revolution are
-unchanged; a function of the absolute angle is not. Each log is simulated
+unchanged (one revolution, not many: a ripple found at 7.0002 cycles a
+revolution is still the ripple); a function of the absolute angle is not. Each log is simulated
 after a warm-up at its first (shifted) value as long as the longest log,
 so a filter starts settled and a step at the log's start is not mistaken for
 a dependence. The change counts when its RMS over the training samples is
@@ -82,9 +83,8 @@ def clock_shifts(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | Non
     """The angle inputs that are a clock in at least one log, and the shift that tests a row.
 
     ``x``: the inputs (n_inputs, N) of the training logs laid end to end,
-    ``starts`` where each further log begins. On a rotary axis the shift is the
-    smallest whole number of revolutions beyond the input's range over all
-    logs; on a linear axis the range itself.
+    ``starts`` where each further log begins. On a rotary axis the shift is one
+    revolution; on a linear axis the input's range over all logs.
     """
     out: dict[int, float] = {}
     for i, role in enumerate(roles):
@@ -93,13 +93,23 @@ def clock_shifts(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | Non
         col = np.asarray(x[i], dtype=float)
         if not any(is_clock(col[a:b]) for a, b in segments(len(col), starts)):
             continue
-        span = float(np.max(col) - np.min(col))
-        if axis == "rotary":
-            turn = 2.0 * math.pi
-            out[i] = turn * max(1, math.ceil(span / turn + 1e-9))
-        else:
-            out[i] = span
+        out[i] = 2.0 * math.pi if axis == "rotary" else float(np.max(col) - np.min(col))
     return out
+
+
+def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | None],
+                  axis: str) -> tuple[int, ...]:
+    """The angle inputs the search's rows leave out: a clock in every training log.
+
+    Only when the inputs hold what physics reads from the angle otherwise: a
+    velocity, and on a rotary axis the wrapped angle (a ripple repeats over
+    it). Without them the search keeps the angle, and its rows that read time
+    from it go after the search (:func:`passengers`).
+    """
+    if "velocity" not in roles or (axis == "rotary" and "angle_wrapped" not in roles):
+        return ()
+    return tuple(i for i, role in enumerate(roles) if role == CLOCK_ROLE and all(
+        is_clock(np.asarray(x[i][a:b], dtype=float)) for a, b in segments(x.shape[-1], starts)))
 
 
 def _settled(comp: Compensator, row: Row, col: np.ndarray, starts: Sequence[int],

@@ -87,11 +87,18 @@ class Operators:
         Rates and sizes.
     n_inputs : int
         Number of input signals (input codes are 0 .. n_inputs - 1).
+    barred : sequence of int
+        Input codes no drawn or mutated row takes (an angle that is a clock of
+        every training log: docs/abstraction.md#clocks-rows-that-read-time-from-the-angle);
+        empty: every input, drawn with the same random numbers as ever.
     """
 
-    def __init__(self, ga: GaSettings, n_inputs: int):
+    def __init__(self, ga: GaSettings, n_inputs: int, barred: Sequence[int] = ()):
         self.ga = ga
         self.n_inputs = int(n_inputs)
+        self.choices = (None if not barred else
+                        np.array([i for i in range(self.n_inputs) if i not in set(barred)],
+                                 dtype=np.int64))
         self.allowed = allowed_codes(ga.elements)
         self.through_rate = ga.through_rate if THROUGH in self.allowed else 0.0
 
@@ -102,10 +109,16 @@ class Operators:
         through = rng.random(shape) < self.through_rate
         return np.where(through, THROUGH, pick)
 
+    def random_inputs(self, rng: np.random.Generator, shape: int | tuple[int, ...]) -> np.ndarray:
+        """Input codes, uniform over the inputs not barred."""
+        if self.choices is None:
+            return rng.integers(self.n_inputs, size=shape)
+        return self.choices[rng.integers(len(self.choices), size=shape)]
+
     def random_rows(self, rng: np.random.Generator, count: int, n: int
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``count`` random rows: input codes (count,), codes and ps (count, n)."""
-        inputs = rng.integers(self.n_inputs, size=count)
+        inputs = self.random_inputs(rng, count)
         codes = self.random_codes(rng, (count, n))
         ps = rng.random((count, n))
         return inputs.astype(np.int64), codes.astype(np.int64), ps
@@ -180,7 +193,7 @@ class Operators:
         pop.codes[...] = np.where(hit, codes, pop.codes)
         pop.ps[...] = np.where(hit, ps, pop.ps)
         hit_in = rng.random(pop.inputs.shape) < self.ga.input_mutation_rate
-        new_in = rng.integers(self.n_inputs, size=pop.inputs.shape)
+        new_in = self.random_inputs(rng, pop.inputs.shape)
         pop.inputs[...] = np.where(hit_in, new_in, pop.inputs)
 
     def offspring(self, rng: np.random.Generator, ranked: Population, count: int) -> Population:

@@ -46,7 +46,7 @@ from edm_sym.engines.abstraction.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
-from edm_sym.engines.abstraction.clocks import clock_shifts, is_clock
+from edm_sym.engines.abstraction.clocks import barred_inputs, clock_shifts, is_clock
 from edm_sym.engines.abstraction.evaluator import EvalStats, Evaluator
 from edm_sym.engines.abstraction.fidelity import effective, window_samples
 from edm_sym.engines.abstraction.ga import THROUGH, Operators, Population, Progress, allowed_codes, rank
@@ -231,13 +231,13 @@ class _Runner:
                  callback: Callable[[GenerationInfo], bool | None] | None,
                  mask: np.ndarray | None = None, fidelities: Fidelities | None = None,
                  periodic: int | None = None, velocity: int | None = None,
-                 starts: Sequence[int] = ()):
+                 starts: Sequence[int] = (), barred: Sequence[int] = ()):
         self.cfg, self.x, self.y, self.t, self.ts = cfg, x, y, t, ts
         # Multi-fidelity evaluation (docs/abstraction.md#multi-fidelity-evaluation); None: full.
         self.fid = fidelities
         self.multi = MultiSteps(fidelities, rng) if fidelities is not None else None
         self.mask, self.periodic, self.starts = mask, periodic, tuple(starts)
-        self.velocity = velocity
+        self.velocity, self.barred = velocity, tuple(barred)
         self._lam: np.ndarray | float = 1.0
         self.ranges, self.human, self.evaluator = ranges, human, evaluator
         self.inputs = tuple(inputs)
@@ -304,7 +304,7 @@ class _Runner:
             else:
                 self.evaluator.set_weights(lam)
                 self.evaluator.set_reject_poles(step.ga.reject_poles)
-            ops = Operators(step.ga, self.x.shape[0])
+            ops = Operators(step.ga, self.x.shape[0], self.barred)
             cur = self.state.current
             if cur is None or cur.step != k:
                 cur = self._init_step(k, step, ops)
@@ -578,6 +578,7 @@ def abstract(
                      else int(np.count_nonzero(hold.mask)), cfg, blocks=hold.mask is not None)
     check_data(data, target, inputs, logs=logs)
     job = _search_job(cfg, data, logs, hold, target=target, inputs=inputs, axis=axis)
+    _warn_barred(job)
     seeds = search_seeds(int(seed), cfg.searches)
     checkpoint = Path(checkpoint) if checkpoint is not None else None
     files = checkpoint_files(checkpoint, cfg.searches)
@@ -686,7 +687,8 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
     return _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                       human=human, hold=hold, n=n, starts=hold.training.starts,
                       fidelity=effective(cfg.fidelity, hold.n_train),
-                      periodic=angle_input(roles, axis), velocity=velocity_input(roles))
+                      periodic=angle_input(roles, axis), velocity=velocity_input(roles),
+                      barred=barred_inputs(part.x, hold.training.starts, roles, axis))
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
@@ -721,6 +723,8 @@ def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
                                   "data_sha256": data.sha256, "stop_reason": reason}
+    if job.barred:
+        provenance["clock_inputs"] = [job.inputs[i] for i in job.barred]
     if job.fidelity == "multi":
         # Only when used: a run of full fidelity writes the result.json it always did.
         provenance["fidelity"] = {"mode": "multi", "config": cfg.fidelity,
@@ -765,6 +769,9 @@ class _SearchJob:
     periodic: int | None = None
     #: The input a Stribeck hump is a function of (:func:`seeding.velocity_input`), or None.
     velocity: int | None = None
+    #: Angle inputs no row of the search takes: a clock of every training log
+    #: (:func:`~edm_sym.engines.abstraction.clocks.barred_inputs`).
+    barred: tuple[int, ...] = ()
 
     @property
     def mask(self) -> np.ndarray | None:
@@ -816,7 +823,7 @@ class _SearchJob:
                          inputs=self.inputs, evaluator=evaluator, state=state, rng=rng,
                          checkpoint=checkpoint, time_limit=time_limit, callback=callback,
                          mask=self.mask, fidelities=fid, periodic=self.periodic, velocity=self.velocity,
-                         starts=self.starts)
+                         starts=self.starts, barred=self.barred)
         reason = "completed"
         try:
             # One BLAS thread in this process's lane too (see worker.worker_init).
@@ -926,6 +933,19 @@ def warn_clocks(data: DataLog, inputs: Sequence[str]) -> None:
                       f"{last:.4g}): within this run it is a clock, and what the search explains "
                       "through it is the run's time (the start from rest), not the axis, unless it "
                       "repeats over the angle; edm describe names no physics from it",
+                      ClockWarning, stacklevel=3)
+
+
+def _warn_barred(job: _SearchJob) -> None:
+    """Warn (:class:`~edm_sym.core.errors.ClockWarning`) of the inputs the search's rows leave out."""
+    import warnings
+
+    from edm_sym.core.errors import ClockWarning
+
+    for i in job.barred:
+        warnings.warn(f"input {job.inputs[i]!r} only moves one way in every log: the search's "
+                      "rows leave it out, and read the velocity and the wrapped angle instead "
+                      "(docs/abstraction.md#clocks-rows-that-read-time-from-the-angle)",
                       ClockWarning, stacklevel=3)
 
 
