@@ -23,7 +23,7 @@ evaluation runs. ``--root DIR`` runs another checkout's ``edm`` (the one
 before a change, say) on the same runs.
 
     python benchmarks/bench_clocks.py [--draws 900-905] [--seeds 1,2] [--workers 2]
-        [--root DIR] [--keep DIR] [--out bench_clocks.json]
+        [--inputs theta_w,theta_uw,omega,alpha] [--root DIR] [--keep DIR] [--out bench_clocks.json]
 
 Each run takes 1-3 minutes on 2 workers.
 """
@@ -76,7 +76,8 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
-def run_one(draw: int, seed: int, work: Path, root: Path, workers: int) -> dict:
+def run_one(draw: int, seed: int, work: Path, root: Path, workers: int, inputs: str = INPUTS
+            ) -> dict:
     """One run: the runs written, abstract, describe, simulate."""
     from edm_sym.engines.plant.family import draw_plant
     from edm_sym.engines.sources import load_data
@@ -86,7 +87,7 @@ def run_one(draw: int, seed: int, work: Path, root: Path, workers: int) -> dict:
     files = write_runs(draw, seed, folder)
     train, evaluation = files[:len(TRAINING)], files[len(TRAINING):]
     result = folder / "result.json"
-    done = _edm(root, "abstract", *map(str, train), "--target", "tau_ext", "--inputs", INPUTS,
+    done = _edm(root, "abstract", *map(str, train), "--target", "tau_ext", "--inputs", inputs,
                 "--seed", str(seed), "--workers", str(workers), "--quiet", "-o", str(result))
     if done.returncode != 0:
         return {"draw": draw, "seed": seed, "error": done.stderr.strip()[-2000:]}
@@ -143,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--draws", default="900-905")
     ap.add_argument("--seeds", default="1,2")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--inputs", default=INPUTS, help="edm abstract --inputs (without theta_w: the "
+                    "search keeps theta_uw, and the rule after it acts)")
     ap.add_argument("--root", default=str(ROOT), help="the checkout whose edm runs")
     ap.add_argument("--keep", help="folder for the runs and results (default: a temporary one)")
     ap.add_argument("--out", default="bench_clocks.json")
@@ -151,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     runs = []
     for draw in _ints(args.draws):
         for seed in _ints(args.seeds):
-            r = run_one(draw, seed, work, Path(args.root).resolve(), args.workers)
+            r = run_one(draw, seed, work, Path(args.root).resolve(), args.workers, args.inputs)
             runs.append(r)
             if "error" in r:
                 print(f"family-{draw} seed {seed}: error {r['error'][-300:]}", flush=True)
