@@ -101,12 +101,13 @@ def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | No
                   axis: str) -> tuple[int, ...]:
     """The angle inputs the search's rows leave out: a clock in every training log.
 
-    Only when the inputs hold what physics reads from the angle otherwise: a
-    velocity, and on a rotary axis the wrapped angle (a ripple repeats over
-    it). Without them the search keeps the angle, and its rows that read time
-    from it go after the search (:func:`passengers`).
+    Only when the inputs hold a velocity, what physics reads from the angle's
+    changes. A ripple then needs the wrapped angle among the inputs (it
+    repeats over it). Without a velocity the search keeps the angle (its
+    derivative is the velocity), and its rows that read time from it go after
+    the search (:func:`passengers`).
     """
-    if "velocity" not in roles or (axis == "rotary" and "angle_wrapped" not in roles):
+    if "velocity" not in roles:
         return ()
     return tuple(i for i, role in enumerate(roles) if role == CLOCK_ROLE and all(
         is_clock(np.asarray(x[i][a:b], dtype=float)) for a, b in segments(x.shape[-1], starts)))
