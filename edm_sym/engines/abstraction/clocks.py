@@ -102,10 +102,10 @@ def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | No
     """The angle inputs the search's rows leave out: a clock in every training log.
 
     Only when the inputs hold a velocity, what physics reads from the angle's
-    changes. A ripple then needs the wrapped angle among the inputs (it
-    repeats over it). Without a velocity the search keeps the angle (its
-    derivative is the velocity), and its rows that read time from it go after
-    the search (:func:`passengers`).
+    changes (a ripple repeats over the wrapped angle; without one, the ripple
+    seeds may still put a row on the angle). Without a velocity the search
+    keeps the angle (its derivative is the velocity). Rows on it that read
+    time go after the search (:func:`passengers`).
     """
     if "velocity" not in roles:
         return ()

@@ -944,8 +944,8 @@ def _warn_barred(job: _SearchJob) -> None:
 
     for i in job.barred:
         warnings.warn(f"input {job.inputs[i]!r} only moves one way in every log: the search's "
-                      "rows leave it out and read the velocity instead (give the wrapped angle "
-                      "for a ripple; docs/abstraction.md#clocks-rows-that-read-time-from-the-angle)",
+                      "rows leave it out and read the velocity instead "
+                      "(docs/abstraction.md#clocks-rows-that-read-time-from-the-angle)",
                       ClockWarning, stacklevel=3)
 
 
