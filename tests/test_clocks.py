@@ -59,6 +59,10 @@ def test_a_one_way_angle_is_a_clock_despite_jitter_at_the_start() -> None:
     assert not is_clock(back)
     assert not is_clock(theta + 1.0 * (np.arange(N) > N // 2) * (theta[-1] - theta[0]) * -2 * RETREAT)
     assert not is_clock(np.zeros(N))
+    _, omega = one_way_run(-8.0)
+    noisy = omega + 1e-3 * np.random.default_rng(0).standard_normal(N)
+    assert not is_clock(noisy)  # steps to a level and holds it: no clock
+    assert is_clock(np.arange(N) * TS)  # the time column is one
 
 
 def test_only_an_angle_that_is_a_clock_of_some_log_is_tested_and_by_one_turn() -> None:

@@ -12,7 +12,9 @@ through where the axis is within a revolution (a ripple repeats over it).
 **Clock** (:func:`is_clock`): over one log, the input moves from its first to
 its last value without ever going back by more than :data:`RETREAT` of that
 travel (an encoder count or two of jitter at the start from rest does not
-make a run two-way). A wrapped angle never counts.
+make a run two-way), and keeps moving: at the log's middle sample it has
+covered at most :data:`HALFWAY` of it (a velocity that steps to a level and
+holds it is no clock). A wrapped angle never counts.
 
 **Passenger** (:func:`passengers`): a row on an angle input that is a clock in
 at least one training log, whose output changes when the angle is shifted
@@ -45,6 +47,8 @@ from edm_sym.engines.simulate import segments, simulate_row
 
 #: The most an input may go back over a log, as a share of its travel, and still be a clock.
 RETREAT = 0.01
+#: The most of its travel a clock may have covered at the log's middle sample.
+HALFWAY = 0.75
 #: A passenger's output changes under the shift by at least this share of the target's RMS.
 SHARE = 0.01
 #: The role of an input that can be a clock (the unwrapped angle, a linear axis' position).
@@ -52,8 +56,10 @@ CLOCK_ROLE = "angle"
 
 
 def is_clock(col: np.ndarray) -> bool:
-    """Whether ``col`` (one log) moves one way: it never goes back by more than
-    :data:`RETREAT` of its travel from first to last value."""
+    """Whether ``col`` (one log) moves one way and keeps moving: it never goes back by
+    more than :data:`RETREAT` of its travel from first to last value, and at the log's
+    middle sample it has covered at most :data:`HALFWAY` of that travel (a velocity that
+    steps to a level and holds it is no clock)."""
     col = np.asarray(col, dtype=float)
     if col.size < 3 or not np.all(np.isfinite(col)):
         return False
@@ -62,7 +68,8 @@ def is_clock(col: np.ndarray) -> bool:
         return False
     rising = col if travel > 0 else -col
     retreat = float(np.max(np.maximum.accumulate(rising) - rising))
-    return retreat <= RETREAT * abs(travel)
+    halfway = float(col[col.size // 2] - col[0]) / travel
+    return retreat <= RETREAT * abs(travel) and halfway <= HALFWAY
 
 
 @dataclass(frozen=True)
