@@ -219,13 +219,12 @@ def test_an_angle_that_is_a_clock_of_every_log_is_barred_when_a_velocity_is_ther
     omega = np.concatenate([r[1] for r in runs])
     x = np.array([np.mod(theta, 2 * np.pi), theta, omega])
     full = ["angle_wrapped", "angle", "velocity"]
-    assert barred_inputs(x, (N,), full, "rotary") == (1,)
-    assert barred_inputs(x, (N,), ["angle_wrapped", "angle", None], "rotary") == ()  # no velocity
-    assert barred_inputs(x[1:], (N,), full[1:], "rotary") == (0,)  # no wrapped angle
-    assert barred_inputs(x[1:], (N,), full[1:], "linear") == (0,)
+    assert barred_inputs(x, (N,), full) == (1,)
+    assert barred_inputs(x, (N,), ["angle_wrapped", "angle", None]) == ()  # no velocity
+    assert barred_inputs(x[1:], (N,), full[1:]) == (0,)  # no wrapped angle: on either axis
     two_way = x.copy()
     two_way[1, :N] = np.sin(np.arange(N) * TS)  # the first log goes there and back
-    assert barred_inputs(two_way, (N,), full, "rotary") == ()
+    assert barred_inputs(two_way, (N,), full) == ()
 
 
 def test_abstract_leaves_a_clock_of_every_run_out_of_the_search_rows(tmp_path) -> None:

@@ -85,6 +85,14 @@ class Passenger:
     """RMS of the output's change under the shift over the target's RMS."""
 
 
+def _angle_clocks(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | None]
+                  ) -> dict[int, list[bool]]:
+    """For each angle input (role :data:`CLOCK_ROLE`), whether it is a clock in each log."""
+    edges = segments(x.shape[-1], starts)
+    return {i: [is_clock(np.asarray(x[i][a:b], dtype=float)) for a, b in edges]
+            for i, role in enumerate(roles) if role == CLOCK_ROLE}
+
+
 def clock_shifts(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | None],
                  axis: str) -> dict[int, float]:
     """The angle inputs that are a clock in at least one log, and the shift that tests a row.
@@ -93,19 +101,12 @@ def clock_shifts(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | Non
     ``starts`` where each further log begins. On a rotary axis the shift is one
     revolution; on a linear axis the input's range over all logs.
     """
-    out: dict[int, float] = {}
-    for i, role in enumerate(roles):
-        if role != CLOCK_ROLE:
-            continue
-        col = np.asarray(x[i], dtype=float)
-        if not any(is_clock(col[a:b]) for a, b in segments(len(col), starts)):
-            continue
-        out[i] = 2.0 * math.pi if axis == "rotary" else float(np.max(col) - np.min(col))
-    return out
+    return {i: 2.0 * math.pi if axis == "rotary" else float(np.ptp(np.asarray(x[i], dtype=float)))
+            for i, logs in _angle_clocks(x, starts, roles).items() if any(logs)}
 
 
-def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | None],
-                  axis: str) -> tuple[int, ...]:
+def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | None]
+                  ) -> tuple[int, ...]:
     """The angle inputs the search's rows leave out: a clock in every training log.
 
     Only when the inputs hold a velocity, what physics reads from the angle's
@@ -116,8 +117,7 @@ def barred_inputs(x: np.ndarray, starts: Sequence[int], roles: Sequence[str | No
     """
     if "velocity" not in roles:
         return ()
-    return tuple(i for i, role in enumerate(roles) if role == CLOCK_ROLE and all(
-        is_clock(np.asarray(x[i][a:b], dtype=float)) for a, b in segments(x.shape[-1], starts)))
+    return tuple(i for i, logs in _angle_clocks(x, starts, roles).items() if all(logs))
 
 
 def _settled(comp: Compensator, row: Row, col: np.ndarray, starts: Sequence[int],

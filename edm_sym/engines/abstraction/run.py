@@ -21,8 +21,8 @@ import json
 import math
 import time
 import warnings
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -688,7 +688,8 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
                       human=human, hold=hold, n=n, starts=hold.training.starts,
                       fidelity=effective(cfg.fidelity, hold.n_train),
                       periodic=angle_input(roles, axis), velocity=velocity_input(roles),
-                      barred=barred_inputs(part.x, hold.training.starts, roles, axis))
+                      barred=barred_inputs(part.x, hold.training.starts, roles),
+                      clocks=clock_shifts(part.x, hold.training.starts, roles, axis))
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
@@ -715,10 +716,8 @@ def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
         fin = replace(cfg, parsimony=replace(cfg.parsimony, prune=False))
         made = None
     # Rows that read time from a clock (the unwrapped angle of a one-way run) are no physics.
-    clocks = clock_shifts(job.hold.training.x, job.hold.training.starts, _roles(data, job.inputs),
-                          axis)
     comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, job.hold, fin, select,
-                                                     made, clocks)
+                                                     made, job.clocks)
     steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
@@ -772,6 +771,9 @@ class _SearchJob:
     #: Angle inputs no row of the search takes: a clock of every training log
     #: (:func:`~edm_sym.engines.abstraction.clocks.barred_inputs`).
     barred: tuple[int, ...] = ()
+    #: Angle inputs that are a clock of some training log, and the shift that tests a row on
+    #: one after the search (:func:`~edm_sym.engines.abstraction.clocks.clock_shifts`).
+    clocks: Mapping[int, float] = field(default_factory=dict)
 
     @property
     def mask(self) -> np.ndarray | None:
