@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.signal import lfilter
 from helpers import TS
 
 from edm_sym.core.data import DataLog
@@ -12,8 +13,9 @@ from edm_sym.core.elements import BY_NAME, default_ranges
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.result import dumps
 from edm_sym.engines.abstraction import Parallel, abstract, parse_config
-from edm_sym.engines.abstraction.seeding import (angle_input, harmonic_rows, residual_harmonics,
-                                                 residual_stribeck, stribeck_rows, velocity_input)
+from edm_sym.engines.abstraction.seeding import (LAG_CORNERS, angle_input, harmonic_rows,
+                                                 residual_harmonics, residual_stribeck,
+                                                 stribeck_rows, velocity_input)
 from edm_sym.engines.simulate import simulate_rows
 
 
@@ -23,7 +25,8 @@ def test_the_strongest_harmonics_of_a_residual_are_found_with_their_phase() -> N
     resid = (0.2 * np.sin(5 * theta + 0.7) + 0.05 * np.sin(2 * theta - 1.0)
              + 0.3 + rng.normal(0, 0.02, 20000))
     found = residual_harmonics(theta, resid, np.ones_like(theta), count=2)
-    (k1, a1, p1), (k2, a2, p2) = found
+    (k1, a1, p1, c1), (k2, a2, p2, c2) = found
+    assert c1 is None and c2 is None  # no corners tried: no lag
     assert (k1, k2) == (5, 2)
     assert a1 == pytest.approx(0.2, rel=0.05) and p1 == pytest.approx(0.7, abs=0.05)
     assert a2 == pytest.approx(0.05, rel=0.2) and p2 == pytest.approx(-1.0, abs=0.2)
@@ -50,6 +53,38 @@ def test_a_seed_row_is_the_harmonic_it_was_made_from() -> None:
     assert harmonic_rows([(4, 0.08, 0.0)], ranges, 2, allowed) == []
     assert harmonic_rows([(4, 0.08, 0.0)], ranges, 4, allowed - {BY_NAME["sin_phase"].code}) == []
     assert harmonic_rows([(40, 0.08, 0.0)], ranges, 4, allowed) == []
+
+
+def test_a_ripple_seen_through_a_lag_is_found_with_its_corner() -> None:
+    # A 7-cycle ripple at up to 60 rad/s reaches the target through g/(s+g), g = 250:
+    # the plain fit loses much of it, the lagged one finds the amplitude and the corner.
+    n = 20000
+    t = np.arange(n) * TS
+    omega = 60.0 * np.sin(2 * np.pi * 0.1 * t)
+    theta = np.cumsum(omega) * TS
+    ranges = default_ranges(TS, n * TS)
+    ripple = 0.15 * np.sin(7 * theta + 0.9)
+    b, a = BY_NAME["lpf"].coefficients(250.0, TS)
+    resid = lfilter(b, a, ripple) + np.random.default_rng(4).normal(0.0, 0.005, n)
+    corners = np.geomspace(ranges["lpf"].low, ranges["lpf"].high, LAG_CORNERS)
+    plain, = residual_harmonics(theta, resid, np.ones(n), count=1)
+    lagged, = residual_harmonics(theta, resid, np.ones(n), count=1, corners=corners, ts=TS)
+    assert plain.order == lagged.order == 7 and plain.corner is None
+    assert plain.amplitude < 0.9 * 0.15
+    assert lagged.amplitude == pytest.approx(0.15, rel=0.05)
+    assert lagged.corner == pytest.approx(250.0, rel=0.1)
+    # the seed row with its low-pass is the lagged ripple
+    (codes, ps), = harmonic_rows([lagged], ranges, 4, {el.code for el in BY_NAME.values()})
+    assert BY_NAME["lpf"].code in codes.tolist()
+    row = Row(0, tuple(Gene(int(c), float(p)) for c, p in zip(codes, ps, strict=True)))
+    comp = Compensator(ElementMatrix(("theta_w",), (row,)), TS, ranges, n * TS)
+    out = simulate_rows(comp, [row], theta[None, :])[0]
+    assert np.sqrt(np.mean((out - resid) ** 2)) < 0.01
+    # no lag in the residual: no corner; three elements a row: the row without its low-pass
+    assert residual_harmonics(theta, ripple, np.ones(n), count=1, corners=corners,
+                              ts=TS)[0].corner is None
+    (codes3, _), = harmonic_rows([lagged], ranges, 3, {el.code for el in BY_NAME.values()})
+    assert BY_NAME["lpf"].code not in codes3.tolist()
 
 
 def test_seeds_need_a_rotary_axis_and_an_angle() -> None:

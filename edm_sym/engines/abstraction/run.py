@@ -62,6 +62,7 @@ from edm_sym.engines.abstraction.searches import (
     search_seeds,
 )
 from edm_sym.engines.abstraction.seeding import (
+    LAG_CORNERS,
     angle_input,
     harmonic_rows,
     residual_harmonics,
@@ -367,7 +368,11 @@ class _Runner:
         allowed = set(ops.allowed.tolist())
         ga, seeded = step.ga, []
         if ga.harmonic_seeds and self.periodic is not None:
-            found = residual_harmonics(self.x[self.periodic], resid, w, ga.harmonic_seeds)
+            lpf = self.ranges.get("lpf")
+            corners = (() if lpf is None or BY_NAME["lpf"].code not in allowed
+                       else tuple(np.geomspace(lpf.low, lpf.high, LAG_CORNERS)))
+            found = residual_harmonics(self.x[self.periodic], resid, w, ga.harmonic_seeds,
+                                       corners=corners, ts=self.ts, starts=self.starts)
             seeded += [(self.periodic, row) for row in
                        harmonic_rows(found, self.ranges, step.n_elements, allowed)]
         if ga.stribeck_seeds and self.velocity is not None:

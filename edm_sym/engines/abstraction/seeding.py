@@ -11,9 +11,12 @@ new row, a harmonic of the inherited model's residual over the angle:
 1. the inherited model is simulated on the training samples (held-out blocks
    weigh nothing, as in the fitness);
 2. the residual is fitted by weighted least squares on ``cos k theta`` and
-   ``sin k theta`` for ``k = 1 .. MAX_ORDER`` and a constant;
+   ``sin k theta`` for ``k = 1 .. MAX_ORDER`` and a constant, and on the same
+   columns through a low-pass of scanned corner: a ripple at many cycles a
+   revolution and a high speed reaches the target through the observer's lag;
 3. the ``ga.harmonic_seeds`` orders of largest amplitude each give one
-   individual the row ``theta -> gain(k) -> sin_phase(phi) -> gain(A)``.
+   individual the row ``theta -> gain(k) -> sin_phase(phi) -> gain(A)``, with
+   ``lpf(c)`` before the last gain when the lagged fit is the better one.
 
 The GA decides the rest: a seed that does not lower the fitness is outranked
 and bred out like any other row, and pruning removes a row the held-out blocks
@@ -37,16 +40,24 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.signal import lfilter
 
 from edm_sym.core.elements import BY_NAME, ParamRange
 
-__all__ = ["MAX_ORDER", "STRIBECK_GRID", "angle_input", "harmonic_rows", "residual_harmonics",
-           "residual_stribeck", "stribeck_rows", "velocity_input"]
+__all__ = ["LAG_CORNERS", "LAG_GAIN", "MAX_ORDER", "STRIBECK_GRID", "Harmonic", "angle_input",
+           "harmonic_rows", "residual_harmonics", "residual_stribeck", "stribeck_rows",
+           "velocity_input"]
 
 #: Highest harmonic order looked for (cycles per revolution).
 MAX_ORDER = 10
+#: Low-pass corners tried by :func:`residual_harmonics` (log-spaced over the ``lpf`` range).
+LAG_CORNERS = 16
+#: A lagged harmonic fit is kept when it leaves at least this share less of the residual.
+LAG_GAIN = 0.02
 #: Stribeck velocities tried by :func:`residual_stribeck`.
 STRIBECK_GRID = 24
 
@@ -62,10 +73,43 @@ def angle_input(roles: Sequence[str | None], axis: str) -> int | None:
     return None
 
 
+class Harmonic(NamedTuple):
+    """One harmonic of a residual: ``amplitude sin(order theta + phase)``, through the
+    low-pass ``corner / (s + corner)`` when ``corner`` is not None."""
+
+    order: int
+    amplitude: float
+    phase: float
+    corner: float | None = None
+
+
+def _lowpassed(columns: np.ndarray, corner: float, ts: float, starts: Sequence[int]) -> np.ndarray:
+    """Each column of ``columns`` (shape (N, k)) through the ``lpf`` element's discrete
+    filter, from rest at every log start."""
+    b, a = BY_NAME["lpf"].coefficients(corner, ts)
+    out = np.empty_like(columns)
+    edges = [*sorted({0, *(int(s) for s in starts)}), columns.shape[0]]
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        if hi > lo:
+            out[lo:hi] = lfilter(b, a, columns[lo:hi], axis=0)
+    return out
+
+
 def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndarray,
-                       count: int, max_order: int = MAX_ORDER
-                       ) -> list[tuple[int, float, float]]:
+                       count: int, max_order: int = MAX_ORDER, *,
+                       corners: Sequence[float] = (), ts: float | None = None,
+                       starts: Sequence[int] = (0,)) -> list[Harmonic]:
     """The ``count`` strongest harmonics of ``residual`` over ``theta``.
+
+    The residual is fitted by weighted least squares on a constant and
+    ``cos k theta``, ``sin k theta`` for ``k = 1 .. max_order``; with
+    ``corners``, also on those columns through each corner's low-pass (the
+    ``lpf`` element, from rest at every log start), and the corner whose fit
+    leaves the least of the residual (the best of the grid, refined between
+    its neighbours) is kept when it leaves at least :data:`LAG_GAIN` less
+    than the plain fit. A ripple at many cycles a revolution and a
+    high speed reaches the target through the observer's lag; the same
+    harmonic without it leaves most of it behind.
 
     Parameters
     ----------
@@ -77,30 +121,62 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
         Non-negative sample weights (0 on held-out samples).
     count : int
     max_order : int
+    corners : sequence of float, optional
+        Low-pass corners [rad/s] tried (none: no lag).
+    ts : float, optional
+        Sample time [s]; needed with ``corners``.
+    starts : sequence of int, optional
+        The first sample of each log.
 
     Returns
     -------
-    list of (int, float, float)
-        ``(k, amplitude, phase)`` of ``amplitude sin(k theta + phase)``, largest
-        amplitude first.
+    list of Harmonic
+        Largest amplitude first.
     """
     w = np.sqrt(np.maximum(np.asarray(weights, dtype=float), 0.0))
     keep = w > 0
     if count <= 0 or np.count_nonzero(keep) <= 2 * max_order + 1:
         return []
-    th, r, w = np.asarray(theta, dtype=float)[keep], np.asarray(residual, dtype=float)[keep], w[keep]
+    th, r = np.asarray(theta, dtype=float), np.asarray(residual, dtype=float)
     ks = np.arange(1, max_order + 1)
     arg = np.outer(th, ks)
-    basis = np.hstack([np.ones((th.size, 1)), np.cos(arg), np.sin(arg)])
-    coef, *_ = np.linalg.lstsq(basis * w[:, None], r * w, rcond=None)
+    waves = np.hstack([np.cos(arg), np.sin(arg)])
+    ones = np.ones((th.size, 1))
+    rk, wk = r[keep], w[keep]
+
+    def fit(columns: np.ndarray) -> tuple[float, np.ndarray]:
+        basis = np.hstack([ones, columns])[keep]
+        coef, *_ = np.linalg.lstsq(basis * wk[:, None], rk * wk, rcond=None)
+        return float(np.sum(((rk - basis @ coef) * wk) ** 2)), coef
+
+    plain, coef = fit(waves)
+    corner = None
+    if len(corners) and ts is not None and math.isfinite(plain):
+        def lag(c: float) -> tuple[float, np.ndarray]:
+            return fit(_lowpassed(waves, c, ts, starts))
+
+        grid = [float(c) for c in corners]
+        tried = [lag(c)[0] for c in grid]
+        i = int(np.nanargmin(tried)) if np.any(np.isfinite(tried)) else 0
+        # The best corner of the grid, refined between its neighbours (on a log scale).
+        lo, hi = math.log(grid[max(i - 1, 0)]), math.log(grid[min(i + 1, len(grid) - 1)])
+        c = grid[i]
+        if hi > lo:
+            found = minimize_scalar(lambda u: lag(math.exp(u))[0], bounds=(lo, hi),
+                                    method="bounded", options={"xatol": 0.01})
+            if found.success and found.fun < tried[i]:
+                c = float(math.exp(found.x))
+        left, lag_coef = lag(c)
+        if math.isfinite(left) and left < (1.0 - LAG_GAIN) * plain:
+            corner, coef = c, lag_coef
     if not np.all(np.isfinite(coef)):
         return []
     a, b = coef[1:max_order + 1], coef[max_order + 1:]
     amp = np.hypot(a, b)
     order = np.argsort(-amp, kind="stable")[:count]
     # a cos + b sin = A sin(k theta + phi) with A = hypot(a, b), phi = atan2(a, b).
-    return [(int(ks[i]), float(amp[i]), float(math.atan2(a[i], b[i]))) for i in order
-            if amp[i] > 0]
+    return [Harmonic(int(ks[i]), float(amp[i]), float(math.atan2(a[i], b[i])), corner)
+            for i in order if amp[i] > 0]
 
 
 def _row(n_elements: int, genes: Sequence[tuple[int, float]]) -> tuple[np.ndarray, np.ndarray]:
@@ -112,24 +188,35 @@ def _row(n_elements: int, genes: Sequence[tuple[int, float]]) -> tuple[np.ndarra
     return codes, ps
 
 
-def harmonic_rows(harmonics: Sequence[tuple[int, float, float]], ranges: dict[str, ParamRange],
-                  n_elements: int, allowed: set[int]) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Each harmonic as a row's genes ``(codes, ps)`` of length ``n_elements``.
+def harmonic_rows(harmonics: Sequence[Harmonic | tuple[int, float, float]],
+                  ranges: dict[str, ParamRange], n_elements: int, allowed: set[int]
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Each harmonic as a row's genes ``(codes, ps)`` of length ``n_elements``:
+    ``theta -> gain(k) -> sin_phase(phi) -> gain(A)``, with ``lpf(corner)`` before the
+    last gain when the harmonic has a corner.
 
     A harmonic whose gain or amplitude lies outside the gain's range, or a
     schedule without ``gain`` and ``sin_phase`` (or with fewer than three
-    elements a row), gives no row.
+    elements a row), gives no row. Its corner is left out when it lies outside
+    the ``lpf`` range, the schedule has no ``lpf`` or a row fewer than four
+    elements.
     """
-    gain, sine = BY_NAME["gain"], BY_NAME["sin_phase"]
+    gain, sine, lpf = BY_NAME["gain"], BY_NAME["sin_phase"], BY_NAME["lpf"]
     if n_elements < 3 or not {gain.code, sine.code} <= allowed:
         return []
     g, s = ranges[gain.name], ranges[sine.name]
+    f = ranges.get(lpf.name)
     out = []
-    for k, amp, phase in harmonics:
+    for h in harmonics:
+        k, amp, phase = h[0], h[1], h[2]
+        corner = h[3] if len(h) > 3 else None
         if not (g.low <= k <= g.high and g.low <= amp <= g.high):
             continue
-        codes, ps = _row(n_elements, [(gain.code, g.encode(float(k))), (sine.code, s.encode(phase)),
-                                      (gain.code, g.encode(amp))])
+        genes = [(gain.code, g.encode(float(k))), (sine.code, s.encode(phase))]
+        if (corner is not None and f is not None and n_elements >= 4 and lpf.code in allowed
+                and f.low <= corner <= f.high):
+            genes.append((lpf.code, f.encode(float(corner))))
+        codes, ps = _row(n_elements, [*genes, (gain.code, g.encode(amp))])
         out.append((codes, ps))
     return out
 
