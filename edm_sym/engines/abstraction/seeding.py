@@ -95,6 +95,17 @@ def _lowpassed(columns: np.ndarray, corner: float, ts: float, starts: Sequence[i
     return out
 
 
+def _typical_speed(theta: np.ndarray, ts: float, starts: Sequence[int]) -> float:
+    """The median speed of the angle [rad/s] over the samples that move (above 2 % of the
+    fastest), the angle unwrapped within each log."""
+    edges = [*sorted({0, *(int(s) for s in starts)}), theta.size]
+    speed = np.concatenate([np.abs(np.diff(np.unwrap(theta[lo:hi]))) / ts
+                            for lo, hi in zip(edges[:-1], edges[1:], strict=True) if hi - lo > 1]
+                           or [np.zeros(0)])
+    moving = speed[speed > 0.02 * speed.max()] if speed.size else speed
+    return float(np.median(moving)) if moving.size else math.inf
+
+
 def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndarray,
                        count: int, max_order: int = MAX_ORDER, *,
                        corners: Sequence[float] = (), ts: float | None = None,
@@ -107,7 +118,12 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
     ``lpf`` element, from rest at every log start), and the corner whose fit
     leaves the least of the residual (the best of the grid, refined between
     its neighbours) is kept when it leaves at least :data:`LAG_GAIN` less
-    than the plain fit. A ripple at many cycles a revolution and a
+    than the plain fit. Only corners at or above the angle's median speed
+    over the samples that move are tried: a low-pass slower than even the
+    first harmonic at a typical speed turns the harmonics into slow signals
+    that fit any slow part of the residual (on a plant without ripple, the
+    search then started from rows of amplitude 0.6 N m through a 1 rad/s
+    low-pass and stayed there). A ripple at many cycles a revolution and a
     high speed reaches the target through the observer's lag; the same
     harmonic without it leaves most of it behind.
 
@@ -150,12 +166,13 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
         return float(np.sum(((rk - basis @ coef) * wk) ** 2)), coef
 
     plain, coef = fit(waves)
+    floor = _typical_speed(th, ts, starts) if len(corners) and ts is not None else math.inf
+    grid = [float(c) for c in corners if c >= floor]
     corner = None
-    if len(corners) and ts is not None and math.isfinite(plain):
+    if grid and math.isfinite(plain):
         def lag(c: float) -> tuple[float, np.ndarray]:
             return fit(_lowpassed(waves, c, ts, starts))
 
-        grid = [float(c) for c in corners]
         tried = [lag(c)[0] for c in grid]
         i = int(np.nanargmin(tried)) if np.any(np.isfinite(tried)) else 0
         # The best corner of the grid, refined between its neighbours (on a log scale).
