@@ -80,6 +80,12 @@ def test_a_ripple_seen_through_a_lag_is_found_with_its_corner() -> None:
     comp = Compensator(ElementMatrix(("theta_w",), (row,)), TS, ranges, n * TS)
     out = simulate_rows(comp, [row], theta[None, :])[0]
     assert np.sqrt(np.mean((out - resid) ** 2)) < 0.01
+    # a residual without ripple (slow steps): no corner, though a slow low-pass of the
+    # harmonics would fit the steps
+    steps = (0.3 * np.sign(np.sin(2 * np.pi * 0.05 * t))
+             + np.random.default_rng(5).normal(0.0, 0.005, n))
+    slow, = residual_harmonics(theta, steps, np.ones(n), count=1, corners=corners, ts=TS)
+    assert slow.corner is None and slow.amplitude < 0.03
     # no lag in the residual: no corner; three elements a row: the row without its low-pass
     assert residual_harmonics(theta, ripple, np.ones(n), count=1, corners=corners,
                               ts=TS)[0].corner is None
