@@ -57,7 +57,7 @@ MAX_ORDER = 10
 #: Low-pass corners tried by :func:`residual_harmonics` (log-spaced over the ``lpf`` range).
 LAG_CORNERS = 16
 #: A lagged harmonic fit is kept when it leaves at least this share less of the residual.
-LAG_GAIN = 0.02
+LAG_GAIN = 0.2
 #: Stribeck velocities tried by :func:`residual_stribeck`.
 STRIBECK_GRID = 24
 
