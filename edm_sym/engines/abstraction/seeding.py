@@ -56,7 +56,9 @@ __all__ = ["LAG_CORNERS", "LAG_GAIN", "MAX_ORDER", "STRIBECK_GRID", "Harmonic", 
 MAX_ORDER = 10
 #: Low-pass corners tried by :func:`residual_harmonics` (log-spaced over the ``lpf`` range).
 LAG_CORNERS = 16
-#: A lagged harmonic fit is kept when it leaves at least this share less of the residual.
+#: A lagged harmonic fit is kept when it leaves at least this share less of the residual
+#: than the plain one (a 7-cycle ripple through a 250 rad/s observer: 65-80 % less; the
+#: residual of a plant without ripple: 1-2 % less, spuriously).
 LAG_GAIN = 0.2
 #: Stribeck velocities tried by :func:`residual_stribeck`.
 STRIBECK_GRID = 24
@@ -117,8 +119,8 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
     ``corners``, also on those columns through each corner's low-pass (the
     ``lpf`` element, from rest at every log start), and the corner whose fit
     leaves the least of the residual (the best of the grid, refined between
-    its neighbours) is kept when it leaves at least :data:`LAG_GAIN` less
-    than the plain fit. Only corners at or above the angle's median speed
+    its neighbours) is kept when it leaves at least the share
+    :data:`LAG_GAIN` less than the plain fit. Only corners at or above the angle's median speed
     over the samples that move are tried: a low-pass slower than even the
     first harmonic at a typical speed turns the harmonics into slow signals
     that fit any slow part of the residual (on a plant without ripple, the
