@@ -5,17 +5,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.signal import lfilter
 from helpers import TS
+from scipy.signal import lfilter
 
 from edm_sym.core.data import DataLog
 from edm_sym.core.elements import BY_NAME, default_ranges
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.result import dumps
 from edm_sym.engines.abstraction import Parallel, abstract, parse_config
-from edm_sym.engines.abstraction.seeding import (LAG_CORNERS, angle_input, harmonic_rows,
-                                                 residual_harmonics, residual_stribeck,
-                                                 stribeck_rows, velocity_input)
+from edm_sym.engines.abstraction.seeding import (
+    LAG_CORNERS,
+    angle_input,
+    harmonic_rows,
+    residual_harmonics,
+    residual_stribeck,
+    stribeck_rows,
+    velocity_input,
+)
 from edm_sym.engines.simulate import simulate_rows
 
 

@@ -47,6 +47,7 @@ from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 from edm_sym.core.elements import BY_NAME, ParamRange
+from edm_sym.engines.simulate import segments
 
 __all__ = ["LAG_CORNERS", "LAG_GAIN", "MAX_ORDER", "STRIBECK_GRID", "Harmonic", "angle_input",
            "harmonic_rows", "residual_harmonics", "residual_stribeck", "stribeck_rows",
@@ -90,20 +91,16 @@ def _lowpassed(columns: np.ndarray, corner: float, ts: float, starts: Sequence[i
     filter, from rest at every log start."""
     b, a = BY_NAME["lpf"].coefficients(corner, ts)
     out = np.empty_like(columns)
-    edges = [*sorted({0, *(int(s) for s in starts)}), columns.shape[0]]
-    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
-        if hi > lo:
-            out[lo:hi] = lfilter(b, a, columns[lo:hi], axis=0)
+    for lo, hi in segments(columns.shape[0], starts):
+        out[lo:hi] = lfilter(b, a, columns[lo:hi], axis=0)
     return out
 
 
 def _typical_speed(theta: np.ndarray, ts: float, starts: Sequence[int]) -> float:
     """The median speed of the angle [rad/s] over the samples that move (above 2 % of the
     fastest), the angle unwrapped within each log."""
-    edges = [*sorted({0, *(int(s) for s in starts)}), theta.size]
     speed = np.concatenate([np.abs(np.diff(np.unwrap(theta[lo:hi]))) / ts
-                            for lo, hi in zip(edges[:-1], edges[1:], strict=True) if hi - lo > 1]
-                           or [np.zeros(0)])
+                            for lo, hi in segments(theta.size, starts)])
     moving = speed[speed > 0.02 * speed.max()] if speed.size else speed
     return float(np.median(moving)) if moving.size else math.inf
 
@@ -111,7 +108,7 @@ def _typical_speed(theta: np.ndarray, ts: float, starts: Sequence[int]) -> float
 def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndarray,
                        count: int, max_order: int = MAX_ORDER, *,
                        corners: Sequence[float] = (), ts: float | None = None,
-                       starts: Sequence[int] = (0,)) -> list[Harmonic]:
+                       starts: Sequence[int] = ()) -> list[Harmonic]:
     """The ``count`` strongest harmonics of ``residual`` over ``theta``.
 
     The residual is fitted by weighted least squares on a constant and
@@ -120,8 +117,8 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
     ``lpf`` element, from rest at every log start), and the corner whose fit
     leaves the least of the residual (the best of the grid, refined between
     its neighbours) is kept when it leaves at least the share
-    :data:`LAG_GAIN` less than the plain fit. Only corners at or above the angle's median speed
-    over the samples that move are tried: a low-pass slower than even the
+    :data:`LAG_GAIN` less than the plain fit. Only corners at or above the
+    angle's median speed over the samples that move are tried: a low-pass slower than even the
     first harmonic at a typical speed turns the harmonics into slow signals
     that fit any slow part of the residual (on a plant without ripple, the
     search then started from rows of amplitude 0.6 N m through a 1 rad/s
@@ -144,7 +141,8 @@ def residual_harmonics(theta: np.ndarray, residual: np.ndarray, weights: np.ndar
     ts : float, optional
         Sample time [s]; needed with ``corners``.
     starts : sequence of int, optional
-        The first sample of each log.
+        The first sample of each log after the first
+        (:func:`edm_sym.engines.simulate.segments`).
 
     Returns
     -------
