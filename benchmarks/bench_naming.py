@@ -29,13 +29,12 @@ log, divided by
 
 Whether the excitation identifies a Stribeck hump at all: the engineer's
 least squares on the run's own training log with the Stribeck velocity
-scanned, not given (:func:`anchor_stribeck`). A hump at or below the
-staircase's slowest plateau misses its peak there too; the summary gives the
-pass share over the other runs beside the share over all of them (the pass
-criterion is the same for every run). It also counts the Stribeck peaks
-within tolerance apart for humps at most :data:`LOW_HUMP` times the slowest
-plateau and above it (:func:`stribeck_by_speed`): the search misses the low
-ones far more often.
+scanned, not given (:func:`anchor_stribeck`). On a plant that sticks and
+slips at the staircase's slow plateaus it misses the peak too; the summary
+gives the pass share over the other runs beside the share over all of them
+(the pass criterion is the same for every run). It also counts the Stribeck
+peaks within tolerance apart for humps at most :data:`LOW_HUMP` times the
+presets' slowest plateau (pi/2 rad/s) and above it (:func:`stribeck_by_speed`).
 
 Draws 0-3 are the tuning draws (rules may be tuned on them), draws 100-111 the
 measured ones; the summary gives each set separately: the share of runs with
@@ -83,8 +82,8 @@ TOLERANCES = (("coulomb", "level", 0.10), ("stribeck", "peak", STRIBECK_TOLERANC
               ("spatial", "amplitude", 0.20))
 #: The Stribeck velocities [rad/s] the engineer's least squares scans (:func:`anchor_stribeck`).
 STRIBECK_SCAN = tuple(float(v) for v in np.geomspace(0.3, 30.0, 80))
-#: A hump whose true Stribeck velocity is at most this many times the staircase's slowest
-#: plateau is a low one (:func:`stribeck_by_speed`).
+#: A hump whose true Stribeck velocity is at most this many times the presets' staircase's
+#: slowest plateau (pi/2 rad/s) is a low one (:func:`stribeck_by_speed`).
 LOW_HUMP = 1.3
 #: Parameters that add up when several terms name the same kind.
 ADDITIVE = {"level", "coefficient", "inertia", "peak"}
@@ -221,11 +220,12 @@ def anchor_stribeck(fp: FamilyPlant, seed: int) -> float | None:
 
     :func:`~edm_sym.engines.plant.anchor.fit_anchor` with the Stribeck
     velocity scanned over :data:`STRIBECK_SCAN` (not given): whether the
-    abstraction excitation identifies the hump at all. A hump at or below the
-    staircase's slowest plateau (pi/2 rad/s,
-    :data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`) is seen only on its flank, and
-    least squares with the right regressors misses its peak too. None when the
-    plant has no Stribeck hump.
+    abstraction excitation identifies the hump at all. The draws' staircase
+    (:data:`~edm_sym.engines.plant.family.STAIRCASE`) holds plateaus at pi/4
+    and pi/2 rad/s, below the slowest Stribeck velocity drawn; a plant that
+    sticks and slips there (a steep hump under a P loop: draws 607, 804) never
+    slides steadily at low speed, and least squares with the right regressors
+    misses its peak too. None when the plant has no Stribeck hump.
     """
     from edm_sym.engines.plant import simulate_plant
     from edm_sym.engines.plant.anchor import fit_anchor
@@ -249,8 +249,10 @@ def stribeck_by_speed(runs: list[dict]) -> tuple[str, str, float]:
 
     Over the runs whose plant has a hump: ``(low, high, bound)``, each count
     as ``"passed/runs"``, where a low hump's true Stribeck velocity is at most
-    ``bound`` = :data:`LOW_HUMP` times the staircase's slowest plateau
-    (:data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`). A missing
+    ``bound`` = :data:`LOW_HUMP` times the presets' staircase's slowest plateau
+    (pi/2 rad/s, :data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`):
+    the humps the draws' logs saw only on their flank before the draws had a
+    staircase of their own; the bound stays, so releases compare. A missing
     peak counts as outside the tolerance.
     """
     from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS

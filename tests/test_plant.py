@@ -110,6 +110,9 @@ def test_unknown_preset_and_excitation_are_refused() -> None:
         ({"encoder_counts": 1.5}, "encoder_counts"),
         ({"ripple": [RippleHarmonic(1, 0.1)]}, "ripple"),
         ({"current_noise": -0.1}, "current_noise"),
+        ({"staircase": (1.0, 2.0)}, "staircase"),
+        ({"staircase": [1.0] * 10}, "staircase"),
+        ({"staircase": (float("inf"),) * 10}, "staircase"),
     ],
 )
 def test_preset_validation(changes: dict[str, object], field: str) -> None:
@@ -177,6 +180,11 @@ def test_abstraction_staircase() -> None:
     biggest = max(abs(b - a) for a, b in zip((0.0, *levels), (*levels, 0.0), strict=True))
     assert np.abs(alpha).max() <= 1.876 * biggest / plant.excitation.RAMP_TIME
     assert np.abs(np.diff(alpha)).max() < 1.0
+    # A preset's own staircase replaces the levels and keeps the rest.
+    own = tuple(-v for v in levels)
+    command = plant.excitation.get_excitation("abstraction", own)
+    np.testing.assert_allclose(command(np.arange(len(levels)) + 0.5), own)
+    np.testing.assert_array_equal(command(t + 10.0), excitation_command("abstraction", t + 10.0))
 
 
 # ------------------------------------------------------------------ friction model

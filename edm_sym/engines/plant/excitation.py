@@ -8,7 +8,8 @@ each step a quintic (minimum-jerk shaped) ramp, so acceleration is continuous;
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from functools import partial
 
 import numpy as np
 
@@ -45,13 +46,18 @@ def _smoothstep(x: np.ndarray) -> np.ndarray:
     return x * x * x * (x * (6.0 * x - 15.0) + 10.0)
 
 
-def abstraction_command(t: np.ndarray) -> np.ndarray:
+def abstraction_command(
+    t: np.ndarray, levels: Sequence[float] = STAIRCASE_LEVELS
+) -> np.ndarray:
     """Velocity command of the abstraction experiment.
 
     Parameters
     ----------
     t : array_like
         Time [s].
+    levels : sequence of float, optional
+        The staircase's ten plateau speeds [rad/s], plateau i from t = i s;
+        default :data:`STAIRCASE_LEVELS`.
 
     Returns
     -------
@@ -62,9 +68,8 @@ def abstraction_command(t: np.ndarray) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     omega = np.zeros_like(t)
     previous = 0.0
-    starts = [float(i) for i in range(len(STAIRCASE_LEVELS))] + [_STAIRCASE_END - RAMP_TIME]
-    levels = [*STAIRCASE_LEVELS, 0.0]
-    for start, level in zip(starts, levels, strict=True):
+    starts = [float(i) for i in range(len(levels))] + [_STAIRCASE_END - RAMP_TIME]
+    for start, level in zip(starts, [*levels, 0.0], strict=True):
         # A sum of smooth steps: each ramp moves from the previous level to the next.
         omega += (level - previous) * _smoothstep((t - start) / RAMP_TIME)
         previous = level
@@ -96,13 +101,18 @@ _COMMANDS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 }
 
 
-def get_excitation(name: str) -> Callable[[np.ndarray], np.ndarray]:
+def get_excitation(
+    name: str, staircase: Sequence[float] | None = None
+) -> Callable[[np.ndarray], np.ndarray]:
     """Return the command function of a named excitation.
 
     Parameters
     ----------
     name : str
         One of :data:`EXCITATIONS`.
+    staircase : sequence of float, optional
+        The abstraction staircase's plateau speeds [rad/s] (a preset's
+        ``staircase``); default :data:`STAIRCASE_LEVELS`.
 
     Returns
     -------
@@ -115,6 +125,8 @@ def get_excitation(name: str) -> Callable[[np.ndarray], np.ndarray]:
         (a ``ValueError``) when the name is unknown.
     """
     if isinstance(name, str) and name in _COMMANDS:
+        if name == "abstraction" and staircase is not None:
+            return partial(abstraction_command, levels=tuple(staircase))
         return _COMMANDS[name]
     raise ConfigError(
         "excitation", f"expected one of {', '.join(EXCITATIONS)}, found {name!r}"

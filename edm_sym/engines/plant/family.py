@@ -36,6 +36,7 @@ from edm_sym.engines.plant.servo import PlantLog, simulate_plant
 __all__ = [
     "FAMILY_PREFIX",
     "PRESENCE_SHARE",
+    "STAIRCASE",
     "TRUTH_UNITS",
     "FamilyPlant",
     "draw_plant",
@@ -52,6 +53,14 @@ _FAMILY_NAME = re.compile(r"family-(0|[1-9][0-9]*)")
 #: A term is present when its RMS through Q(s) on the evaluation log is at least
 #: this share of the RMS of tau_ext (seed 0).
 PRESENCE_SHARE = 0.03
+#: The draws' abstraction staircase [rad/s]: the presets' one
+#: (:data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`) with its slow
+#: plateaus at pi/4 and pi/2 instead of pi/2 and 2 pi, so the slowest sits at
+#: about half the slowest Stribeck velocity drawn (1.5 rad/s) and a hump is
+#: seen on its crest, not only on its flank (docs/plant.md).
+STAIRCASE: tuple[float, ...] = tuple(
+    math.pi * k for k in (0.25, 2.0, 6.0, 12.0, 0.5, -0.25, -2.0, -6.0, -12.0, -0.5)
+)
 
 #: The units of every truth parameter (rotary axis, as `edm describe` gives them).
 TRUTH_UNITS: Mapping[str, Mapping[str, str]] = MappingProxyType({
@@ -259,6 +268,7 @@ def _drawn_preset(draw: int) -> PlantPreset:
         g_acceleration=1000.0,
         encoder_counts=encoder_counts,
         current_noise=current_noise,
+        staircase=STAIRCASE,
     )
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, fields
 
 from edm_sym.core.errors import ConfigError
 from edm_sym.core.terms import TermKind
+from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS
 
 __all__ = ["PRESETS", "PlantPreset", "RippleHarmonic", "get_preset"]
 
@@ -106,6 +107,10 @@ class PlantPreset:
         Encoder counts per revolution; 0 means an ideal (unquantised) angle.
     current_noise : float
         Standard deviation of the current-sensor noise [A], white per sample.
+    staircase : tuple of float, optional
+        The ten plateau speeds [rad/s] of this plant's ``"abstraction"``
+        staircase; None (the default) uses
+        :data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`.
     """
 
     name: str
@@ -129,6 +134,7 @@ class PlantPreset:
     g_acceleration: float
     encoder_counts: int
     current_noise: float
+    staircase: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         where = f"PlantPreset({self.name!r})"
@@ -169,6 +175,9 @@ class PlantPreset:
                 f"{where}.encoder_counts",
                 f"expected an integer >= 0 (0 = unquantised), found {counts!r}",
             )
+
+        if self.staircase is not None:
+            _check_staircase(f"{where}.staircase", self.staircase)
 
     @property
     def true_terms(self) -> tuple[TermKind, ...]:
@@ -220,6 +229,15 @@ class PlantPreset:
                 ]
             out[f.name] = value
         return out
+
+
+def _check_staircase(where: str, levels: object) -> None:
+    n = len(STAIRCASE_LEVELS)
+    if not (isinstance(levels, tuple) and len(levels) == n and all(
+            not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v)
+            for v in levels)):
+        raise ConfigError(where, f"expected a tuple of {n} finite speeds [rad/s], "
+                                 f"found {levels!r}")
 
 
 def _check_finite(

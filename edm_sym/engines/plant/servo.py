@@ -215,7 +215,7 @@ def simulate_plant(
         (a ``ValueError``) for an unknown preset or excitation, or a bad option.
     """
     plant = get_preset(preset)
-    command = get_excitation(excitation)
+    command = get_excitation(excitation, plant.staircase)
     log = simulate_axis(plant, command, ts=ts, duration=duration, seed=seed, substeps=substeps)
     return replace(log, excitation=excitation)
 
