@@ -1,6 +1,7 @@
 """The q31 and q15 C on the host: strict warnings, sanitizers, bit for bit the Python model.
 
-Each build is compiled by gcc (and clang: for the shipped example always, for
+Each build is compiled by gcc (and clang: for the examples always (q31 the shipped
+one, q15 the relay one of `cg_support.FIXED_EXAMPLES`), for
 every element kind and the random matrices with ``--slow``) with
 ``-Wall -Wextra -Wconversion`` and the undefined-behaviour sanitizer (signed
 overflow included); a harness runs the kit's vectors through ``<prefix>_step``
@@ -91,7 +92,7 @@ def model_outputs(result, real: str, input_range=None) -> np.ndarray:  # noqa: A
 def test_example_bit_exact_and_kit_passes(real: str, cc: str, tmp_path: Path) -> None:
     if not shutil.which(cc):
         pytest.skip(f"{cc} is not installed")
-    result = load_result(cg.EXAMPLE)
+    result = load_result(cg.FIXED_EXAMPLES[real])
     got = build_and_run(result, real, tmp_path, cc)
     np.testing.assert_array_equal(got, model_outputs(result, real))
     text = (tmp_path / "edm_comp.c").read_text() + (tmp_path / "edm_comp.h").read_text()
@@ -160,7 +161,7 @@ def test_the_kit_applies_the_switching_rule_as_the_export_measures(real: str,
     from edm_sym.engines.fixedpoint.accuracy import measure
     from edm_sym.engines.fixedpoint.formats import to_int
 
-    result = load_result(cg.EXAMPLE)
+    result = load_result(cg.FIXED_EXAMPLES[real])
     export(result, "c", tmp_path, real=real)
     export(result, "test", tmp_path, real=real)
     cg.run(["gcc", *WARN, *SANITIZE["gcc"], "-o", "kit", "edm_comp_test.c", "edm_comp.c"],

@@ -36,7 +36,7 @@ SOFT_FLOAT = re.compile(r"__aeabi_[fd]|__(add|sub|mul|div|float|fix|extend|trunc
 @pytest.mark.parametrize("real", ["q31", "q15"])
 def test_cortex_m3_runs_the_kit_without_floating_point(real: str, tmp_path: Path,
                                                        capsys: pytest.CaptureFixture) -> None:
-    result = load_result(cg.EXAMPLE)
+    result = load_result(cg.FIXED_EXAMPLES[real])
     export(result, "c", tmp_path, real=real)
     export(result, "test", tmp_path, real=real)
     cc = "arm-none-eabi-gcc"

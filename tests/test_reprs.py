@@ -38,7 +38,9 @@ def test_the_shipped_result_fits_on_a_screen() -> None:
     m, n = len(res.matrix.rows), len(res.matrix.rows[0].genes)  # shown n x m, as the paper
     assert lines[0].startswith(f"EdmResult(target 'tau_ext', 4 inputs, {n}x{m} matrix")
     assert "through" not in repr(res)
-    assert lines[2].startswith("  row 2: theta_uw -> sin_phase(")
+    # Each row: its input by name, then its stages.
+    for i, (line, row) in enumerate(zip(lines[1:], res.matrix.rows, strict=True), start=1):
+        assert line.startswith(f"  row {i}: {res.matrix.inputs[row.input]} -> "), line
     legacy = edm_sym.load_result(ROOT / "tests" / "golden" / "legacy_auger_result.json")
     legacy_lines = repr(legacy).splitlines()
     assert max(map(len, legacy_lines)) < 120 and "shift(5.879 samples)" in legacy_lines[5]

@@ -22,6 +22,12 @@ from edm_sym.core.result import EdmResult
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 EXAMPLE = REPO / "examples" / "auger" / "result.json"
+#: The example an earlier release shipped (seed 1 of the auger config), its Coulomb row a
+#: relay: the fixed-point tests of relays and the q15 golden (the shipped example's
+#: Coulomb row, a steep tanh, is beyond q15; test_fixedpoint checks the refusal).
+RELAY_EXAMPLE = REPO / "tests" / "golden" / "relay_auger_result.json"
+#: The example each fixed-point word is tested on: q31 the shipped one, q15 the relay one.
+FIXED_EXAMPLES = {"q31": EXAMPLE, "q15": RELAY_EXAMPLE}
 #: A hand-written 4x4 result with known content (tests/make_handwritten_result.py).
 HANDWRITTEN = REPO / "tests" / "data" / "handwritten_result.json"
 
