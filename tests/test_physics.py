@@ -19,12 +19,15 @@ import edm_sym
 from edm_sym.core.elements import default_ranges
 from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.engines.physics import (
+    HELD_BAND,
     MotionRange,
     PhysicsOptions,
     TermKind,
     model_physics,
+    held_speed,
     probe_runs,
     ranges_from_data,
+    ranges_from_result,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -146,6 +149,64 @@ def test_ranges_from_data_are_the_motion_the_log_reaches() -> None:
     assert r.velocity == pytest.approx(5.0, rel=0.01)
     assert 0 < r.slowest < r.velocity
     assert r.acceleration == pytest.approx(5.0, rel=0.01)
+
+
+def _staircase_and_chirp(slow: float) -> np.ndarray:
+    """A velocity: 1 s plateaus at +-slow, +-6 and +-30 rad/s, then a 10 s chirp to 60."""
+    t = np.arange(10000) * TS
+    stairs = np.repeat([slow, 6.0, 30.0, -slow, -6.0, -30.0], 1000)
+    chirp = 60.0 * np.sin(2 * np.pi * 0.5 * t ** 2)
+    return np.concatenate([np.zeros(2000), stairs, np.zeros(2000), chirp])
+
+
+def test_the_probes_go_down_to_the_slowest_speed_a_log_holds() -> None:
+    # A plateau at 0.8 rad/s (2 s of 20) is held; the chirp's passages through every speed
+    # are not. Probes go down to a fiftieth of the fastest, and lower to a held speed down
+    # to a two-hundredth; a plateau below that is not followed.
+    rng = np.random.default_rng(0)
+    for slow, expected in ((0.8, 0.8), (3.0, None), (0.1, None)):
+        v = _staircase_and_chirp(slow) + rng.normal(0.0, 0.01, 20000)
+        r = ranges_from_data(v, np.gradient(v, TS), np.cumsum(v) * TS, "log")
+        if expected is None:
+            assert r.slowest == pytest.approx(r.velocity / 50.0)
+        else:
+            assert r.slowest == pytest.approx(expected, rel=HELD_BAND)
+    chirp = _staircase_and_chirp(0.8)[10000:]
+    assert held_speed(chirp, 0.3, 1.2) is None
+    assert held_speed(np.zeros(100), 0.3, 1.2) is None
+
+
+def test_describe_probes_as_slow_as_the_abstraction_log_held() -> None:
+    # result.json's physics records the slowest speed its abstraction log held; describe
+    # on another log (a chirp) probes down to it, with data or without.
+    from edm_sym.engines.physics import physics_on_log
+    from edm_sym.engines.simulate import simulate_rows
+
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.5)]), ("omega", [("gain", 0.01)])],
+                 inputs=("theta_uw", "omega", "alpha"))
+    v = _staircase_and_chirp(0.8)[10000:]
+    x = np.vstack([np.cumsum(v) * TS, v, np.gradient(v, TS)])
+    rows = simulate_rows(comp, comp.matrix.rows, x)
+    target = rows.sum(axis=0)
+    roles = ("angle", "velocity", "acceleration")
+    alone = physics_on_log(comp, roles, x=x, rows=rows, target=target, ts=TS, source="c.csv")
+    assert alone.ranges.slowest == pytest.approx(alone.ranges.velocity / 50.0)
+
+    class Result:  # what ranges_from_result reads of a result
+        logs = ({"use": "abstraction", "columns": [{"name": "omega", "min": -60.0, "max": 60.0}]},)
+        physics = {"ranges": {"slowest": 0.8}}
+        source = "r.json"
+
+    recorded = ranges_from_result(Result(), {"omega": "velocity"})
+    assert recorded.slowest == 0.8
+    given = physics_on_log(comp, roles, x=x, rows=rows, target=target, ts=TS, source="c.csv",
+                           fallback=recorded)
+    assert given.ranges.slowest == 0.8
+    assert given.named()["coulomb"]["level"] == pytest.approx(0.5, rel=0.01)
+    Result.physics = {"ranges": {"slowest": 0.01}}  # at least a two-hundredth of the fastest
+    assert ranges_from_result(Result(), {"omega": "velocity"}).slowest == pytest.approx(0.3)
+    Result.physics = {}  # an older result: a fiftieth
+    assert ranges_from_result(Result(), {"omega": "velocity"}).slowest == pytest.approx(1.2)
 
 
 def test_linear_axis_units_and_a_position_profile() -> None:

@@ -277,6 +277,12 @@ MAX_PER_RUN = 1500
 ROW_SHARE = 0.1
 #: On the data, a row is unexplained when this share of its own RMS is outside the laws.
 DATA_UNEXPLAINED = 0.5
+#: A speed a log holds (a plateau): at least this share of its samples within
+#: +-:data:`HELD_BAND` of it (a 1 s plateau in both directions of a 20 s log: 8 %;
+#: a chirp's slowest speeds: under 0.2 %).
+HELD_SHARE = 0.01
+#: The relative half-width of the band around a held speed.
+HELD_BAND = 0.05
 
 
 def _pct(share: float) -> str:
@@ -297,8 +303,11 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
 
     The velocity range is the largest |velocity| recorded (from the angle's
     span over the log's duration when no velocity is recorded), the slowest a
-    fiftieth of it, the acceleration the largest |acceleration| (else the
-    velocity over a tenth of a second). None when nothing is recorded.
+    fiftieth of it, or the slowest speed the abstraction log holds when the
+    result's ``physics`` records a slower one (``physics.ranges.slowest``,
+    :func:`ranges_from_data` on that log; at least a two-hundredth of the
+    fastest), the acceleration the largest |acceleration| (else the velocity
+    over a tenth of a second). None when nothing is recorded.
     """
     logs = [g for g in getattr(result, "logs", ()) if g.get("use") == "abstraction"] or list(
         getattr(result, "logs", ()))
@@ -321,7 +330,11 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
         return None
     a = max(abs(acc[0]), abs(acc[1])) if acc is not None else 10.0 * v
     name = getattr(result, "source", None) or "result.json"
-    return MotionRange(v, v / 50.0, a if a > 0 and math.isfinite(a) else 10.0 * v, pos,
+    slowest = v / 50.0
+    held = (getattr(result, "physics", None) or {}).get("ranges", {}).get("slowest")
+    if isinstance(held, int | float) and not isinstance(held, bool) and math.isfinite(held):
+        slowest = min(slowest, max(float(held), v / 200.0))
+    return MotionRange(v, slowest, a if a > 0 and math.isfinite(a) else 10.0 * v, pos,
                        f"the ranges {_basename(name)} records")
 
 
@@ -337,8 +350,7 @@ def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.n
     vmax = float(np.percentile(v, 99.0))
     if not (vmax > 0):
         return None
-    moving = v[v > 0.02 * vmax]
-    slowest = float(np.percentile(moving, 5.0)) if moving.size else vmax / 50.0
+    held = held_speed(v, vmax / 200.0, vmax / 50.0)
     a = np.abs(np.asarray(acceleration, dtype=float))
     a = a[np.isfinite(a)]
     amax = float(np.percentile(a, 99.0)) if a.size else 10.0 * vmax
@@ -347,11 +359,41 @@ def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.n
         th = np.asarray(angle, dtype=float)
         th = th[np.isfinite(th)]
         pos = (float(th.min()), float(th.max())) if th.size else None
-    # Down to the slowest moving speed, and at least to a fiftieth of the fastest: the
-    # log the model was fitted to may hold slower speeds than this one (a Stribeck
-    # hump at 2 rad/s is invisible from 5 rad/s up).
-    return MotionRange(vmax, min(max(slowest, vmax / 200.0), vmax / 50.0),
+    # Down to a fiftieth of the fastest (the log the model was fitted to may hold slower
+    # speeds than this one: a Stribeck hump at 2 rad/s is invisible from 5 rad/s up),
+    # and to the slowest speed this log holds, down to a two-hundredth.
+    return MotionRange(vmax, vmax / 50.0 if held is None else held,
                        amax if amax > 0 else 10.0 * vmax, pos, source)
+
+
+def held_speed(speed: np.ndarray, low: float, high: float) -> float | None:
+    """The slowest speed in ``[low, high]`` a log holds: a plateau, not a passage.
+
+    A speed is held when at least :data:`HELD_SHARE` of the samples' ``|speed|``
+    lie within +-:data:`HELD_BAND` of it. Scanned on a geometric grid (steps of
+    half the band) from ``low`` up; from the first speed held, the scan climbs
+    to the share's local peak (the plateau's level). None when no speed in the
+    interval is held (a chirp, a sweep, a stick-slip that never settles).
+    """
+    v = np.abs(np.asarray(speed, dtype=float))
+    v = v[np.isfinite(v)]
+    if v.size == 0 or not (0.0 < low < high):
+        return None
+    v = np.sort(v)
+    grid = np.exp(np.arange(math.log(low), math.log(high) + 1e-12, HELD_BAND / 2.0))
+
+    def share(c: float) -> float:
+        lo, hi = np.searchsorted(v, [c / (1.0 + HELD_BAND), c * (1.0 + HELD_BAND)], side="left")
+        return (hi - lo) / v.size
+
+    shares = [share(float(c)) for c in grid]
+    first = next((i for i, x in enumerate(shares) if x >= HELD_SHARE), None)
+    if first is None:
+        return None
+    i = first
+    while i + 1 < len(grid) and shares[i + 1] > shares[i]:
+        i += 1
+    return float(grid[i])
 
 
 def _basename(path: str) -> str:
@@ -903,7 +945,11 @@ def physics_on_log(
     part : slice or numpy.ndarray
         The samples the shares are measured on (the held-out rows).
     fallback : MotionRange, optional
-        The ranges to probe over when the log has no motion (no velocity or angle input).
+        The ranges result.json records (:func:`ranges_from_result`): probed over
+        when the log has no motion (no velocity or angle input); otherwise its
+        slowest speed, the speed the model was fitted down to, lowers the
+        probes' slowest when it is slower than this log's (down to a
+        two-hundredth of this log's fastest).
 
     Returns
     -------
@@ -917,7 +963,11 @@ def physics_on_log(
     vel, acc = motion
     by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
     angle = by_role.get("angle", by_role.get("angle_wrapped"))
-    ranges = ranges_from_data(vel, acc, angle, source) or fallback
+    ranges = ranges_from_data(vel, acc, angle, source)
+    if ranges is None:
+        ranges = fallback
+    elif fallback is not None and fallback.slowest < ranges.slowest:
+        ranges = replace(ranges, slowest=max(fallback.slowest, ranges.velocity / 200.0))
     if ranges is None:
         return None
     out = np.asarray(rows, dtype=float)
