@@ -381,17 +381,13 @@ def held_speed(speed: np.ndarray, low: float, high: float) -> float | None:
         return None
     v = np.sort(v)
     grid = np.exp(np.arange(math.log(low), math.log(high) + 1e-12, HELD_BAND / 2.0))
-
-    def share(c: float) -> float:
-        lo, hi = np.searchsorted(v, [c / (1.0 + HELD_BAND), c * (1.0 + HELD_BAND)], side="left")
-        return (hi - lo) / v.size
-
-    shares = [share(float(c)) for c in grid]
-    first = next((i for i, x in enumerate(shares) if x >= HELD_SHARE), None)
-    if first is None:
+    shares = (np.searchsorted(v, grid * (1.0 + HELD_BAND))
+              - np.searchsorted(v, grid / (1.0 + HELD_BAND))) / v.size
+    held = np.flatnonzero(shares >= HELD_SHARE)
+    if held.size == 0:
         return None
-    i = first
-    while i + 1 < len(grid) and shares[i + 1] > shares[i]:
+    i = int(held[0])
+    while i + 1 < grid.size and shares[i + 1] > shares[i]:
         i += 1
     return float(grid[i])
 

@@ -175,7 +175,6 @@ class PlantPreset:
                 f"{where}.encoder_counts",
                 f"expected an integer >= 0 (0 = unquantised), found {counts!r}",
             )
-
         if self.staircase is not None:
             _check_staircase(f"{where}.staircase", self.staircase)
 
