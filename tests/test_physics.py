@@ -20,15 +20,20 @@ from edm_sym.core.elements import default_ranges
 from edm_sym.core.matrix import Compensator, make_matrix
 from edm_sym.engines.physics import (
     HELD_BAND,
+    Law,
     MotionRange,
+    Physics,
     PhysicsOptions,
+    RowBehaviour,
     TermKind,
     held_speed,
+    inertia_on_data,
     model_physics,
     probe_runs,
     ranges_from_data,
     ranges_from_result,
 )
+from edm_sym.engines.plant.anchor import centred_motion
 
 ROOT = Path(__file__).resolve().parents[1]
 TS = 1e-3
@@ -361,3 +366,36 @@ def test_a_law_the_data_does_not_need_is_not_named(plant_has_inertia: bool) -> N
     # Without the data the same model's inertia is named (nothing says the plant lacks it).
     assert "acceleration" in model_physics(comp, ("angle", "velocity", "acceleration"),
                                            RANGE).named()
+
+
+
+def test_an_inertia_too_small_on_the_log_is_left_out() -> None:
+    """The probes' constant accelerations can give a row on the acceleration a gain the
+    log's motion does not. Measured on the log, the inertia's share is rescaled; under
+    the threshold it is not named (left out with both values) and no row lists it; above
+    it the law stays named with the log's value."""
+    angle = np.asarray(edm_sym.load_data("plant:auger/evaluation").column("theta_uw"), dtype=float)
+    _, omega, alpha = centred_motion(angle, TS)
+    friction = 0.5 * np.sign(omega) + 0.01 * omega
+    ranges = MotionRange(float(np.max(np.abs(omega))), 1.0, float(np.max(np.abs(alpha))), None,
+                         "test")
+    # On the probes: 1e-4 kg m^2, 5 % of the reference.
+    law = Law(TermKind.ACCELERATION, {"inertia": (1e-4, "kg m^2")}, 0.05, rows=(0.0, 1.0))
+    rows = (RowBehaviour(1, {"coulomb": 1.0}, 0.0), RowBehaviour(2, {"acceleration": 1.0}, 0.0))
+    phys = Physics((law,), (), 1.0, rows, ranges, None)
+    assert PhysicsOptions().threshold == 0.01
+
+    kept = inertia_on_data(phys, angle, friction + 6e-5 * alpha, TS)  # 3 %: named
+    assert [x.kind for x in kept.terms] == [TermKind.ACCELERATION]
+    # The log's least squares reads the 6e-5 the output holds.
+    on_log = kept.terms[0].parameters["inertia"][0]
+    assert on_log == pytest.approx(6e-5, rel=0.02)
+    assert kept.terms[0].share == pytest.approx(0.05 * on_log / 1e-4)
+    assert kept.rows == rows and kept.left_out == ()
+
+    small = inertia_on_data(phys, angle, friction + 1e-5 * alpha, TS)  # 0.5 %: left out
+    assert small.terms == ()
+    ((kind, why),) = small.left_out
+    assert kind is TermKind.ACCELERATION
+    assert "below the 1 % threshold" in why and "on the probes 0.0001 kg m^2" in why
+    assert [r.laws for r in small.rows] == [{"coulomb": 1.0}, {}]

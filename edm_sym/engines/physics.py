@@ -1031,8 +1031,21 @@ def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts:
     old, unit = law.parameters["inertia"]
     if not (math.isfinite(fit.inertia) and old != 0 and fit.inertia * old > 0):
         return phys  # the log cannot tell it (or tells another sign): the probes' value stays
+    share = law.share * abs(fit.inertia / old)
+    threshold = (options or PhysicsOptions()).threshold
+    if share < threshold:
+        # Measured where the plant moves, the term is too small to name: it was the
+        # probes' constant accelerations that made it look like one.
+        reason = (f"{_pct(share)} % of the target measured on the log's motion ({fit.inertia:.4g} "
+                  f"{unit}; on the probes {old:.4g} {unit}), below the {100 * threshold:g} % "
+                  "threshold")
+        kind = TermKind.ACCELERATION.value
+        rows = tuple(replace(r, laws={k: v for k, v in r.laws.items() if k != kind})
+                     for r in phys.rows)
+        return replace(phys, terms=tuple(t for t in phys.terms if t is not law),
+                       left_out=(*phys.left_out, (TermKind.ACCELERATION, reason)), rows=rows)
     note = ("on_data", f"measured on the log's motion (least squares of the model's output); "
                        f"on the probes {old:.4g} {unit}")
     new = replace(law, parameters={**law.parameters, "inertia": (fit.inertia, unit)},
-                  share=law.share * abs(fit.inertia / old), flags=(*law.flags, note))
+                  share=share, flags=(*law.flags, note))
     return replace(phys, terms=tuple(new if t is law else t for t in phys.terms))
