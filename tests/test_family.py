@@ -17,9 +17,11 @@ from edm_sym.application.cli import main
 from edm_sym.core.errors import ConfigError, DataFormatError
 from edm_sym.engines.plant import PRESETS, lowpass, simulate_plant
 from edm_sym.engines.plant.anchor import centred_motion, fit_anchor, law_torque
+from edm_sym.engines.plant.excitation import STAIRCASE_LEVELS
 from edm_sym.engines.plant.family import (
     PRESENCE_SHARE,
     STAIRCASE,
+    STRIBECK_VELOCITIES,
     TRUTH_UNITS,
     draw_plant,
     family_draw,
@@ -288,6 +290,28 @@ def test_the_draws_staircase_shows_a_low_hump_on_its_crest() -> None:
     assert abs(bench.anchor_stribeck(fp, 1)) < 0.05
     presets_staircase = replace(fp, preset=replace(fp.preset, staircase=None))
     assert bench.anchor_stribeck(presets_staircase, 1) < -bench.STRIBECK_TOLERANCE
+
+
+def test_the_draws_staircase_holds_a_plateau_near_every_drawn_stribeck_velocity() -> None:
+    """The staircase's plateaus sample the hump's shape wherever v_s is drawn: a
+    plateau within a factor 1.6 of every Stribeck velocity of the range (the
+    presets' spacing left 1.6-5 rad/s between pi/2 and 2 pi, where a search's model
+    bent its curve unseen), and two plateaus where every drawn hump has decayed
+    below 0.2 % of its peak, so Coulomb and viscous are told apart without it."""
+    def unseen(levels: tuple[float, ...]) -> list[float]:
+        speeds = {abs(v) for v in levels}
+        return [float(vs) for vs in np.geomspace(*STRIBECK_VELOCITIES, 60)
+                if not any(vs / 1.6 <= v <= vs * 1.6 for v in speeds)]
+
+    speeds = sorted({abs(v) for v in STAIRCASE})
+    assert sorted({-v for v in STAIRCASE if v < 0}) == speeds  # both directions alike
+    assert unseen(STAIRCASE) == []
+    assert min(speeds) < 0.6 * STRIBECK_VELOCITIES[0]
+    past_hump = [v for v in speeds if math.exp(-(v / STRIBECK_VELOCITIES[1]) ** 2) < 0.002]
+    assert len(past_hump) >= 2
+    # The presets' levels and the draws' earlier ones leave about 2.6-3.9 rad/s unseen.
+    assert min(unseen(STAIRCASE_LEVELS)) < 3.0 < max(unseen(STAIRCASE_LEVELS))
+    assert unseen(tuple(math.pi * k for k in (0.25, 2.0, 6.0, 12.0, 0.5)))
 
 
 def test_the_benchmark_counts_low_and_other_humps_apart() -> None:

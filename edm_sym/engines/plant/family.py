@@ -53,13 +53,15 @@ _FAMILY_NAME = re.compile(r"family-(0|[1-9][0-9]*)")
 #: A term is present when its RMS through Q(s) on the evaluation log is at least
 #: this share of the RMS of tau_ext (seed 0).
 PRESENCE_SHARE = 0.03
-#: The draws' abstraction staircase [rad/s]: the presets' one
-#: (:data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`) with its slow
-#: plateaus at pi/4 and pi/2 instead of pi/2 and 2 pi, so the slowest sits at
-#: about half the slowest Stribeck velocity drawn (1.5 rad/s) and a hump is
-#: seen on its crest, not only on its flank (docs/plant.md).
+#: The draws' abstraction staircase [rad/s], spaced for the drawn Stribeck
+#: velocities (1.5-5 rad/s; docs/plant.md): pi/4, pi/2 and pi below and
+#: through the hump (the slowest at about half the slowest v_s, so a hump is
+#: seen on its crest, not only on its flank), then 4 pi and 12 pi, where every
+#: drawn hump has decayed below 0.2 % of its peak, so two plateaus tell
+#: Coulomb from viscous without the hump. The presets keep theirs
+#: (:data:`~edm_sym.engines.plant.excitation.STAIRCASE_LEVELS`).
 STAIRCASE: tuple[float, ...] = tuple(
-    math.pi * k for k in (0.25, 2.0, 6.0, 12.0, 0.5, -0.25, -2.0, -6.0, -12.0, -0.5)
+    math.pi * k for k in (0.25, 1.0, 4.0, 12.0, 0.5, -0.25, -1.0, -4.0, -12.0, -0.5)
 )
 
 #: The units of every truth parameter (rotary axis, as `edm describe` gives them).
@@ -82,6 +84,8 @@ _DRIVES = ((500.0, 150.0, 0.0), (800.0, 200.0, 4000.0))
 _ENCODERS = (2**20, 2**23)
 #: Stribeck ratios (stiction/Coulomb) below this are drawn as 1 (no Stribeck term).
 STRIBECK_MIN_RATIO = 1.2
+#: The range the Stribeck velocities are drawn from [rad/s] (log-uniform).
+STRIBECK_VELOCITIES = (1.5, 5.0)
 
 
 @dataclass(frozen=True)
@@ -230,7 +234,7 @@ def _drawn_preset(draw: int) -> PlantPreset:
     stiction = _round(coulomb * ratio) if ratio > 1.0 else coulomb
     if stiction < STRIBECK_MIN_RATIO * coulomb:  # rounding must not leave a ratio just under 1.2
         stiction = coulomb
-    stribeck_velocity = _round(_log_uniform(rng, 1.5, 5.0))
+    stribeck_velocity = _round(_log_uniform(rng, *STRIBECK_VELOCITIES))
     viscous = _round(_log_uniform(rng, 0.002, 0.02))
     inertia = _round(_log_uniform(rng, 4e-4, 1.2e-3))
     error = 0.0 if rng.random() < 0.25 else float(rng.choice((-1.0, 1.0)) * rng.uniform(0.08, 0.25))
