@@ -997,7 +997,9 @@ def inertia_on_data(phys: Physics, angle: np.ndarray, model_out: np.ndarray, ts:
     (:func:`edm_sym.engines.plant.anchor.fit_anchor`: sign, velocity,
     acceleration, offset, the named Stribeck hump and angle harmonics, each
     through the observer's low-pass, the reversals left out) of the model's
-    own output on the log. The probes' value stays in the law's flags.
+    own output on the log. The probes' value stays in the law's flags. The
+    law's share is scaled by the same ratio; under ``options.threshold`` the
+    law is left out (``left_out``, with both values) and no row lists it.
 
     Parameters
     ----------
