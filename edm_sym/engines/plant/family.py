@@ -35,12 +35,14 @@ from edm_sym.engines.plant.servo import PlantLog, simulate_plant
 
 __all__ = [
     "FAMILY_PREFIX",
+    "HOLD_MARGIN",
     "PRESENCE_SHARE",
     "STAIRCASE",
     "TRUTH_UNITS",
     "FamilyPlant",
     "draw_plant",
     "family_draw",
+    "hump_slope",
     "resolve_preset",
     "term_shares",
     "true_law",
@@ -86,6 +88,12 @@ _ENCODERS = (2**20, 2**23)
 STRIBECK_MIN_RATIO = 1.2
 #: The range the Stribeck velocities are drawn from [rad/s] (log-uniform).
 STRIBECK_VELOCITIES = (1.5, 5.0)
+#: A hump is drawn only as steep as the drive holds: its steepest negative slope
+#: (``hump_slope``) at most this share of ``g_dob J_n``. Linearised, a DOB of
+#: bandwidth g_dob and nominal inertia J_n leaves the sliding axis the pole
+#: ``(k - g_dob J_n) / J`` for a friction slope -k; the share keeps a gain
+#: margin of 2 (6 dB) for the sampled loop (docs/plant.md).
+HOLD_MARGIN = 0.5
 
 
 @dataclass(frozen=True)
@@ -226,6 +234,32 @@ def _round(x: float, digits: int = 3) -> float:
     return 0.0 if x == 0 else float(f"{x:.{digits - 1}e}")
 
 
+def hump_slope(excess: float, stribeck_velocity: float) -> float:
+    """The steepest negative slope of a Stribeck hump [N m s/rad].
+
+    ``excess * exp(-(v / v_s)^2)`` falls fastest at ``v = v_s / sqrt(2)``,
+    by ``excess * sqrt(2 / e) / v_s``.
+
+    Parameters
+    ----------
+    excess : float
+        The hump's excess over Coulomb at rest, ``tau_s - tau_c`` [N m].
+    stribeck_velocity : float
+        ``v_s`` [rad/s], > 0.
+
+    Returns
+    -------
+    float
+    """
+    return excess * math.sqrt(2.0 / math.e) / stribeck_velocity
+
+
+def _held(stiction: float, coulomb: float, stribeck_velocity: float,
+          g_dob: float, inertia_nominal: float) -> bool:
+    """Whether the drive holds a sliding axis on the hump (:data:`HOLD_MARGIN`)."""
+    return hump_slope(stiction - coulomb, stribeck_velocity) <= HOLD_MARGIN * g_dob * inertia_nominal
+
+
 def _drawn_preset(draw: int) -> PlantPreset:
     """The parameters of draw ``draw`` before the presence rule (ranges: docs/plant.md)."""
     rng = np.random.default_rng(draw)
@@ -250,6 +284,19 @@ def _drawn_preset(draw: int) -> PlantPreset:
     stiffness = _round(_log_uniform(rng, 5e3, 2e4))
     damping_ratio = float(rng.uniform(0.15, 0.3))
     damping = _round(2.0 * damping_ratio * math.sqrt(stiffness * inertia))
+    # A hump steeper than the drive holds would stick and slip on the slow
+    # plateaus, where no static law can be read: its ratio and v_s are drawn
+    # again (a generator of their own, so the other parameters stay).
+    for attempt in range(1, 1001):
+        if _held(stiction, coulomb, stribeck_velocity, g_dob, inertia_nominal):
+            break
+        again = np.random.default_rng((draw, attempt))
+        stiction = _round(coulomb * float(again.uniform(STRIBECK_MIN_RATIO, 2.5)))
+        if stiction < STRIBECK_MIN_RATIO * coulomb:
+            stiction = coulomb
+        stribeck_velocity = _round(_log_uniform(again, *STRIBECK_VELOCITIES))
+    else:  # pragma: no cover - the gentlest hump drawn (1.2, 5 rad/s) is held
+        raise RuntimeError(f"family-{draw}: no hump the drive holds in 1000 draws")
     return PlantPreset(
         name=f"{FAMILY_PREFIX}{draw}",
         description=f"draw {draw} of the family of plants with known truth (docs/plant.md)",
