@@ -286,7 +286,8 @@ def test_a_hump_steeper_than_the_drive_holds_is_drawn_again() -> None:
     fp = draw_plant(607)
     p = fp.preset
     assert p.stiction >= 1.2 * p.coulomb
-    assert hump_slope(p.stiction - p.coulomb, p.stribeck_velocity) <= HOLD_MARGIN * p.g_dob * p.inertia_nominal
+    slope = hump_slope(p.stiction - p.coulomb, p.stribeck_velocity)
+    assert slope <= HOLD_MARGIN * p.g_dob * p.inertia_nominal
     assert _speed_swing(p) < 0.2
     assert abs(bench.anchor_stribeck(fp, 1)) < 0.05
     assert abs(bench.anchor_stribeck(draw_plant(501), 1)) < 0.05
