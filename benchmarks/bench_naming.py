@@ -223,9 +223,10 @@ def anchor_stribeck(fp: FamilyPlant, seed: int) -> float | None:
     abstraction excitation identifies the hump at all. The draws' staircase
     (:data:`~edm_sym.engines.plant.family.STAIRCASE`) holds plateaus at pi/4
     and pi/2 rad/s, below the slowest Stribeck velocity drawn; a plant that
-    sticks and slips there (a steep hump under a P loop: draws 607, 804) never
-    slides steadily at low speed, and least squares with the right regressors
-    misses its peak too. None when the plant has no Stribeck hump.
+    sticks and slips there never slides steadily at low speed, and least
+    squares with the right regressors misses its peak too. The family draws
+    no such hump any more (docs/plant.md, "A hump the drive holds"; draws 607
+    and 804 did before). None when the plant has no Stribeck hump.
     """
     from edm_sym.engines.plant import simulate_plant
     from edm_sym.engines.plant.anchor import fit_anchor
