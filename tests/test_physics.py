@@ -118,6 +118,25 @@ def test_a_tiny_law_is_left_out_below_the_threshold() -> None:
     assert any(k is TermKind.VISCOUS for k, _ in phys.left_out)
 
 
+def test_a_law_that_hangs_on_one_probe_speed_is_flagged_uncertain() -> None:
+    """A friction curve that bends between the probe speeds (Coulomb, viscous and a
+    wobble 0.06 sin(0.5 v), as a search's free curve can hold) gets a viscous slope
+    that depends on which speeds are probed: its relative error is the jackknife
+    over the speeds (14 %; as independent samples, 0.4 %), and it is flagged.
+    A curve that is the law has errors near zero and no flag."""
+    clean = _comp([("omega", [("sign", 0), ("gain", 0.3)]), ("omega", [("gain", 0.01)])])
+    wobbly = _comp([("omega", [("sign", 0), ("gain", 0.3)]), ("omega", [("gain", 0.01)]),
+                    ("omega", [("gain", 0.5), ("sin_amp", 0.06)])])
+    law = {t.kind: t for t in model_physics(clean, ROLES, RANGE).terms}
+    assert law[TermKind.VISCOUS].errors["coefficient"] < 1e-6
+    assert not any(t.flags for t in law.values())
+    law = {t.kind: t for t in model_physics(wobbly, ROLES, RANGE).terms}
+    viscous = law[TermKind.VISCOUS]
+    assert viscous.parameters["coefficient"][0] == pytest.approx(0.0067, rel=0.05)
+    assert viscous.errors["coefficient"] > PhysicsOptions().uncertain
+    assert [code for code, _ in viscous.flags] == ["uncertain"]
+
+
 def test_observer_lag_is_taken_out_before_the_inertia_is_named() -> None:
     # A viscous law seen through the observer's low-pass g/(s+g) lags: without the
     # bandwidth it reads as an inertia of -D/g, with it as none.

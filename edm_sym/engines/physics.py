@@ -400,13 +400,16 @@ def _basename(path: str) -> str:
 
 @dataclass(frozen=True)
 class Run:
-    """One probe motion from rest: angle, velocity, acceleration per sample, and the
-    samples where the model has settled (``steady``)."""
+    """One probe motion from rest: angle, velocity, acceleration per sample, the
+    samples where the model has settled (``steady``), and the probe speed it
+    belongs to (``speed``: its index, both directions alike; -1 for a triangle
+    wave), which the jackknife of the laws' errors leaves out in turn."""
 
     theta: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
     steady: np.ndarray
+    speed: int = -1
 
 
 def settling_time(comp: Compensator, max_settle: float) -> float:
@@ -460,7 +463,7 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     speeds = np.geomspace(ranges.slowest, ranges.velocity, options.levels)
     a_ramp = 0.5 * ranges.acceleration
     for sign in (1.0, -1.0):
-        for speed in speeds:
+        for index, speed in enumerate(speeds):
             ramp = max(int(math.ceil(speed / a_ramp / ts)), 1)
             window = travel / speed if travel > 0 else 0.5
             window = min(max(window, 50 * ts, settle), options.max_window)
@@ -469,7 +472,7 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
             theta, v, a = _profile(v, ts, lo if sign > 0 else hi)
             steady = np.zeros(v.size, dtype=bool)
             steady[ramp + 1 + n_settle:] = True
-            runs.append(Run(theta, v, a, steady))
+            runs.append(Run(theta, v, a, steady, index))
     for top, share in ((ranges.velocity, 0.5), (ranges.velocity / 3.0, 0.5),
                        (ranges.velocity, 0.125), (ranges.velocity / 3.0, 0.125)):
         # The accelerations of the log, not slower: a filter's response at the log's
@@ -593,6 +596,25 @@ def _fit(X: np.ndarray, Y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.nd
     return coef, (Y - X @ coef)
 
 
+def _jackknife(X: np.ndarray, y: np.ndarray, w: np.ndarray,  # noqa: N803
+               groups: np.ndarray) -> np.ndarray:
+    """Jackknife standard errors of the weighted fit, leaving out one group of probes at a time.
+
+    The probes are noise-free and their residuals are the model's departures
+    from the laws, correlated along each run: the textbook standard error
+    treats them as independent samples and shrinks with their number. Leaving
+    out each probe speed in turn (``groups``: its label; -1 is never left out)
+    says instead how much the parameters hang on one part of the model's
+    curve. NaN with fewer than three groups.
+    """
+    labels = np.unique(groups[groups >= 0])
+    g = labels.size
+    if g < 3:
+        return np.full(X.shape[1], math.nan)
+    coefs = np.array([_fit(X[groups != k], y[groups != k], w[groups != k])[0] for k in labels])
+    return np.sqrt((g - 1) / g * np.sum((coefs - coefs.mean(axis=0)) ** 2, axis=0))
+
+
 def _wrms(x: np.ndarray, w: np.ndarray) -> float:
     return float(np.sqrt(np.sum(w * x * x) / np.sum(w)))
 
@@ -668,7 +690,7 @@ def model_physics(
                                                     sorted(lags.items()))
                      + ", as the log's own signals lag the angle's derivatives")
     runs = probe_runs(ranges, ts, settle, rotary=rotary, options=opts)
-    ys, v, a, th, w = [], [], [], [], []
+    ys, v, a, th, w, grp = [], [], [], [], [], []
     for run in runs:
         out = simulate_rows(comp, comp.matrix.rows, run_inputs(run, roles, lags, ts))
         if bandwidth is not None and out.shape[1] > 2:
@@ -684,8 +706,9 @@ def model_physics(
         a.append(run.acceleration[m])
         th.append(run.theta[m])
         w.append(np.full(n, 1.0 / n))
+        grp.append(np.full(n, run.speed))
     Y = np.concatenate(ys, axis=1).T  # (n, m)  # noqa: N806
-    V, A, TH, W = (np.concatenate(x) for x in (v, a, th, w))  # noqa: N806
+    V, A, TH, W, G = (np.concatenate(x) for x in (v, a, th, w, grp))  # noqa: N806
     y = Y.sum(axis=1)
     has_angle = any(r in ("angle", "angle_wrapped") for r in roles)
     harmonics = opts.max_harmonic if has_angle and rotary else 0
@@ -724,6 +747,9 @@ def model_physics(
         stderr = np.sqrt(np.maximum(np.diag(cov), 0.0))
     except np.linalg.LinAlgError:
         stderr = np.full(X.shape[1], math.nan)
+    # The larger of that and the spread over the probe speeds (each left out in turn):
+    # a model whose curve bends between the speeds is not described to a few per cent.
+    stderr = np.fmax(stderr, _jackknife(X, y, W, G))
     # Each row on the same basis: its coefficients (they add up to the model's).
     row_coef, row_res = _fit(X, Y, W)
     # The reference motion the shares are measured on.
