@@ -260,14 +260,19 @@ def _held(stiction: float, coulomb: float, stribeck_velocity: float,
     return hump_slope(stiction - coulomb, stribeck_velocity) <= HOLD_MARGIN * g_dob * inertia_nominal
 
 
+def _stiction(coulomb: float, ratio: float) -> float:
+    """The stiction level of a drawn ratio, rounded; the Coulomb level (no hump) when
+    the ratio, or the rounding, leaves it under :data:`STRIBECK_MIN_RATIO` times it."""
+    stiction = _round(coulomb * ratio) if ratio > 1.0 else coulomb
+    return stiction if stiction >= STRIBECK_MIN_RATIO * coulomb else coulomb
+
+
 def _drawn_preset(draw: int) -> PlantPreset:
     """The parameters of draw ``draw`` before the presence rule (ranges: docs/plant.md)."""
     rng = np.random.default_rng(draw)
     coulomb = _round(_log_uniform(rng, 0.15, 1.0))
     ratio = 1.0 if rng.random() < 0.4 else float(rng.uniform(STRIBECK_MIN_RATIO, 2.5))
-    stiction = _round(coulomb * ratio) if ratio > 1.0 else coulomb
-    if stiction < STRIBECK_MIN_RATIO * coulomb:  # rounding must not leave a ratio just under 1.2
-        stiction = coulomb
+    stiction = _stiction(coulomb, ratio)
     stribeck_velocity = _round(_log_uniform(rng, *STRIBECK_VELOCITIES))
     viscous = _round(_log_uniform(rng, 0.002, 0.02))
     inertia = _round(_log_uniform(rng, 4e-4, 1.2e-3))
@@ -291,9 +296,7 @@ def _drawn_preset(draw: int) -> PlantPreset:
         if _held(stiction, coulomb, stribeck_velocity, g_dob, inertia_nominal):
             break
         again = np.random.default_rng((draw, attempt))
-        stiction = _round(coulomb * float(again.uniform(STRIBECK_MIN_RATIO, 2.5)))
-        if stiction < STRIBECK_MIN_RATIO * coulomb:
-            stiction = coulomb
+        stiction = _stiction(coulomb, float(again.uniform(STRIBECK_MIN_RATIO, 2.5)))
         stribeck_velocity = _round(_log_uniform(again, *STRIBECK_VELOCITIES))
     else:  # pragma: no cover - the gentlest hump drawn (1.2, 5 rad/s) is held
         raise RuntimeError(f"family-{draw}: no hump the drive holds in 1000 draws")
