@@ -10,6 +10,7 @@ the engineer's least squares on the measured log (docs/describe.md#physics-named
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,7 @@ from edm_sym.engines.physics import (
     RowBehaviour,
     TermKind,
     held_speed,
+    held_time,
     inertia_on_data,
     model_physics,
     probe_runs,
@@ -231,6 +233,65 @@ def test_describe_probes_as_slow_as_the_abstraction_log_held() -> None:
     assert ranges_from_result(Result(), {"omega": "velocity"}).slowest == pytest.approx(0.3)
     Result.physics = {}  # an older result: a fiftieth
     assert ranges_from_result(Result(), {"omega": "velocity"}).slowest == pytest.approx(1.2)
+
+
+def test_the_longest_hold_of_a_log_is_its_longest_plateau() -> None:
+    # 1 s plateaus (noise of 0.01 rad/s) hold about 1 s; a chirp's passages do not hold;
+    # rest is no hold.
+    rng = np.random.default_rng(0)
+    v = _staircase_and_chirp(0.8) + rng.normal(0.0, 0.01, 20000)
+    assert 0.9 <= held_time(v, TS, 0.3) <= 1.0
+    assert held_time(v[10000:], TS, 0.3) < 0.3
+    assert held_time(np.zeros(100), TS, 0.1) is None
+    r = ranges_from_data(v, np.gradient(v, TS), np.cumsum(v) * TS, "log", TS)
+    assert r.hold == held_time(v, TS, r.velocity / 200.0)
+    assert ranges_from_data(v, np.gradient(v, TS), None, "log").hold is None  # no sample time
+
+
+def test_the_probes_wait_no_longer_than_the_fitted_log_holds_a_speed() -> None:
+    """A pole at 0.75 rad/s on an acceleration row (as a search puts one, draw 1402)
+    is a viscous term of -0.0025 that fades over 1.3 s after each change of speed: the
+    log's 0.9 s plateaus saw it, a 3 s wait does not. With the hold recorded the probes
+    wait 0.9 s and read the viscous slope nearer what the log's time scales show (the
+    chirp's 0.0075, the 1 s plateaus' 0.0094) than the DC gain 0.01; a model whose
+    filters settle within the hold reads the same either way."""
+    from edm_sym.engines.physics import physics_on_log
+    from edm_sym.engines.simulate import simulate_rows
+
+    slow = _comp([("omega", [("sign", 0), ("gain", 0.3)]), ("omega", [("gain", 0.01)]),
+                  ("alpha", [("lpf", 0.75), ("gain", -0.0025 / 0.75)])])
+    before = model_physics(slow, ROLES, RANGE)
+    held = model_physics(slow, ROLES, replace(RANGE, hold=0.9))
+    assert any("waited 3 s" in n for n in before.notes)
+    assert any("waited 0.9 s" in n and "time scales" in n for n in held.notes)
+    d_before = before.named()["viscous"]["coefficient"]
+    d_held = held.named()["viscous"]["coefficient"]
+    assert d_held < 0.95 * d_before and d_held > 0.0075
+    assert held.named()["coulomb"]["level"] == pytest.approx(0.3, rel=0.01)
+    fast = _comp([("omega", [("sign", 0), ("gain", 0.3)]), ("omega", [("gain", 0.01)]),
+                  ("alpha", [("lpf", 50.0), ("gain", 0.002)])])
+    assert model_physics(fast, ROLES, replace(RANGE, hold=0.9)).named() == \
+        model_physics(fast, ROLES, RANGE).named()
+    # On data the hold is the fitted log's, which result.json records (a chirp holds
+    # 0.2 s); a result written before records none, and the probes wait as then.
+    v = _staircase_and_chirp(0.8)[10000:]
+    x = np.vstack([np.mod(np.cumsum(v) * TS, 2 * np.pi), np.cumsum(v) * TS, v, np.gradient(v, TS)])
+    rows = simulate_rows(slow, slow.matrix.rows, x)
+
+    class Result:  # what ranges_from_result reads of a result
+        logs = ({"use": "abstraction", "columns": [{"name": "omega", "min": -60.0, "max": 60.0}]},)
+        physics = {"ranges": {"slowest": 0.8, "hold": 0.9}}
+        source = "r.json"
+
+    for recorded, wait in ((0.9, "0.9 s"), (None, "3 s")):
+        Result.physics = {"ranges": {"slowest": 0.8, **({} if recorded is None else {"hold": recorded})}}
+        fallback = ranges_from_result(Result(), dict(zip(INPUTS, ROLES, strict=True)))
+        assert fallback.hold == recorded
+        phys = physics_on_log(slow, ROLES, x=x, rows=rows, target=rows.sum(axis=0), ts=TS,
+                              source="c.csv", fallback=fallback)
+        assert phys.ranges.hold == recorded
+        assert any(f"waited {wait}" in n for n in phys.notes)
+        assert ("hold" in phys.to_json()["ranges"]) == (recorded is not None)
 
 
 def test_linear_axis_units_and_a_position_profile() -> None:

@@ -11,7 +11,8 @@ like, not what the model does. This module names the model by its behaviour:
    consistent motions inside the ranges the data (or result.json) records:
    constant-velocity runs in both directions at speeds from the slowest the
    log holds to the fastest (each from rest, long enough for the model's
-   filters to settle, over whole revolutions where the speed allows), and
+   filters to settle, but no longer than the log the model was fitted on
+   holds a speed, over whole revolutions where the speed allows), and
    triangle waves of velocity at constant acceleration. Every input gets the
    signal its role says (the angle, the wrapped angle, the velocity, the
    acceleration); an input without a role is held at zero (said in the notes).
@@ -127,6 +128,10 @@ class MotionRange:
         The span of the unwrapped angle (or linear position), when an input has it.
     source : str
         Where the ranges come from (a log, or result.json's recorded ranges).
+    hold : float or None
+        The longest time the log holds a speed [s] (:func:`held_time`): the
+        probes wait no longer than this for the model to settle. None: not
+        known (a result written before it was recorded), no limit.
     """
 
     velocity: float
@@ -134,6 +139,7 @@ class MotionRange:
     acceleration: float
     position: tuple[float, float] | None
     source: str
+    hold: float | None = None
 
 
 @dataclass(frozen=True)
@@ -248,6 +254,7 @@ class Physics:
                 "ranges": {"velocity": _finite(r.velocity), "slowest": _finite(r.slowest),
                            "acceleration": _finite(r.acceleration),
                            "position": None if r.position is None else [_finite(p) for p in r.position],
+                           **({} if r.hold is None else {"hold": _finite(r.hold)}),
                            "source": r.source},
                 "observer_bandwidth": None if self.bandwidth is None else _finite(self.bandwidth),
                 "reference": self.reference, "notes": list(self.notes)}
@@ -307,7 +314,8 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
     result's ``physics`` records a slower one (``physics.ranges.slowest``,
     :func:`ranges_from_data` on that log; at least a two-hundredth of the
     fastest), the acceleration the largest |acceleration| (else the velocity
-    over a tenth of a second). None when nothing is recorded.
+    over a tenth of a second), the hold the longest time that log held a speed
+    (``physics.ranges.hold``; None when not recorded). None when nothing is recorded.
     """
     logs = [g for g in getattr(result, "logs", ()) if g.get("use") == "abstraction"] or list(
         getattr(result, "logs", ()))
@@ -331,18 +339,25 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
     a = max(abs(acc[0]), abs(acc[1])) if acc is not None else 10.0 * v
     name = getattr(result, "source", None) or "result.json"
     slowest = v / 50.0
-    held = (getattr(result, "physics", None) or {}).get("ranges", {}).get("slowest")
+    recorded = (getattr(result, "physics", None) or {}).get("ranges", {})
+    held = recorded.get("slowest")
     if isinstance(held, int | float) and not isinstance(held, bool) and math.isfinite(held):
         slowest = min(slowest, max(float(held), v / 200.0))
+    hold = recorded.get("hold")
+    if not (isinstance(hold, int | float) and not isinstance(hold, bool) and math.isfinite(hold)
+            and hold > 0):
+        hold = None
     return MotionRange(v, slowest, a if a > 0 and math.isfinite(a) else 10.0 * v, pos,
-                       f"the ranges {_basename(name)} records")
+                       f"the ranges {_basename(name)} records",
+                       None if hold is None else float(hold))
 
 
 def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.ndarray | None,
-                     source: str) -> MotionRange | None:
-    """The motion a log reaches: the 99th percentile of |v| and |a|, the slowest moving
-    speed (the 5th percentile of |v| above 2 % of the fastest, at most a fiftieth of
-    the fastest), the angle's span."""
+                     source: str, ts: float | None = None) -> MotionRange | None:
+    """The motion a log reaches: the 99th percentile of |v| and |a|, the slowest
+    speed probed (a fiftieth of the fastest, or the slowest speed the log holds down
+    to a two-hundredth, :func:`held_speed`), the angle's span, and with the sample
+    time ``ts`` the longest time the log holds a speed (:func:`held_time`)."""
     v = np.abs(np.asarray(velocity, dtype=float))
     v = v[np.isfinite(v)]
     if v.size < 2:
@@ -363,7 +378,8 @@ def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.n
     # speeds than this one: a Stribeck hump at 2 rad/s is invisible from 5 rad/s up),
     # and to the slowest speed this log holds, down to a two-hundredth.
     return MotionRange(vmax, vmax / 50.0 if held is None else held,
-                       amax if amax > 0 else 10.0 * vmax, pos, source)
+                       amax if amax > 0 else 10.0 * vmax, pos, source,
+                       None if ts is None else held_time(velocity, ts, vmax / 200.0))
 
 
 def held_speed(speed: np.ndarray, low: float, high: float) -> float | None:
@@ -390,6 +406,51 @@ def held_speed(speed: np.ndarray, low: float, high: float) -> float | None:
     while i + 1 < grid.size and shares[i + 1] > shares[i]:
         i += 1
     return float(grid[i])
+
+
+def held_time(velocity: np.ndarray, ts: float, floor: float) -> float | None:
+    """The longest time [s] a log holds one speed: a stretch of one sign, every
+    ``|v|`` at least ``floor`` and within +-:data:`HELD_BAND` of one level (the
+    largest at most ``(1 + HELD_BAND)^2`` times the smallest). A staircase of 1 s
+    plateaus holds 0.9 s (its noise included), a chirp a fraction of its slowest
+    period. None when nothing moves above ``floor``.
+
+    One pass with the running extremes of a sliding window (monotonic queues).
+    """
+    from collections import deque
+
+    v = np.asarray(velocity, dtype=float)
+    speed = np.abs(v)
+    sign = np.sign(v)
+    moving = np.isfinite(v) & (speed >= floor) & (speed > 0)
+    limit = (1.0 + HELD_BAND) ** 2
+    best, lo = 0, 0
+    top: deque[int] = deque()
+    low: deque[int] = deque()
+    for i in range(v.size):
+        if not moving[i]:
+            lo = i + 1
+            top.clear()
+            low.clear()
+            continue
+        if i > lo and sign[i] != sign[i - 1]:
+            lo = i
+            top.clear()
+            low.clear()
+        while top and speed[top[-1]] <= speed[i]:
+            top.pop()
+        top.append(i)
+        while low and speed[low[-1]] >= speed[i]:
+            low.pop()
+        low.append(i)
+        while speed[top[0]] > limit * speed[low[0]]:
+            lo += 1
+            if top[0] < lo:
+                top.popleft()
+            if low[0] < lo:
+                low.popleft()
+        best = max(best, i - lo + 1)
+    return best * float(ts) if best else None
 
 
 def _basename(path: str) -> str:
@@ -674,7 +735,16 @@ def model_physics(
     rotary = axis == "rotary"
     notes = []
     settle = settling_time(comp, opts.max_settle)
-    if settle >= opts.max_settle:
+    if ranges.hold is not None and settle > max(ranges.hold, 20 * ts):
+        # The model's response at the time scales of the log it was fitted on: a filter
+        # slower than the log's plateaus was fitted to their transients, and its steady
+        # state on a longer hold is one the log never showed (docs/describe.md).
+        settle = max(ranges.hold, 20 * ts)
+        notes.append(f"a filter of the model settles slower than the log it was fitted on holds "
+                     f"a speed ({settle:.3g} s): each run waited {settle:.3g} s, so the laws are "
+                     "the model's response at the log's time scales, not a steady state the "
+                     "log never showed")
+    elif settle >= opts.max_settle:
         notes.append(f"a filter of the model settles slower than {opts.max_settle:g} s "
                      f"(an integrator, or a pole near 1): each run waited {opts.max_settle:g} s")
     missing = [j for j, r in enumerate(roles) if r is None]
@@ -971,7 +1041,9 @@ def physics_on_log(
         when the log has no motion (no velocity or angle input); otherwise its
         slowest speed, the speed the model was fitted down to, lowers the
         probes' slowest when it is slower than this log's (down to a
-        two-hundredth of this log's fastest).
+        two-hundredth of this log's fastest), and its hold, the longest time
+        the model's log held a speed, limits the probes' wait instead of this
+        log's.
 
     Returns
     -------
@@ -985,11 +1057,15 @@ def physics_on_log(
     vel, acc = motion
     by_role = {r: np.asarray(v, dtype=float) for v, r in zip(x, roles, strict=True) if r}
     angle = by_role.get("angle", by_role.get("angle_wrapped"))
-    ranges = ranges_from_data(vel, acc, angle, source)
+    ranges = ranges_from_data(vel, acc, angle, source, ts)
     if ranges is None:
         ranges = fallback
-    elif fallback is not None and fallback.slowest < ranges.slowest:
-        ranges = replace(ranges, slowest=max(fallback.slowest, ranges.velocity / 200.0))
+    elif fallback is not None:
+        # The time scale is the log's the model was fitted on, which result.json
+        # records (None in a result written before: no limit, as then).
+        ranges = replace(ranges, hold=fallback.hold)
+        if fallback.slowest < ranges.slowest:
+            ranges = replace(ranges, slowest=max(fallback.slowest, ranges.velocity / 200.0))
     if ranges is None:
         return None
     out = np.asarray(rows, dtype=float)
