@@ -155,7 +155,10 @@ class Law:
         RMS of the law's term over the reference RMS (0.42 = 42 %).
     errors : dict of str to float
         Relative standard error of each fitted parameter (the probes are
-        noise-free: it measures how well the law describes the model).
+        noise-free: it measures how well the law describes the model): the
+        larger of the least-squares one, the jackknife over the probe speeds
+        and, when the probes waited only the log's hold, the change of the
+        value when the model is held until it settles.
     rows : tuple of float
         Each row's share of the law (they add up to one).
     flags : tuple of (str, str)
@@ -734,6 +737,7 @@ def model_physics(
     ts = comp.sample_time
     rotary = axis == "rotary"
     notes = []
+    settled: dict[str, dict[str, float]] | None = None
     settle = settling_time(comp, opts.max_settle)
     if ranges.hold is not None and settle > max(ranges.hold, 20 * ts):
         # The model's response at the time scales of the log it was fitted on: a filter
@@ -744,6 +748,10 @@ def model_physics(
                      f"a speed ({settle:.3g} s): each run waited {settle:.3g} s, so the laws are "
                      "the model's response at the log's time scales, not a steady state the "
                      "log never showed")
+        # The same model probed until it settles (at most max_settle): a law that reads
+        # otherwise there hangs on how long a speed is held, and its error says so.
+        settled = model_physics(comp, roles, replace(ranges, hold=None), axis=axis,
+                                bandwidth=bandwidth, options=opts, lags=lags).named()
     elif settle >= opts.max_settle:
         notes.append(f"a filter of the model settles slower than {opts.max_settle:g} s "
                      f"(an integrator, or a pole near 1): each run waited {opts.max_settle:g} s")
@@ -891,10 +899,21 @@ def model_physics(
             left.append((kind, unsupported))
             return
         flags = list(extra)
+        errors = dict(errors)
+        waited = {}
+        for k in errors:
+            other = (settled or {}).get(kind.value, {}).get(k)
+            value = params[k][0]
+            if other is not None and value != 0:
+                waited[k] = abs(other - value) / abs(value)
+                errors[k] = max(errors[k], waited[k])
         for k, e in errors.items():
             if not e <= opts.uncertain:
+                why = ("the law describes the model loosely" if waited.get(k, 0.0) < e else
+                       "the model, held at a speed until it settles, reads "
+                       f"{(settled or {})[kind.value][k]:.4g}: the law hangs on how long a speed is held")
                 flags.append(("uncertain", f"{k.replace('_', ' ')}: relative standard error "
-                                           f"{100 * e:.2g} % (the law describes the model loosely)"))
+                                           f"{100 * e:.2g} % ({why})"))
         terms.append(Law(kind, params, s, errors, rows_of(cols), tuple(flags)))
 
     fc, d, j, c0 = (float(coef[idx[n]]) for n in (TermKind.COULOMB, TermKind.VISCOUS,
