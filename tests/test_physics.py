@@ -298,6 +298,11 @@ def test_the_probes_wait_no_longer_than_the_fitted_log_holds_a_speed() -> None:
         assert phys.ranges.hold == recorded
         assert any(f"waited {wait}" in n for n in phys.notes)
         assert ("hold" in phys.to_json()["ranges"]) == (recorded is not None)
+    # Without a record only the log the model was fitted on (edm abstract's summary) sets it.
+    kw = {"x": x, "rows": rows, "target": rows.sum(axis=0), "ts": TS, "source": "c.csv"}
+    assert physics_on_log(slow, ROLES, **kw).ranges.hold is None
+    own = physics_on_log(slow, ROLES, **kw, fitted=True)
+    assert own.ranges.hold == held_time(v, TS, own.ranges.velocity / 200.0) < 0.3
 
 
 def test_linear_axis_units_and_a_position_profile() -> None:

@@ -135,7 +135,7 @@ def physics_of(result: Any, log: Any) -> Any:
     try:
         return physics_on_log(comp, [role_map[n] for n in names], x=x, rows=rows, target=target,
                               ts=first.ts, source=source, axis=getattr(result, "axis", "rotary"),
-                              bandwidth=g, options=PhysicsOptions())
+                              bandwidth=g, options=PhysicsOptions(), fitted=True)
     except (ValueError, np.linalg.LinAlgError):
         return None
 

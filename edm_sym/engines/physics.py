@@ -1025,6 +1025,7 @@ def physics_on_log(
     part: slice | np.ndarray = slice(None),
     fallback: MotionRange | None = None,
     options: PhysicsOptions | None = None,
+    fitted: bool = False,
 ) -> Physics | None:
     """:func:`model_physics` over a log's motion, its shares measured on ``part`` of it.
 
@@ -1063,6 +1064,11 @@ def physics_on_log(
         two-hundredth of this log's fastest), and its hold, the longest time
         the model's log held a speed, limits the probes' wait instead of this
         log's.
+    fitted : bool, default False
+        The log is the one the model was fitted on (``edm abstract``'s summary):
+        its own hold limits the probes' wait. Otherwise only a recorded hold
+        (``fallback``) does; without one the probes wait as long as the model
+        needs (at most ``options.max_settle``).
 
     Returns
     -------
@@ -1079,11 +1085,12 @@ def physics_on_log(
     ranges = ranges_from_data(vel, acc, angle, source, ts)
     if ranges is None:
         ranges = fallback
-    elif fallback is not None:
-        # The time scale is the log's the model was fitted on, which result.json
-        # records (None in a result written before: no limit, as then).
-        ranges = replace(ranges, hold=fallback.hold)
-        if fallback.slowest < ranges.slowest:
+    else:
+        # The time scale is the log's the model was fitted on: this one when it is that
+        # log, else what result.json records (None in a result written before: no limit).
+        if not fitted:
+            ranges = replace(ranges, hold=None if fallback is None else fallback.hold)
+        if fallback is not None and fallback.slowest < ranges.slowest:
             ranges = replace(ranges, slowest=max(fallback.slowest, ranges.velocity / 200.0))
     if ranges is None:
         return None
