@@ -343,16 +343,17 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
     name = getattr(result, "source", None) or "result.json"
     slowest = v / 50.0
     recorded = (getattr(result, "physics", None) or {}).get("ranges", {})
-    held = recorded.get("slowest")
-    if isinstance(held, int | float) and not isinstance(held, bool) and math.isfinite(held):
-        slowest = min(slowest, max(float(held), v / 200.0))
-    hold = recorded.get("hold")
-    if not (isinstance(hold, int | float) and not isinstance(hold, bool) and math.isfinite(hold)
-            and hold > 0):
-        hold = None
+    held = _positive(recorded.get("slowest"))
+    if held is not None:
+        slowest = min(slowest, max(held, v / 200.0))
     return MotionRange(v, slowest, a if a > 0 and math.isfinite(a) else 10.0 * v, pos,
-                       f"the ranges {_basename(name)} records",
-                       None if hold is None else float(hold))
+                       f"the ranges {_basename(name)} records", _positive(recorded.get("hold")))
+
+
+def _positive(value: Any) -> float | None:
+    """A value result.json records as a finite positive number, else None."""
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    return float(value) if ok and math.isfinite(value) and value > 0 else None
 
 
 def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.ndarray | None,
