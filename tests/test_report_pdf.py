@@ -203,3 +203,28 @@ def _pdftext_lines(pdf: Path, start: str) -> list[str]:
     k = next(i for i, line in enumerate(out) if start in line)
     end = next(i for i in range(k + 2, len(out)) if not out[i].strip() and not out[i - 1].strip())
     return out[k:end]
+
+
+def test_a_law_carried_by_every_row_fits_the_physics_table(tmp_path: Path,
+                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """The rows column breaks its lines: a law eight rows carry, each share with its sign
+    and a decimal, stays within the page (it was a fixed-width column: 15 pt over)."""
+    from edm_sym.outputs.report import context
+
+    made = context._physics
+
+    def carried_by_all(p, model, result, runs):  # noqa: ANN001, ANN202
+        out = made(p, model, result, runs)
+        shares = [-123.4, 56.7, 38.9, -12.3, 45.6, 78.9, -10.1, 25.8]
+        rows = ", ".join(rf"{j + 1}: {p.math(p.number(s))}\,\%" for j, s in enumerate(shares))
+        law = {"kind": p.text("viscous"), "params": p.text("coefficient ") + p.math("0.001234"),
+               "share": p.math("12.35") + r"\,\%", "rows": rows}
+        laws = out["tables"][0]["laws"] if out["tables"] else []
+        out["tables"] = [{"laws": [*laws, law]}]
+        return out
+
+    monkeypatch.setattr(context, "_physics", carried_by_all)
+    case = ugr.Case("eight", ugr.eight_row_result, lugre=True, options={"prefix": "eight"})
+    _, _, pdf, log = _build(case, tmp_path)
+    _check_log(log)
+    assert "-123.4" in _pdftext(pdf).replace("−", "-")
