@@ -196,3 +196,50 @@ def test_a_step_that_adds_a_row_meets_the_stribeck_hump_through_its_seed() -> No
         "the seeded tanh row was bred out"
     assert seeded.steps[-1].fitness < 0.7 * plain.steps[-1].fitness
     assert dumps(run(2)) == dumps(seeded)
+
+
+def test_a_long_log_is_seeded_from_a_thinned_fit_in_bounded_memory(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """320 000 samples: the seeds fit every 8th training sample, the low-passed columns
+    filtered over the whole log one at a time; the harmonic and its corner are those of
+    the whole log, and the fit never holds the log's columns all at once."""
+    import tracemalloc
+
+    from edm_sym.engines.abstraction.seeding import SEED_SAMPLES, fitted_samples
+
+    n = 320_000
+    t = np.arange(n) * TS
+    omega = 60.0 * np.sin(2 * np.pi * 0.1 * t)
+    theta = np.cumsum(omega) * TS
+    b, a = BY_NAME["lpf"].coefficients(250.0, TS)
+    resid = (lfilter(b, a, 0.15 * np.sin(7 * theta + 0.9))
+             + np.random.default_rng(6).normal(0.0, 0.005, n))
+    weights = np.ones(n)
+    weights[100_000:140_000] = 0.0  # held out
+    chosen = fitted_samples(weights)
+    assert chosen.size <= SEED_SAMPLES and np.all(weights[chosen] > 0)
+    assert np.array_equal(fitted_samples(weights[:30_000]), np.arange(30_000))
+    ranges = default_ranges(TS, n * TS)
+    corners = np.geomspace(ranges["lpf"].low, ranges["lpf"].high, LAG_CORNERS)
+    tracemalloc.start()
+    try:
+        lagged, = residual_harmonics(theta, resid, weights, count=1, corners=corners, ts=TS)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert lagged.order == 7 and lagged.amplitude == pytest.approx(0.15, rel=0.05)
+    assert lagged.corner == pytest.approx(250.0, rel=0.1)
+    # A few whole-log vectors (the angle's speed, one column and its filtered copy ...):
+    # the whole-log fit held over a hundred at once (0.3 GB).
+    assert peak < 20 * 8 * n
+    hump = 0.1 * np.sign(omega) * np.exp(-(omega / 5.0) ** 2)
+    (k, c, _), = residual_stribeck(omega, hump, weights, 1)
+    # the same as the whole log's fits (every sample)
+    from edm_sym.engines.abstraction import seeding
+
+    monkeypatch.setattr(seeding, "SEED_SAMPLES", 10 * n)
+    whole, = residual_harmonics(theta, resid, weights, count=1, corners=corners, ts=TS)
+    assert whole.order == lagged.order and whole.corner == pytest.approx(lagged.corner, rel=0.02)
+    assert whole.amplitude == pytest.approx(lagged.amplitude, rel=0.01)
+    (k_all, c_all, _), = residual_stribeck(omega, hump, weights, 1)
+    assert k == pytest.approx(k_all, rel=0.05) and c == pytest.approx(c_all, rel=0.02)
