@@ -94,7 +94,8 @@ def _lowpassed(theta: np.ndarray, ks: np.ndarray, corner: float, ts: float,
     """``cos k theta`` then ``sin k theta`` for each ``k`` of ``ks`` through the ``lpf``
     element's discrete filter, from rest at every log start, at the ``chosen`` samples:
     shape (len(chosen), 2 len(ks)). One column at a time over the whole log, so a long
-    log never holds more than one whole column (docs/abstraction.md#harmonic-seeds)."""
+    log never holds more than one whole column
+    (docs/abstraction.md#hierarchy-and-inheritance-figs-8-19)."""
     b, a = BY_NAME["lpf"].coefficients(corner, ts)
     out = np.empty((chosen.size, 2 * ks.size))
     full = np.empty(theta.size)
