@@ -340,3 +340,45 @@ def test_reject_poles_is_a_step_setting_on_by_default() -> None:
     assert all(s.ga.reject_poles for s in cfg.steps)
     off = parse_config({**TINY, "ga": {**TINY.get("ga", {}), "reject_poles": False}}, "t.toml")
     assert not any(s.ga.reject_poles for s in off.steps)
+
+
+COULOMB_ONLY = [("omega", [("sign", None), ("gain", 1.0), ("through", None)])]
+LAWS = {"viscous": INPUTS.index("omega"), "inertia": INPUTS.index("alpha")}
+
+
+def test_a_linear_law_the_model_lacks_is_offered_as_a_row_and_kept_when_it_earns_it(
+        friction_data: DataLog) -> None:
+    """The log holds Coulomb 1.0 and viscous 0.01 N m s/rad; the model only the Coulomb
+    row. The viscous row (omega -> gain) is added with its gain fitted; the inertia row,
+    which the log does not hold, is not (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front)."""
+    sc = scorer(friction_data)
+    lacking = compensator(COULOMB_ONLY, len(friction_data))
+    comp, record = apply_parsimony(lacking, sc, ParsimonySettings(), laws=LAWS)
+    assert record["law_rows"] == ["viscous"]
+    assert "a viscous row added" in record["front"][-1]["change"]
+    gains = [comp.value(r.genes[-1]) for r in comp.matrix.rows
+             if comp.matrix.inputs[r.input] == "omega"
+             and [g.element.name for g in r.genes] == ["through", "through", "gain"]]
+    assert gains == [pytest.approx(0.01, rel=0.02)]
+    assert sc.criterion(comp) <= 1.01 * sc.criterion(compensator(TRUTH, len(friction_data)))
+    # Off by the config, or without the roles: the pruning alone, as before.
+    plain, rec0 = apply_parsimony(lacking, scorer(friction_data), ParsimonySettings())
+    off, rec1 = apply_parsimony(lacking, scorer(friction_data), ParsimonySettings(law_rows=False),
+                                laws=LAWS)
+    assert "law_rows" not in rec0 and "law_rows" not in rec1 and off == plain
+    # A schedule without the gain element offers none.
+    from edm_sym.core.elements import BY_NAME
+
+    no_gain, rec2 = apply_parsimony(lacking, scorer(friction_data), ParsimonySettings(), laws=LAWS,
+                                    allowed=[BY_NAME["sign"].code, BY_NAME["through"].code])
+    assert "law_rows" not in rec2 and no_gain == plain
+
+
+def test_a_model_that_holds_the_law_gets_no_law_row(friction_data: DataLog) -> None:
+    sc = scorer(friction_data)
+    comp, record = apply_parsimony(compensator(TRUTH, len(friction_data)), sc, ParsimonySettings(),
+                                   laws=LAWS)
+    assert "law_rows" not in record
+    with pytest.raises(ConfigError, match="parsimony.law_rows: expected true or false"):
+        ParsimonySettings(law_rows="yes")  # type: ignore[arg-type]
+    assert parse_parsimony("x: parsimony", {"law_rows": False}).law_rows is False

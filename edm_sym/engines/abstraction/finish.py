@@ -20,6 +20,7 @@ import numpy as np
 from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import StepRecord, matrix_to_json
 from edm_sym.engines.abstraction.clocks import Passenger, passengers
+from edm_sym.engines.abstraction.ga import allowed_codes
 from edm_sym.engines.abstraction.holdout import Holdout, Scorer, fragile_rows
 from edm_sym.engines.abstraction.local_search import Candidate, step_candidates
 from edm_sym.engines.abstraction.prune import apply_parsimony, refit_gains
@@ -29,7 +30,7 @@ from edm_sym.engines.abstraction.schedule import AbstractionConfig
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
            cfg: AbstractionConfig, select: str | None = None, *,
            candidates_in: Sequence[Candidate] | None = None,
-           clocks: Mapping[int, float] | None = None
+           clocks: Mapping[int, float] | None = None, laws: Mapping[str, int] | None = None
            ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
     """After the search: choose the search's model, prune it, score the exported one.
 
@@ -55,6 +56,9 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         every candidate loses the rows that read time from them
         (:func:`without_passengers`) before the choice and the pruning; without
         pruning (``--no-prune``, an interrupted run) they keep them.
+    laws : mapping of str to int, optional
+        The input of each linear law's row offered before the pruning
+        (:func:`~edm_sym.engines.abstraction.prune.offer_law_rows`).
 
     Returns
     -------
@@ -105,7 +109,8 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         comp, found = without_passengers(comp, scorer, clocks)
         clock_rows = _clock_rows(origin, found)
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
-                                      refit=refit, refitted=refitted)
+                                      refit=refit, refitted=refitted, laws=laws,
+                                      allowed=allowed_codes(cfg.steps[-1].ga.elements).tolist())
     if parsimony and candidates:
         parsimony["start_tie"] = cfg.parsimony.tie
         parsimony["start_candidates"] = candidates

@@ -28,7 +28,7 @@ from edm_sym.core.errors import ConfigError
 from edm_sym.engines.abstraction.tables import settings_from_table
 
 KNEE_WITHIN = 1.5
-_KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit", "tie")
+_KEYS = ("prune", "tolerance", "select", "criterion", "start", "refit", "tie", "law_rows")
 #: What the criterion measures on the held-out part: the plain RMSE or eq. 8 with the
 #: final step's weighting.
 CRITERIA = ("rmse", "fitness")
@@ -76,6 +76,11 @@ class ParsimonySettings:
         With ``start = "best-step"``: candidates whose whole-log RMSE is
         within this share of the lowest are tied, and the held-out RMSE
         chooses among them (default 0.02; 0: the whole log alone).
+    law_rows : bool
+        Before pruning, offer the plain rows of the linear laws (viscous on a
+        velocity input, inertia on an acceleration input) and keep each one
+        that lowers the criterion by more than ``tolerance``
+        (:func:`~edm_sym.engines.abstraction.prune.offer_law_rows`; default true).
     """
 
     prune: bool = True
@@ -85,6 +90,7 @@ class ParsimonySettings:
     start: str = "best-step"
     refit: int = 600
     tie: float = 0.02
+    law_rows: bool = True
 
     @property
     def from_step_bests(self) -> bool:
@@ -92,8 +98,10 @@ class ParsimonySettings:
         return self.prune and self.start == "best-step"
 
     def __post_init__(self) -> None:
-        if not isinstance(self.prune, bool):
-            raise ConfigError("parsimony.prune", f"expected true or false, found {self.prune!r}")
+        for name in ("prune", "law_rows"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(f"parsimony.{name}",
+                                  f"expected true or false, found {getattr(self, name)!r}")
         t = self.tolerance
         if isinstance(t, bool) or not isinstance(t, int | float) or not (
                 math.isfinite(t) and 0 <= t <= 1):
@@ -125,7 +133,7 @@ class ParsimonySettings:
         """The settings as a config table."""
         return {"prune": self.prune, "tolerance": self.tolerance, "select": self.selection,
                 "criterion": self.criterion, "start": self.start, "refit": self.refit,
-                "tie": self.tie}
+                "tie": self.tie, "law_rows": self.law_rows}
 
 
 def check_select(text: Any, where: str) -> str:

@@ -54,6 +54,7 @@ from edm_sym.engines.abstraction.holdout import Holdout, mask_weights, plan_hold
 from edm_sym.engines.abstraction.local_search import tune_parameters
 from edm_sym.engines.abstraction.multi import Fidelities, MultiSteps, evaluate_fitted
 from edm_sym.engines.abstraction.parallel import Parallel
+from edm_sym.engines.abstraction.prune import LAW_ROWS
 from edm_sym.engines.abstraction.schedule import AbstractionConfig, GaSettings, StepConfig, default_config
 from edm_sym.engines.abstraction.searches import (
     checkpoint_files,
@@ -694,7 +695,8 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
                       fidelity=effective(cfg.fidelity, hold.n_train),
                       periodic=angle_input(roles, axis), velocity=velocity_input(roles),
                       barred=barred_inputs(part.x, hold.training.starts, roles),
-                      clocks=clock_shifts(part.x, hold.training.starts, roles, axis))
+                      clocks=clock_shifts(part.x, hold.training.starts, roles, axis),
+                      laws={law: roles.index(role) for law, role in LAW_ROWS if role in roles})
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
@@ -722,7 +724,7 @@ def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
         made = None
     # Rows that read time from a clock (the unwrapped angle of a one-way run) are no physics.
     comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, job.hold, fin, select,
-                                                     made, job.clocks)
+                                                     made, job.clocks, job.laws)
     steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
@@ -779,6 +781,9 @@ class _SearchJob:
     #: Angle inputs that are a clock of some training log, and the shift that tests a row on
     #: one after the search (:func:`~edm_sym.engines.abstraction.clocks.clock_shifts`).
     clocks: Mapping[int, float] = field(default_factory=dict)
+    #: The input of each linear law's row offered before pruning
+    #: (:func:`~edm_sym.engines.abstraction.prune.offer_law_rows`).
+    laws: Mapping[str, int] = field(default_factory=dict)
 
     @property
     def mask(self) -> np.ndarray | None:
