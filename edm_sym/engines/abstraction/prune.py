@@ -55,7 +55,8 @@ from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, row_gains, scale_p
 from edm_sym.engines.abstraction.holdout import Scorer
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_select, select
 
-#: The ``gain`` element's code, and the gain a law row starts from before its refit.
+#: The ``gain`` element's code, and the gain a law row starts from before its refit (the
+#: middle of the range when a config's gain range leaves it out).
 GAIN = next(c for c, el in REGISTRY.items() if el.name == "gain")
 LAW_START = 1e-3
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
@@ -290,6 +291,7 @@ def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
     if rng is None or (allowed and GAIN not in allowed) or not comp.matrix.rows:
         return comp, []
     n = len(comp.matrix.rows[0].genes)
+    start = rng.encode(LAW_START) if rng.low <= LAW_START <= rng.high else 0.5
     added: list[str] = []
     while True:
         now = scorer.criterion(comp)
@@ -298,7 +300,7 @@ def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
             if law in added or law not in inputs:
                 continue
             row = Row(inputs[law], (Gene(THROUGH, 0.0),) * (n - 1)
-                      + (Gene(GAIN, rng.encode(LAW_START)),))
+                      + (Gene(GAIN, start),))
             m = refit_gains(comp, ElementMatrix(comp.matrix.inputs, comp.matrix.rows + (row,)),
                             scorer)
             if m is None:
