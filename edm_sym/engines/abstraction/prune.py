@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from edm_sym.core.bounds import BOUND_MARGIN, bound_flags, complexity
-from edm_sym.core.elements import REGISTRY
+from edm_sym.core.elements import BY_NAME, REGISTRY
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.engines.abstraction.ga import THROUGH
 from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, row_gains, scale_position
@@ -57,7 +57,7 @@ from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_selec
 
 #: The ``gain`` element's code, and the gain a law row starts from before its refit (the
 #: middle of the range when a config's gain range leaves it out).
-GAIN = next(c for c, el in REGISTRY.items() if el.name == "gain")
+GAIN = BY_NAME["gain"].code
 LAW_START = 1e-3
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
 MULTIPLYING = frozenset(c for c, el in REGISTRY.items() if el.multiplies_output)
