@@ -350,7 +350,8 @@ def test_a_linear_law_the_model_lacks_is_offered_as_a_row_and_kept_when_it_earns
         friction_data: DataLog) -> None:
     """The log holds Coulomb 1.0 and viscous 0.01 N m s/rad; the model only the Coulomb
     row. The viscous row (omega -> gain) is added with its gain fitted; the inertia row,
-    which the log does not hold, is not (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front)."""
+    which the log does not hold, is not
+    (docs/abstraction.md#parsimony-pruning-and-the-complexity-vs-fitness-front)."""
     sc = scorer(friction_data)
     lacking = compensator(COULOMB_ONLY, len(friction_data))
     comp, record = apply_parsimony(lacking, sc, ParsimonySettings(), laws=LAWS)
