@@ -286,8 +286,7 @@ def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
     added : list of str
         The laws added, in order.
     """
-    gain = REGISTRY[GAIN]
-    rng = comp.ranges.get(gain.name)
+    rng = comp.ranges.get("gain")
     if rng is None or (allowed and GAIN not in allowed) or not comp.matrix.rows:
         return comp, []
     n = len(comp.matrix.rows[0].genes)
