@@ -383,3 +383,31 @@ def test_a_model_that_holds_the_law_gets_no_law_row(friction_data: DataLog) -> N
     with pytest.raises(ConfigError, match="parsimony.law_rows: expected true or false"):
         ParsimonySettings(law_rows="yes")  # type: ignore[arg-type]
     assert parse_parsimony("x: parsimony", {"law_rows": False}).law_rows is False
+
+
+def test_with_the_observers_bandwidth_the_law_rows_carry_its_lag() -> None:
+    """A target seen through an observer (Q(s) = g / (s + g), g = 150 rad/s) of Coulomb,
+    viscous and inertia torques; the model holds only the Coulomb row. Told g, the viscous
+    and inertia rows are offered through that low-pass and both are added, their gains the
+    plant's within 2 %; without g the plain rows fit the lagged target worse."""
+    g, viscous, inertia = 150.0, 0.02, 2e-4
+    data, _ = friction_log(2.0)
+    lag = [("through", None), ("lpf", g)]
+    truth = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)]),
+                         ("omega", [*lag, ("gain", viscous)]),
+                         ("alpha", [*lag, ("gain", inertia)])], len(data))
+    target = (plain_loop(truth, data.columns).sum(axis=0)
+              + 1e-3 * np.random.default_rng(5).standard_normal(len(data)))
+    lagged = DataLog({**data.columns, "tau_ext": target}, TS, "lagged")
+    coulomb = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)])], len(lagged))
+    laws = {"viscous": INPUTS.index("omega"), "inertia": INPUTS.index("alpha")}
+    told, record = apply_parsimony(coulomb, scorer(lagged), ParsimonySettings(), laws=laws,
+                                   observer=g)
+    assert sorted(record["law_rows"]) == ["inertia", "viscous"]
+    rows = {told.matrix.inputs[r.input]: r for r in told.matrix.rows
+            if [e.element.name for e in r.genes] == ["through", "lpf", "gain"]}
+    assert told.value(rows["omega"].genes[1]) == pytest.approx(g, rel=1e-9)
+    assert told.value(rows["omega"].genes[2]) == pytest.approx(viscous, rel=0.02)
+    assert told.value(rows["alpha"].genes[2]) == pytest.approx(inertia, rel=0.02)
+    blind, _ = apply_parsimony(coulomb, scorer(lagged), ParsimonySettings(), laws=laws)
+    assert scorer(lagged).criterion(told) < 0.5 * scorer(lagged).criterion(blind)

@@ -30,7 +30,8 @@ from edm_sym.engines.abstraction.schedule import AbstractionConfig
 def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
            cfg: AbstractionConfig, select: str | None = None, *,
            candidates_in: Sequence[Candidate] | None = None,
-           clocks: Mapping[int, float] | None = None, laws: Mapping[str, int] | None = None
+           clocks: Mapping[int, float] | None = None, laws: Mapping[str, int] | None = None,
+           observer: float | None = None
            ) -> tuple[Compensator, dict[str, Any], dict[str, Any]]:
     """After the search: choose the search's model, prune it, score the exported one.
 
@@ -59,6 +60,9 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
     laws : mapping of str to int, optional
         The input of each linear law's row offered before the pruning
         (:func:`~edm_sym.engines.abstraction.prune.offer_law_rows`).
+    observer : float, optional
+        The observer's bandwidth [rad/s] the log records: the law rows are also
+        offered through its low-pass.
 
     Returns
     -------
@@ -109,7 +113,7 @@ def finish(steps: Sequence[StepRecord], comp: Compensator, hold: Holdout,
         comp, found = without_passengers(comp, scorer, clocks)
         clock_rows = _clock_rows(origin, found)
     comp, parsimony = apply_parsimony(comp, scorer, cfg.parsimony, select, start_step=start_step,
-                                      refit=refit, refitted=refitted, laws=laws,
+                                      refit=refit, refitted=refitted, laws=laws, observer=observer,
                                       allowed=allowed_codes(cfg.steps[-1].ga.elements).tolist())
     if parsimony and candidates:
         parsimony["start_tie"] = cfg.parsimony.tie

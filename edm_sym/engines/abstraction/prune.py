@@ -58,6 +58,7 @@ from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_selec
 #: The ``gain`` element's code, and the gain a law row starts from before its refit (the
 #: middle of the range when a config's gain range leaves it out).
 GAIN = BY_NAME["gain"].code
+LPF = BY_NAME["lpf"].code
 LAW_START = 1e-3
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
 MULTIPLYING = frozenset(c for c, el in REGISTRY.items() if el.multiplies_output)
@@ -263,21 +264,28 @@ LAW_ROWS = (("viscous", "velocity"), ("inertia", "acceleration"))
 
 
 def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
-                   inputs: Mapping[str, int], allowed: Collection[int] = ()
-                   ) -> tuple[Compensator, list[str]]:
-    """Add the plain row of a linear law where the held-out blocks ask for it.
+                   inputs: Mapping[str, int], allowed: Collection[int] = (),
+                   observer: float | None = None) -> tuple[Compensator, list[str]]:
+    """Add the plain rows of linear laws where the held-out blocks ask for them.
 
     A search may build the velocity's share of the torque from saturating
     functions that meet the log's few constant speeds and drift between them,
     with a slow filter to make up for it on the chirp (draw 1602 seed 3: the
     model's own least-squares viscous slope over the staircase 0.00106, the
-    plant's 0.00261). Each law of :data:`LAW_ROWS` whose input role the run
-    has (``inputs``: law to input index) is offered as the row ``input ->
-    gain`` (``through`` elsewhere), every row's gain refitted by least squares
-    on the training part; the one that lowers the criterion most is added when
-    it lowers it by more than ``tolerance`` (the share a row must earn to stay
-    through pruning), then the next, each law at most once. Without ``gain``
-    among the ``allowed`` element codes (when given), nothing is offered.
+    plant's 0.00261); or carry the viscous and inertia torques through delays
+    and filters that match the observer's lag only on the abstraction log's
+    chirp (draw 1611 seed 2). For the laws of :data:`LAW_ROWS` whose input
+    role the run has (``inputs``: law to input index), each law's row alone
+    and all of them together are offered as ``input -> gain`` (``through``
+    elsewhere) and, when the observer's bandwidth is known (``observer``,
+    within the ``lpf`` range), as ``input -> lpf(observer) -> gain``, the
+    target's own lag; with each offer every row's gain is refitted by least
+    squares on the training part. The offer that lowers the criterion most is
+    added when it lowers it by more than ``tolerance`` (the share a row must
+    earn to stay through pruning), rows offered together only when they also
+    beat each of them alone by that much; then the laws not added yet are
+    offered again. Without ``gain`` among the ``allowed`` element codes (when
+    given), nothing is offered; without ``lpf`` among them, only the plain rows.
 
     Returns
     -------
@@ -291,26 +299,39 @@ def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
         return comp, []
     n = len(comp.matrix.rows[0].genes)
     start = rng.encode(LAW_START) if rng.low <= LAW_START <= rng.high else 0.5
+    paths: list[tuple[Gene, ...]] = [()]
+    low_pass = comp.ranges.get("lpf")
+    if (observer is not None and low_pass is not None and n >= 2
+            and low_pass.low <= observer <= low_pass.high and (not allowed or LPF in allowed)):
+        paths.append((Gene(LPF, low_pass.encode(observer)),))
     added: list[str] = []
     while True:
         now = scorer.criterion(comp)
-        best: tuple[float, str, ElementMatrix] | None = None
-        for law, _ in LAW_ROWS:
-            if law in added or law not in inputs:
-                continue
-            row = Row(inputs[law], (Gene(THROUGH, 0.0),) * (n - 1)
-                      + (Gene(GAIN, start),))
-            m = refit_gains(comp, ElementMatrix(comp.matrix.inputs, comp.matrix.rows + (row,)),
-                            scorer)
-            if m is None:
-                continue
-            value = scorer.criterion(_with(comp, m))
-            if best is None or value < best[0]:
-                best = (value, law, m)
+        laws = [law for law, _ in LAW_ROWS if law in inputs and law not in added]
+        offers = [(q,) for q in laws] + ([tuple(laws)] if len(laws) > 1 else [])
+        best: tuple[float, tuple[str, ...], ElementMatrix] | None = None
+        for path in paths:
+            alone: dict[str, float] = {}
+            for offer in offers:
+                rows = tuple(Row(inputs[law], (Gene(THROUGH, 0.0),) * (n - 1 - len(path))
+                                 + path + (Gene(GAIN, start),)) for law in offer)
+                m = refit_gains(comp, ElementMatrix(comp.matrix.inputs, comp.matrix.rows + rows),
+                                scorer)
+                if m is None:
+                    continue
+                value = scorer.criterion(_with(comp, m))
+                # Rows offered together each earn their place: together they beat every
+                # one of them alone by more than the tolerance.
+                if len(offer) == 1:
+                    alone[offer[0]] = value
+                elif not value < min(alone.get(law, now) for law in offer) * (1.0 - tolerance):
+                    continue
+                if best is None or value < best[0]:
+                    best = (value, offer, m)
         if best is None or not best[0] < now * (1.0 - tolerance):
             return comp, added
         comp = _with(comp, best[2])
-        added.append(best[1])
+        added.extend(best[1])
 
 
 def prune(comp: Compensator, scorer: Scorer, *, start: str = "search") -> list[Member]:
@@ -380,7 +401,8 @@ def _key(v: float) -> float:
 def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettings,
                     rule: str | None = None, *, start_step: int | None = None,
                     refit: int = 0, refitted: bool = False, laws: Mapping[str, int] | None = None,
-                    allowed: Collection[int] = ()) -> tuple[Compensator, dict[str, Any]]:
+                    allowed: Collection[int] = (), observer: float | None = None
+                    ) -> tuple[Compensator, dict[str, Any]]:
     """Prune ``comp``, choose the exported member and describe the front for result.json.
 
     Parameters
@@ -405,6 +427,9 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         ``settings.law_rows``; recorded as ``law_rows`` when one is added).
     allowed : collection of int
         The element codes the schedule allows (empty: every one).
+    observer : float, optional
+        The observer's bandwidth [rad/s] when the log records it: the law rows
+        are also offered through its low-pass.
 
     Returns
     -------
@@ -425,7 +450,7 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
     added: list[str] = []
     if laws and settings.law_rows:
-        comp, added = offer_law_rows(comp, scorer, settings.tolerance, laws, allowed)
+        comp, added = offer_law_rows(comp, scorer, settings.tolerance, laws, allowed, observer)
     origin = ("search" if start_step is None else
               f"search (step {start_step} best{', refitted' if refitted else ''})")
     start = (origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")

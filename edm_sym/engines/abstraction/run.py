@@ -675,6 +675,13 @@ def _holdout(data: DataLog, cfg: AbstractionConfig, *, target: str, inputs: tupl
         raise ConfigError(f"{cfg.source}: {exc.where}", exc.problem) from None
 
 
+def _observer(data: DataLog) -> float | None:
+    """The observer's bandwidth [rad/s] the log records (a ``plant:`` log its preset's), or
+    None when it records none or not a positive finite number."""
+    g = data.scalars.get("observer_bandwidth")
+    return float(g) if g is not None and math.isfinite(g) and g > 0 else None
+
+
 def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold: Holdout, *,
                 target: str, inputs: tuple[str, ...], axis: str) -> _SearchJob:
     """What every search of the run shares: the training samples, the ranges, the human model."""
@@ -696,7 +703,8 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
                       periodic=angle_input(roles, axis), velocity=velocity_input(roles),
                       barred=barred_inputs(part.x, hold.training.starts, roles),
                       clocks=clock_shifts(part.x, hold.training.starts, roles, axis),
-                      laws={law: roles.index(role) for law, role in LAW_ROWS if role in roles})
+                      laws={law: roles.index(role) for law, role in LAW_ROWS if role in roles},
+                      observer=_observer(data))
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
@@ -724,7 +732,7 @@ def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
         made = None
     # Rows that read time from a clock (the unwrapped angle of a one-way run) are no physics.
     comp, parsimony, final, chosen = finish_searches(groups, ranges_comp, job.hold, fin, select,
-                                                     made, job.clocks, job.laws)
+                                                     made, job.clocks, job.laws, job.observer)
     steps = groups[chosen]
     fit = final["training"]["fitness"][0] if parsimony else steps[-1].fitness
     provenance: dict[str, Any] = {"seed": seed, "package_version": __version__,
@@ -784,6 +792,9 @@ class _SearchJob:
     #: The input of each linear law's row offered before pruning
     #: (:func:`~edm_sym.engines.abstraction.prune.offer_law_rows`).
     laws: Mapping[str, int] = field(default_factory=dict)
+    #: The observer's bandwidth [rad/s] the log records (its scalar ``observer_bandwidth``),
+    #: or None: the law rows are also offered through its low-pass.
+    observer: float | None = None
 
     @property
     def mask(self) -> np.ndarray | None:

@@ -146,7 +146,7 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
                     cfg: AbstractionConfig, select: str | None = None,
                     cands: Sequence[Sequence[Candidate]] | None = None,
                     clocks: Mapping[int, float] | None = None,
-                    laws: Mapping[str, int] | None = None
+                    laws: Mapping[str, int] | None = None, observer: float | None = None
                     ) -> tuple[Compensator, dict[str, Any], dict[str, Any], int]:
     """:func:`~edm_sym.engines.abstraction.finish.finish` over the step bests of one or several
     searches; also which search won.
@@ -158,7 +158,7 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
     finished alone. A search without any step (stopped before its first
     population) is passed over.
     ``cands``: each search's :func:`search_candidates`, when already made;
-    ``clocks``, ``laws``: as :func:`~edm_sym.engines.abstraction.finish.finish` takes them.
+    ``clocks``, ``laws``, ``observer``: as :func:`~edm_sym.engines.abstraction.finish.finish` takes them.
     """
     ran = [k for k, g in enumerate(groups) if g]
     if len(groups) == 1 or not cfg.parsimony.from_step_bests:
@@ -166,13 +166,13 @@ def finish_searches(groups: Sequence[Sequence[StepRecord]], comp: Compensator, h
         chosen = min(ran, key=lambda k: (-len(groups[k]), groups[k][-1].fitness, k))
         steps = groups[chosen]
         out = finish(steps, replace(comp, matrix=steps[-1].matrix), hold, cfg, select,
-                     clocks=clocks, laws=laws)
+                     clocks=clocks, laws=laws, observer=observer)
         return (*out, chosen)
     pooled = [s for k in ran for s in groups[k]]
     made = [replace(c, search=k) for k in ran
             for c in (cands[k] if cands is not None else search_candidates(groups[k], comp, hold, cfg))]
     comp, parsimony, final = finish(pooled, comp, hold, cfg, select, candidates_in=made,
-                                    clocks=clocks, laws=laws)
+                                    clocks=clocks, laws=laws, observer=observer)
     chosen = next(c["search"] for c in parsimony["start_candidates"] if c["chosen"])
     return comp, parsimony, final, chosen
 
