@@ -411,3 +411,28 @@ def test_with_the_observers_bandwidth_the_law_rows_carry_its_lag() -> None:
     assert told.value(rows["alpha"].genes[2]) == pytest.approx(inertia, rel=0.02)
     blind, _ = apply_parsimony(coulomb, scorer(lagged), ParsimonySettings(), laws=laws)
     assert scorer(lagged).criterion(told) < 0.5 * scorer(lagged).criterion(blind)
+
+
+def test_edm_abstract_takes_the_observers_bandwidth_for_the_law_rows(
+        cli_files: tuple[Path, Path], tmp_path: Path) -> None:
+    """A CSV log records no observer: ``--observer-bandwidth`` tells it, and the law rows
+    are then offered through its low-pass (the log of the test above, as a file)."""
+    g = 150.0
+    data, _ = friction_log(1.0)
+    lag = [("through", None), ("lpf", g)]
+    truth = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)]),
+                         ("omega", [*lag, ("gain", 0.02)]), ("alpha", [*lag, ("gain", 2e-4)])],
+                        len(data))
+    target = (plain_loop(truth, data.columns).sum(axis=0)
+              + 1e-3 * np.random.default_rng(5).standard_normal(len(data)))
+    log = write_csv(tmp_path / "lagged.csv", {**data.columns, "tau_ext": target})
+    shapes = {}
+    for name, extra in (("told", ["--observer-bandwidth", str(g)]), ("blind", [])):
+        out = tmp_path / f"{name}.json"
+        assert _abstract((log, cli_files[1]), out, "--seed", "2", *extra) == 0
+        res = load_result(out)
+        comp = res.compensator
+        assert res.parsimony.get("law_rows")
+        shapes[name] = [(g2.element.name, round(comp.value(g2), 6)) for r in comp.matrix.rows
+                        for g2 in r.genes if g2.element.name == "lpf"]
+    assert ("lpf", g) in shapes["told"] and ("lpf", g) not in shapes["blind"]

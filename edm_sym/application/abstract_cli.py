@@ -152,13 +152,17 @@ def _read_logs(args: argparse.Namespace, config, columns, names,  # noqa: ANN001
         raise ConfigError("--decimate-to", f"expected either --decimate or --decimate-to, "
                                            f"found both (--decimate {factor})")
 
+    def told(log):  # noqa: ANN001, ANN202
+        g = getattr(args, "observer_bandwidth", None)  # over the log's own scalar
+        return log if g is None else replace(log, scalars={**log.scalars, "observer_bandwidth": g})
+
     def decimated(log):  # noqa: ANN001, ANN202
         if period is not None:  # each log's own factor: logs of several rates meet at one
             return decimate(log, decimation_factor(log, period, where="--decimate-to"),
                             where="--decimate-to")
         return decimate(log, factor, where="--decimate") if factor is not None else log
 
-    logs = [decimated(log) for log in logs]
+    logs = [told(decimated(log)) for log in logs]
     for log in logs:
         log.column(target, role="target column")
         log.stack(inputs)
@@ -169,8 +173,8 @@ def _read_logs(args: argparse.Namespace, config, columns, names,  # noqa: ANN001
     path = getattr(args, "validate", None)
     if path is None:
         return logs, None
-    return logs, lambda: decimated(load_data(path, ts=args.ts, require=[target, *inputs],
-                                             columns=columns, names=names))
+    return logs, lambda: told(decimated(load_data(path, ts=args.ts, require=[target, *inputs],
+                                                  columns=columns, names=names)))
 
 
 def _report(result: EdmResult, output: Path, data, phys) -> int:  # noqa: ANN001
