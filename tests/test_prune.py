@@ -385,20 +385,30 @@ def test_a_model_that_holds_the_law_gets_no_law_row(friction_data: DataLog) -> N
     assert parse_parsimony("x: parsimony", {"law_rows": False}).law_rows is False
 
 
+#: The observer's bandwidth [rad/s], viscous and inertia of :func:`lagged_log`.
+OBSERVER, LAGGED_VISCOUS, LAGGED_INERTIA = 150.0, 0.02, 2e-4
+
+
+def lagged_log(duration: float) -> DataLog:
+    """Coulomb 1.0, viscous and inertia torques seen through the observer's low-pass
+    (``OBSERVER / (s + OBSERVER)``), with 1 mN m of noise."""
+    data, _ = friction_log(duration)
+    lag = [("through", None), ("lpf", OBSERVER)]
+    truth = compensator([("omega", [("sign", None), ("lpf", OBSERVER), ("gain", 1.0)]),
+                         ("omega", [*lag, ("gain", LAGGED_VISCOUS)]),
+                         ("alpha", [*lag, ("gain", LAGGED_INERTIA)])], len(data))
+    target = (plain_loop(truth, data.columns).sum(axis=0)
+              + 1e-3 * np.random.default_rng(5).standard_normal(len(data)))
+    return DataLog({**data.columns, "tau_ext": target}, TS, "lagged")
+
+
 def test_with_the_observers_bandwidth_the_law_rows_carry_its_lag() -> None:
     """A target seen through an observer (Q(s) = g / (s + g), g = 150 rad/s) of Coulomb,
     viscous and inertia torques; the model holds only the Coulomb row. Told g, the viscous
     and inertia rows are offered through that low-pass and both are added, their gains the
     plant's within 2 %; without g the plain rows fit the lagged target worse."""
-    g, viscous, inertia = 150.0, 0.02, 2e-4
-    data, _ = friction_log(2.0)
-    lag = [("through", None), ("lpf", g)]
-    truth = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)]),
-                         ("omega", [*lag, ("gain", viscous)]),
-                         ("alpha", [*lag, ("gain", inertia)])], len(data))
-    target = (plain_loop(truth, data.columns).sum(axis=0)
-              + 1e-3 * np.random.default_rng(5).standard_normal(len(data)))
-    lagged = DataLog({**data.columns, "tau_ext": target}, TS, "lagged")
+    g, viscous, inertia = OBSERVER, LAGGED_VISCOUS, LAGGED_INERTIA
+    lagged = lagged_log(2.0)
     coulomb = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)])], len(lagged))
     laws = {"viscous": INPUTS.index("omega"), "inertia": INPUTS.index("alpha")}
     told, record = apply_parsimony(coulomb, scorer(lagged), ParsimonySettings(), laws=laws,
@@ -417,15 +427,8 @@ def test_edm_abstract_takes_the_observers_bandwidth_for_the_law_rows(
         cli_files: tuple[Path, Path], tmp_path: Path) -> None:
     """A CSV log records no observer: ``--observer-bandwidth`` tells it, and the law rows
     are then offered through its low-pass (the log of the test above, as a file)."""
-    g = 150.0
-    data, _ = friction_log(1.0)
-    lag = [("through", None), ("lpf", g)]
-    truth = compensator([("omega", [("sign", None), ("lpf", g), ("gain", 1.0)]),
-                         ("omega", [*lag, ("gain", 0.02)]), ("alpha", [*lag, ("gain", 2e-4)])],
-                        len(data))
-    target = (plain_loop(truth, data.columns).sum(axis=0)
-              + 1e-3 * np.random.default_rng(5).standard_normal(len(data)))
-    log = write_csv(tmp_path / "lagged.csv", {**data.columns, "tau_ext": target})
+    g = OBSERVER
+    log = write_csv(tmp_path / "lagged.csv", lagged_log(1.0).columns)
     shapes = {}
     for name, extra in (("told", ["--observer-bandwidth", str(g)]), ("blind", [])):
         out = tmp_path / f"{name}.json"
