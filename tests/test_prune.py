@@ -436,6 +436,7 @@ def test_edm_abstract_takes_the_observers_bandwidth_for_the_law_rows(
         res = load_result(out)
         comp = res.compensator
         assert res.parsimony.get("law_rows")
+        assert res.provenance.get("observer_bandwidth") == (g if extra else None)
         shapes[name] = [(g2.element.name, round(comp.value(g2), 6)) for r in comp.matrix.rows
                         for g2 in r.genes if g2.element.name == "lpf"]
     assert ("lpf", g) in shapes["told"] and ("lpf", g) not in shapes["blind"]
