@@ -96,9 +96,9 @@ def run_cli(args: argparse.Namespace) -> int:
                           searches=getattr(args, "searches", None),
                           parallel=Parallel(workers=args.workers,
                                             scheduler=getattr(args, "scheduler", None)))
-    told = getattr(args, "observer_bandwidth", None)
-    if told is not None:  # not in the log: the run cannot be repeated without it
-        result = replace(result, provenance={**result.provenance, "observer_bandwidth": told})
+    bandwidth = getattr(args, "observer_bandwidth", None)
+    if bandwidth is not None:  # not in the log: the run cannot be repeated without it
+        result = replace(result, provenance={**result.provenance, "observer_bandwidth": bandwidth})
     if previous is not None:  # what the model inherited
         result = replace(result, provenance={**result.provenance, "initial": {
             "file": Path(args.initial).name, "sha256": previous.sha256}})

@@ -55,8 +55,9 @@ from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, row_gains, scale_p
 from edm_sym.engines.abstraction.holdout import Scorer
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_select, select
 
-#: The ``gain`` element's code, and the gain a law row starts from before its refit (the
-#: middle of the range when a config's gain range leaves it out).
+#: The ``gain`` and ``lpf`` elements' codes (a law row's scale and its observer lag), and
+#: the gain a law row starts from before its refit (the middle of the range when a
+#: config's gain range leaves it out).
 GAIN = BY_NAME["gain"].code
 LPF = BY_NAME["lpf"].code
 LAW_START = 1e-3
@@ -266,7 +267,7 @@ LAW_ROWS = (("viscous", "velocity"), ("inertia", "acceleration"))
 def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
                    inputs: Mapping[str, int], allowed: Collection[int] = (),
                    observer: float | None = None) -> tuple[Compensator, list[str]]:
-    """Add the plain rows of linear laws where the held-out blocks ask for them.
+    """Add the linear laws' rows, plain or through the observer's lag, that the data asks for.
 
     A search may build the velocity's share of the torque from saturating
     functions that meet the log's few constant speeds and drift between them,
