@@ -51,7 +51,7 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.core.roles import motion_signals
 from edm_sym.core.terms import TermKind
 from edm_sym.core.units import axis_units
-from edm_sym.engines.plant.filters import lowpass
+from edm_sym.engines.plant.filters import lowpass, sliding_rows
 
 TWO_PI = 2.0 * math.pi
 
@@ -293,6 +293,13 @@ DATA_UNEXPLAINED = 0.5
 HELD_SHARE = 0.01
 #: The relative half-width of the band around a held speed.
 HELD_BAND = 0.05
+#: The data's support of a law is judged on the samples where the axis slides: at
+#: least the slowest speed probed, for this many observer time constants (1/g) since
+#: the last slower sample (the reversals' presliding and the observer's lag left out,
+#: as :func:`edm_sym.engines.plant.anchor.fit_anchor` leaves them out).
+SLIDE_SETTLE = 6.0
+#: Fewer sliding samples than this share of the data: the support is judged on all.
+SLIDE_MIN_SHARE = 0.1
 
 
 def _pct(share: float) -> str:
@@ -864,22 +871,32 @@ def model_physics(
     if data is not None and data.get("model") is not None:
         model_out = np.asarray(data["model"], dtype=float)
         target_on_data = np.asarray(data["target"], dtype=float)
-        fit_on_data = float(np.sqrt(np.mean((target_on_data - model_out) ** 2)))
+        # The static laws hold where the axis slides: the support is judged there.
+        judged = sliding_rows(rv, ranges.slowest, 0 if bandwidth is None else
+                              int(math.ceil(SLIDE_SETTLE / (bandwidth * ts))))
+        if np.count_nonzero(judged) < SLIDE_MIN_SHARE * judged.size:
+            judged = np.ones(judged.size, dtype=bool)
+            notes.append(f"the data slides at {ranges.slowest:.3g} {units.velocity} or faster in "
+                         f"under {100 * SLIDE_MIN_SHARE:g} % of its samples: the laws' support is "
+                         "judged on every sample, reversals included")
+        fit_on_data = float(np.sqrt(np.mean((target_on_data - model_out)[judged] ** 2)))
 
     def _unsupported(cols: list[int]) -> str:
-        """Why the data does not support a law (empty when it does): the model without the
-        law's term fits the target no worse than with it (by :data:`SUPPORT`)."""
+        """Why the data does not support a law (empty when it does): on the sliding samples,
+        the model without the law's term fits the target no worse than with it (by
+        ``opts.support``)."""
         if fit_on_data is None or not fit_on_data > 0:
             return ""
         term = RX[:, cols] @ coef[cols]
         if bandwidth is not None and term.size > 1:
             term = lowpass(term, bandwidth, ts)
-        without = float(np.sqrt(np.mean((target_on_data - model_out + term) ** 2)))
+        without = float(np.sqrt(np.mean((target_on_data - model_out + term)[judged] ** 2)))
         if without >= (1.0 + opts.support) * fit_on_data:
             return ""
         return (f"the data does not support it: without its term the model fits the target "
-                f"{'better' if without < fit_on_data else 'no worse'} (RMSE {without:.4g} "
-                f"against {fit_on_data:.4g}, a rise under {100 * opts.support:g} %)")
+                f"{'better' if without < fit_on_data else 'no worse'} where the axis slides "
+                f"(RMSE {without:.4g} against {fit_on_data:.4g}, a rise under "
+                f"{100 * opts.support:g} %)")
 
     terms: list[Law] = []
     left: list[tuple[TermKind, str]] = []

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from edm_sym.core.terms import TermKind
-from edm_sym.engines.plant.filters import lowpass
+from edm_sym.engines.plant.filters import lowpass, sliding_rows
 
 __all__ = ["AnchorFit", "centred_motion", "fit_anchor", "law_torque"]
 
@@ -165,7 +165,7 @@ def fit_anchor(
     for k in harmonics:
         base += [np.cos(k * theta), np.sin(k * theta)]
     design = np.column_stack([lowpass(x, g_rtob, ts) for x in base])
-    rows = _sliding_rows(omega, min_speed, int(math.ceil(settle / (g_rtob * ts))))
+    rows = sliding_rows(omega, min_speed, int(math.ceil(settle / (g_rtob * ts))))
     design, target = design[rows], target[rows]
     if stribeck_velocity is None:
         candidates: list[float | None] = [None]
@@ -192,15 +192,6 @@ def fit_anchor(
         found[int(k)] = (math.hypot(a, b), math.atan2(a, b))
     peak = float(coef[-1]) if vs is not None else 0.0
     return AnchorFit(fc, d, dj, c0, peak, vs, found, rmse)
-
-
-def _sliding_rows(omega: np.ndarray, min_speed: float, memory: int) -> np.ndarray:
-    """Rows whose last ``memory`` samples all slide at ``|omega| >= min_speed``."""
-    if min_speed <= 0.0:
-        return np.ones(omega.size, dtype=bool)
-    slow = (np.abs(omega) < min_speed).astype(float)
-    recent = np.convolve(slow, np.ones(memory + 1))[: omega.size]
-    return recent == 0.0
 
 
 def law_torque(

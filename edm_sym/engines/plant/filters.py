@@ -24,6 +24,7 @@ __all__ = [
     "acceleration_from_velocity",
     "lowpass",
     "lowpass_coefficients",
+    "sliding_rows",
     "velocity_from_angle",
 ]
 
@@ -117,3 +118,33 @@ def acceleration_from_velocity(omega: np.ndarray, ts: float, g: float) -> np.nda
     omega = np.asarray(omega, dtype=float)
     return lowpass(np.diff(omega, prepend=0.0) / ts, g, ts)
 
+
+
+def sliding_rows(omega: np.ndarray, min_speed: float, memory: int) -> np.ndarray:
+    """Samples where the axis slides: ``|omega| >= min_speed`` there and in the ``memory``
+    samples before.
+
+    The static friction laws hold while the axis slides; at a reversal and for
+    a while after it (the bristles' presliding, the observer's lag) the target
+    follows dynamics no static law describes. The engineer's least squares
+    (:func:`edm_sym.engines.plant.anchor.fit_anchor`) and the data's support
+    of a named law (docs/describe.md, "Honest names") read these samples.
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        Velocity.
+    min_speed : float
+        The slowest speed that counts as sliding (> 0; 0 or less: every sample).
+    memory : int
+        Samples after a slower one that still do not count.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+    """
+    if min_speed <= 0.0:
+        return np.ones(omega.size, dtype=bool)
+    slow = (np.abs(omega) < min_speed).astype(float)
+    recent = np.convolve(slow, np.ones(memory + 1))[: omega.size]
+    return recent == 0.0
