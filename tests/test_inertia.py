@@ -86,6 +86,26 @@ def test_describe_names_the_inertia_only_with_the_bandwidth() -> None:
     assert "joint" in flags
 
 
+def test_describe_reads_the_bandwidth_edm_abstract_was_told() -> None:
+    # `edm abstract --observer-bandwidth` records it (provenance.observer_bandwidth):
+    # describe and the report read it from there, as if told again; an argument wins.
+    from edm_sym.core.result import load_result
+    from edm_sym.outputs.report.runs import run_log
+
+    result = load_result(ROOT / "examples" / "auger" / "result.json")
+    bare = dataclasses.replace(load_data("plant:auger/evaluation"), scalars={})
+    told = dataclasses.replace(result, provenance={**result.provenance, "observer_bandwidth": 150.0})
+    assert told.observer_bandwidth == 150.0 and result.observer_bandwidth is None
+    doc = lambda d: d.to_json()  # noqa: E731
+    assert doc(edm_sym.describe(told, bare)) == doc(edm_sym.describe(result, bare,
+                                                                     observer_bandwidth=150.0))
+    assert doc(edm_sym.describe(told, bare)) != doc(edm_sym.describe(result, bare))
+    assert doc(edm_sym.describe(told, bare, observer_bandwidth=300.0)) == doc(
+        edm_sym.describe(result, bare, observer_bandwidth=300.0))
+    assert run_log(told, bare, label="evaluation").observer_bandwidth == 150.0
+    assert run_log(result, bare, label="evaluation").observer_bandwidth is None
+
+
 def test_an_acceleration_row_is_left_out_when_the_model_holds_no_inertia(motion) -> None:  # noqa: ANN001
     # The hand-written result's row 3, 0.2 s/(s + 100) on the velocity, is an inertia of
     # 0.002 kg m^2 row by row. When the rows together hold none with the observer's lag

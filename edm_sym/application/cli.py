@@ -192,8 +192,9 @@ def _add_describe_args(p: argparse.ArgumentParser) -> None:
                         "0.1 %% onto its grid (default: refuse it)")
     p.add_argument("--observer-bandwidth", type=_positive_float, metavar="RAD_PER_S",
                    help="bandwidth g of the observer that estimated the target, g/(s+g), to name "
-                        "the inertia the rows hold with its lag taken out (default: the log's "
-                        "scalar observer_bandwidth; plant: logs record it)")
+                        "the inertia the rows hold with its lag taken out (default: the one "
+                        "edm abstract was told, else the log's scalar observer_bandwidth; "
+                        "plant: logs record it)")
     _add_column_args(p, roles=False)
     p.set_defaults(func=_cmd_describe)
 

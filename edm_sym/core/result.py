@@ -138,6 +138,13 @@ class EdmResult:
         return {name: cols.roles[name] for name in self.inputs if name in cols.roles}
 
     @property
+    def observer_bandwidth(self) -> float | None:
+        """The observer's bandwidth [rad/s] ``edm abstract`` was told
+        (``provenance.observer_bandwidth``, docs/result-format.md), else None."""
+        g = self.provenance.get("observer_bandwidth")
+        return float(g) if isinstance(g, int | float) and math.isfinite(g) and g > 0 else None
+
+    @property
     def units(self) -> AxisUnits:
         """The SI units of this result's axis (``axis_units(self.axis)``)."""
         return axis_units(self.axis)

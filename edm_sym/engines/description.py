@@ -401,9 +401,11 @@ def describe(
     observer_bandwidth : float, optional
         The bandwidth ``g`` [rad/s] of the observer that estimated the target
         (``g / (s + g)``), to name the inertia the rows hold with its lag taken
-        out (:mod:`edm_sym.engines.symbolic.inertia`). Default: the log's
+        out (:mod:`edm_sym.engines.symbolic.inertia`). Default: the one
+        ``edm abstract`` was told (:attr:`EdmResult.observer_bandwidth
+        <edm_sym.core.result.EdmResult.observer_bandwidth>`), else the log's
         scalar ``observer_bandwidth`` (a ``plant:`` log records its preset's);
-        without either the inertia is named row by row only.
+        without any the inertia is named row by row only.
 
     Returns
     -------
@@ -425,6 +427,8 @@ def describe(
         except ValueError as exc:
             raise DataFormatError("axis", str(exc)) from None
         result = replace(result, axis=axis)
+    if observer_bandwidth is None:
+        observer_bandwidth = result.observer_bandwidth
     log, notes = _log_of(result, data, ts, columns, resample)
     comp = result.compensator
     on = _measure(result, log) if log is not None else None

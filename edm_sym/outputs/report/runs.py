@@ -67,7 +67,9 @@ class LogRun:
     inputs : numpy.ndarray or None
         Shape (n_inputs, N): the compensator's inputs on this log, in the result's order.
     observer_bandwidth : float or None
-        The log's scalar ``observer_bandwidth`` [rad/s] (docs/describe.md#honest-names).
+        The observer's bandwidth [rad/s] ``edm abstract`` was told (result.json
+        ``provenance.observer_bandwidth``), else the log's scalar
+        ``observer_bandwidth`` (docs/describe.md#honest-names).
     number, of : int
         The log's place among the report's logs of its kind (1-based) and their count.
     """
@@ -166,7 +168,7 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
                   sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse,
                   data.stack(result.compensator.matrix.inputs),
-                  data.scalars.get("observer_bandwidth"))
+                  result.observer_bandwidth or data.scalars.get("observer_bandwidth"))
 
 
 @dataclass(frozen=True)
