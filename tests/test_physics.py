@@ -505,6 +505,21 @@ def test_the_datas_support_of_a_stribeck_hump_is_judged_where_the_axis_slides(
                               "the target better where the axis slides")
 
 
+def test_the_constant_speeds_are_swept_down_to_so_a_relay_is_in_its_sliding_state() -> None:
+    """A relay with a band of +-1 rad/s holds its starting state (0) at slower speeds
+    reached from rest: a Coulomb level carried by it would vanish at the slowest probes.
+    Each constant speed is reached from the fastest one in its direction, where sliding
+    that way has set the relay."""
+    comp = _comp([("omega", [("hysteresis", 1.0), ("gain", 0.5)]),
+                  ("omega", [("gain", 0.01)])])
+    phys = model_physics(comp, ROLES, RANGE)  # probes from 0.5 rad/s
+    named = _named(phys)
+    assert set(named) == {"coulomb", "viscous"}
+    assert named["coulomb"]["level"] == pytest.approx(0.5, rel=0.01)
+    assert named["viscous"]["coefficient"] == pytest.approx(0.01, rel=0.02)
+    assert phys.explained > 0.999
+
+
 def test_an_inertia_too_small_on_the_log_is_left_out() -> None:
     """The probes' constant accelerations can give a row on the acceleration a gain the
     log's motion does not. Measured on the log, the inertia's share is rescaled; under

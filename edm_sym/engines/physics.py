@@ -515,9 +515,11 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
 
     Constant-velocity runs: ``options.levels`` speeds per direction, spaced
     geometrically from ``ranges.slowest`` to ``ranges.velocity``, each reached
-    from rest at constant acceleration, then held for the settling time and a
-    window of one revolution (rotary; the position span on a linear axis), at
-    most ``options.max_window``. Positive runs start at the low end of the
+    as a sweep down in its direction (from rest up to ``ranges.velocity`` and
+    down to the speed, at constant acceleration: a relay or a hysteresis in the
+    model is in the state sliding that way sets, not the one it starts in), then
+    held for the settling time and a window of one revolution (rotary; the
+    position span on a linear axis), at most ``options.max_window``. Positive runs start at the low end of the
     recorded position, negative ones at the high end. Triangle waves: four
     periods between ``-V`` and ``V`` (``V`` the fastest speed and a third of it)
     at half and an eighth of the recorded acceleration (the log's time scales:
@@ -536,11 +538,15 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     a_ramp = 0.5 * ranges.acceleration
     for sign in (1.0, -1.0):
         for index, speed in enumerate(speeds):
-            ramp = max(int(math.ceil(speed / a_ramp / ts)), 1)
+            up = max(int(math.ceil(ranges.velocity / a_ramp / ts)), 1)
+            down = int(math.ceil((ranges.velocity - speed) / a_ramp / ts))
+            ramp = up + down
             window = travel / speed if travel > 0 else 0.5
             window = min(max(window, 50 * ts, settle), options.max_window)
             n_hold = n_settle + int(round(window / ts))
-            v = sign * np.concatenate([np.linspace(0.0, speed, ramp + 1), np.full(n_hold, speed)])
+            v = sign * np.concatenate([np.linspace(0.0, ranges.velocity, up + 1),
+                                       np.linspace(ranges.velocity, speed, down + 1)[1:],
+                                       np.full(n_hold, speed)])
             theta, v, a = _profile(v, ts, lo if sign > 0 else hi)
             steady = np.zeros(v.size, dtype=bool)
             steady[ramp + 1 + n_settle:] = True
