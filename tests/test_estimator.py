@@ -95,11 +95,12 @@ def test_unknown_attribute_is_still_an_attribute_error() -> None:
 def test_params_clone_and_set_params_round_trip() -> None:
     roles = {"x": "velocity"}
     est = EDMRegressor(sample_time=2e-3, config=TINY_CONFIG, seed=7, time_limit=3.0, roles=roles,
-                       target_name="tau", workers=2, searches=2, progress=True, axis="linear")
+                       target_name="tau", workers=2, searches=2, progress=True, axis="linear",
+                       observer_bandwidth=150.0)
     params = est.get_params()
     assert params == {"sample_time": 2e-3, "config": TINY_CONFIG, "seed": 7, "time_limit": 3.0,
                       "roles": roles, "target_name": "tau", "workers": 2, "searches": 2,
-                      "progress": True, "axis": "linear"}
+                      "progress": True, "axis": "linear", "observer_bandwidth": 150.0}
     twin = clone(est)
     assert twin is not est and twin.get_params() == params
     assert EDMRegressor(**params).get_params() == params
@@ -236,6 +237,27 @@ def test_a_linear_axis_reaches_the_result_and_its_outputs(tmp_path: Path) -> Non
     header = est.to_c(tmp_path, prefix="lin")[0].read_text()
     assert "[N]" in header and "m/s" in header and "N m" not in header and "rad/s" not in header
     assert est.to_control().dt == TS
+
+
+def test_the_observers_bandwidth_reaches_the_result_and_describe(log: pd.DataFrame) -> None:
+    """As ``edm abstract --observer-bandwidth``: recorded in the provenance, where
+    describe reads it; without it nothing is recorded."""
+    X, y = log[["omega", "alpha"]], log["tau_ext"]
+    told = EDMRegressor(sample_time=TS, config=TINY_CONFIG, seed=1, observer_bandwidth=150).fit(X, y)
+    assert told.result_.provenance["observer_bandwidth"] == 150.0
+    assert told.result_.observer_bandwidth == 150.0
+    assert told.describe(X, y).physics.bandwidth == 150.0
+    blind = EDMRegressor(sample_time=TS, config=TINY_CONFIG, seed=1).fit(X, y)
+    assert "observer_bandwidth" not in blind.result_.provenance
+    assert blind.describe(X, y).physics.bandwidth is None
+
+
+@pytest.mark.parametrize("g", [0.0, -1.0, float("nan"), float("inf"), "150", True])
+def test_fit_refuses_a_bad_observer_bandwidth(g: object, log: pd.DataFrame) -> None:
+    with pytest.raises(ValueError, match=r"EDMRegressor.observer_bandwidth: expected a finite "
+                                         r"number > 0 \[rad/s\] or None, found"):
+        EDMRegressor(sample_time=TS, config=TINY_CONFIG, observer_bandwidth=g).fit(
+            log[["omega"]], log["tau_ext"])
 
 
 # --- errors ---

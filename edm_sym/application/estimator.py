@@ -22,6 +22,7 @@ import inspect
 import math
 import os
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -97,6 +98,12 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         ``"rotary"`` (rad, N m) or ``"linear"`` (m, N): the SI units of the
         log (docs/data.md#units), recorded in ``result_.axis``; :meth:`describe`,
         :meth:`to_c`, :meth:`to_python` and :meth:`to_control` print its units.
+    observer_bandwidth : float, optional
+        The bandwidth ``g`` [rad/s] of the observer that estimated ``y``
+        (``g/(s + g)``), as ``edm abstract --observer-bandwidth``: the rows of
+        linear laws are also offered through its low-pass before pruning, it
+        is recorded in ``result_.provenance`` and :meth:`describe` names the
+        inertia with its lag taken out (docs/describe.md#inertia-held-by-the-filters).
 
     Attributes
     ----------
@@ -135,6 +142,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         searches: int | None = None,
         progress: bool = False,
         axis: str = "rotary",
+        observer_bandwidth: float | None = None,
     ) -> None:
         self.sample_time = sample_time
         self.config = config
@@ -146,6 +154,7 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         self.searches = searches
         self.progress = progress
         self.axis = axis
+        self.observer_bandwidth = observer_bandwidth
 
     # --- fitting and prediction ---
 
@@ -182,8 +191,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
             infinity, fewer than 2 samples, ``y`` of another length), names
             that are not unique or equal ``target_name``.
         ConfigError
-            A bad ``config``, ``seed``, ``workers``, ``searches``, ``time_limit``, ``target_name`` or
-            ``roles`` (a subclass of ValueError).
+            A bad ``config``, ``seed``, ``workers``, ``searches``, ``time_limit``, ``target_name``,
+            ``roles`` or ``observer_bandwidth`` (a subclass of ValueError).
         DataFormatError
             A constant ``y``: nothing to model (a subclass of ValueError).
         """
@@ -197,6 +206,11 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                 for k, v in self.roles.items())):
             raise ConfigError("EDMRegressor.roles", f"expected a mapping of feature names to "
                               f"roles (str or None), found {self.roles!r}")
+        g = self.observer_bandwidth
+        if g is not None and (isinstance(g, bool) or not isinstance(g, int | float | np.number)
+                              or not (math.isfinite(float(g)) and float(g) > 0)):
+            raise ConfigError("EDMRegressor.observer_bandwidth", f"expected a finite number > 0 "
+                              f"[rad/s] or None, found {g!r}")
         if _is_list_of_frames(X):
             if not isinstance(y, list | tuple) or len(y) != len(X):
                 raise ValueError(f"EDMRegressor.fit: y: expected a list of {len(X)} targets (one per "
@@ -225,7 +239,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                              "name; hint: EDMRegressor(target_name=...) with another name")
         columns = {name: np.array(X[:, j], dtype=np.float64) for j, name in enumerate(names)}
         columns[self.target_name] = np.array(y, dtype=np.float64)
-        data = DataLog(columns, ts, source=FIT_SOURCE)
+        data = DataLog(columns, ts, source=FIT_SOURCE,
+                       scalars={} if g is None else {"observer_bandwidth": float(g)})
         if len(spans) > 1:
             data = [data.window(a, b) for a, b in spans]
         from edm_sym.application.progress import ProgressReporter
@@ -237,6 +252,8 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
                               parallel=Parallel(workers=self.workers))
         from edm_sym.application.summary import with_physics
 
+        if g is not None:  # recorded as edm abstract --observer-bandwidth records it
+            result = replace(result, provenance={**result.provenance, "observer_bandwidth": float(g)})
         self.result_ = with_physics(result, data)[0]
         self.n_features_in_ = X.shape[1]
         self.feature_names_in_ = np.asarray(names, dtype=object)
