@@ -519,8 +519,9 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     down to the speed, at constant acceleration: a relay or a hysteresis in the
     model is in the state sliding that way sets, not the one it starts in), then
     held for the settling time and a window of one revolution (rotary; the
-    position span on a linear axis), at most ``options.max_window``. Positive runs start at the low end of the
-    recorded position, negative ones at the high end. Triangle waves: four
+    position span on a linear axis), at most ``options.max_window``. Positive
+    runs start at the low end of the recorded position, negative ones at the
+    high end. Triangle waves: four
     periods between ``-V`` and ``V`` (``V`` the fastest speed and a third of it)
     at half and an eighth of the recorded acceleration (the log's time scales:
     a filter's response there is what the search fitted, not its DC gain on a
