@@ -521,14 +521,13 @@ def probe_runs(ranges: MotionRange, ts: float, settle: float, *, rotary: bool,
     held for the settling time and a window of one revolution (rotary; the
     position span on a linear axis), at most ``options.max_window``. Positive
     runs start at the low end of the recorded position, negative ones at the
-    high end. Triangle waves: four
-    periods between ``-V`` and ``V`` (``V`` the fastest speed and a third of it)
-    at half and an eighth of the recorded acceleration (the log's time scales:
-    a filter's response there is what the search fitted, not its DC gain on a
-    minute-long ramp), from the middle of the position span; steady after the
-    first period (or the settling time) and away from each turn of the
-    acceleration and each zero crossing of the velocity (the settling time, at
-    most a third of a ramp).
+    high end. Triangle waves: four periods between ``-V`` and ``V`` (``V`` the
+    fastest speed and a third of it) at half and an eighth of the recorded
+    acceleration (the log's time scales: a filter's response there is what the
+    search fitted, not its DC gain on a minute-long ramp), from the middle of
+    the position span; steady after the first period (or the settling time)
+    and away from each turn of the acceleration and each zero crossing of the
+    velocity (the settling time, at most a third of a ramp).
     """
     lo, hi = ranges.position if ranges.position is not None else (0.0, 0.0)
     span = (hi - lo) if hi > lo else (TWO_PI if rotary else 0.0)
