@@ -26,7 +26,7 @@ from edm_sym.core.errors import DataFormatError, ResultFormatError
 from edm_sym.core.fileio import json_kind, read_json, write_atomic
 from edm_sym.core.matrix import Compensator, ElementMatrix, Gene, Row
 from edm_sym.core.units import AXES, AxisUnits, axis_units
-from edm_sym.core.validation import json_path, schema_problem
+from edm_sym.core.validation import json_path, positive_number, schema_problem
 
 FORMAT = "edm-result"
 VERSION = 1
@@ -141,8 +141,7 @@ class EdmResult:
     def observer_bandwidth(self) -> float | None:
         """The observer's bandwidth [rad/s] ``edm abstract`` was told
         (``provenance.observer_bandwidth``, docs/result-format.md), else None."""
-        g = self.provenance.get("observer_bandwidth")
-        return float(g) if isinstance(g, int | float) and math.isfinite(g) and g > 0 else None
+        return positive_number(self.provenance.get("observer_bandwidth"))
 
     @property
     def units(self) -> AxisUnits:

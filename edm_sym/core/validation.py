@@ -19,7 +19,7 @@ from typing import Any
 
 import jsonschema
 
-__all__ = ["json_path", "schema_problem", "show_value"]
+__all__ = ["json_path", "positive_number", "schema_problem", "show_value"]
 
 _TYPE_NAMES = {
     "number": "a number",
@@ -51,6 +51,12 @@ def json_path(parts: Sequence[Any]) -> str:
         else:
             out += f".{part}" if out else str(part)
     return out
+
+
+def positive_number(value: Any) -> float | None:
+    """A value a file or a log records as a finite positive number (not a bool), else None."""
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    return float(value) if ok and math.isfinite(value) and value > 0 else None
 
 
 def show_value(value: Any) -> str:

@@ -51,6 +51,7 @@ from edm_sym.core.matrix import Compensator
 from edm_sym.core.roles import motion_signals
 from edm_sym.core.terms import TermKind
 from edm_sym.core.units import axis_units
+from edm_sym.core.validation import positive_number
 from edm_sym.engines.plant.filters import lowpass, sliding_rows
 
 TWO_PI = 2.0 * math.pi
@@ -350,17 +351,12 @@ def ranges_from_result(result: Any, roles: Mapping[str, str | None]) -> MotionRa
     name = getattr(result, "source", None) or "result.json"
     slowest = v / 50.0
     recorded = (getattr(result, "physics", None) or {}).get("ranges", {})
-    held = _positive(recorded.get("slowest"))
+    held = positive_number(recorded.get("slowest"))
     if held is not None:
         slowest = min(slowest, max(held, v / 200.0))
     return MotionRange(v, slowest, a if a > 0 and math.isfinite(a) else 10.0 * v, pos,
-                       f"the ranges {_basename(name)} records", _positive(recorded.get("hold")))
+                       f"the ranges {_basename(name)} records", positive_number(recorded.get("hold")))
 
-
-def _positive(value: Any) -> float | None:
-    """A value result.json records as a finite positive number, else None."""
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    return float(value) if ok and math.isfinite(value) and value > 0 else None
 
 
 def ranges_from_data(velocity: np.ndarray, acceleration: np.ndarray, angle: np.ndarray | None,

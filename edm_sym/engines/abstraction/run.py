@@ -38,6 +38,7 @@ from edm_sym.core.matrix import Compensator, ElementMatrix
 from edm_sym.core.result import EdmResult, StepRecord, input_name_problem, target_name_problem
 from edm_sym.core.roles import LOG_ROLE_NAMES, ROLES, default_role
 from edm_sym.core.units import axis_units
+from edm_sym.core.validation import positive_number
 from edm_sym.engines.abstraction.checkpoint import (
     FinishedStep,
     RunState,
@@ -675,13 +676,6 @@ def _holdout(data: DataLog, cfg: AbstractionConfig, *, target: str, inputs: tupl
         raise ConfigError(f"{cfg.source}: {exc.where}", exc.problem) from None
 
 
-def _observer(data: DataLog) -> float | None:
-    """The observer's bandwidth [rad/s] the log records (a ``plant:`` log its preset's), or
-    None when it records none or not a positive finite number."""
-    g = data.scalars.get("observer_bandwidth")
-    return float(g) if g is not None and math.isfinite(g) and g > 0 else None
-
-
 def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold: Holdout, *,
                 target: str, inputs: tuple[str, ...], axis: str) -> _SearchJob:
     """What every search of the run shares: the training samples, the ranges, the human model."""
@@ -704,7 +698,7 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
                       barred=barred_inputs(part.x, hold.training.starts, roles),
                       clocks=clock_shifts(part.x, hold.training.starts, roles, axis),
                       laws={law: roles.index(role) for law, role in LAW_ROWS if role in roles},
-                      observer=_observer(data))
+                      observer=positive_number(data.scalars.get("observer_bandwidth")))
 
 
 def _search_result(job: _SearchJob, outcomes: list[tuple], seeds: Sequence[int],
