@@ -54,12 +54,16 @@ from edm_sym.engines.abstraction.ga import THROUGH
 from edm_sym.engines.abstraction.gain_fit import HOMOGENEOUS, row_gains, scale_position
 from edm_sym.engines.abstraction.holdout import Scorer
 from edm_sym.engines.abstraction.parsimony import ParsimonySettings, check_select, select
+from edm_sym.engines.abstraction.seeding import MAX_ORDER, fitted_samples, stribeck_slopes
 
 #: The ``gain`` and ``lpf`` elements' codes (a law row's scale and its observer lag), and
 #: the gain a law row starts from before its refit (the middle of the range when a
 #: config's gain range leaves it out).
 GAIN = BY_NAME["gain"].code
 LPF = BY_NAME["lpf"].code
+SIGN = BY_NAME["sign"].code
+TANH = BY_NAME["tanh"].code
+SIN_PHASE = BY_NAME["sin_phase"].code
 LAW_START = 1e-3
 #: Elements whose parameter multiplies their output: gains and amplitudes, ``a s``, ``a / s``.
 MULTIPLYING = frozenset(c for c, el in REGISTRY.items() if el.multiplies_output)
@@ -335,6 +339,136 @@ def offer_law_rows(comp: Compensator, scorer: Scorer, tolerance: float,
         added.extend(best[1])
 
 
+#: The angle harmonics the static laws' block carries (:func:`offer_law_block`): the
+#: orders of largest amplitude in its least squares.
+BLOCK_HARMONICS = 2
+
+
+def _block_row(n: int, input_: int, head: tuple[Gene, ...], lag: Gene, scale: Gene) -> Row:
+    """``input -> head -> lpf -> gain``, ``through`` before it, as a row of ``n`` genes."""
+    return Row(input_, (Gene(THROUGH, 0.0),) * (n - 2 - len(head)) + head + (lag, scale))
+
+
+def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
+                    inputs: Mapping[str, int], allowed: Collection[int] = (),
+                    observer: float | None = None) -> tuple[Compensator, list[str]]:
+    """Add the documented static laws together, through the observer's lag, when they earn it.
+
+    The search's fitness is the RMSE over the training log, whose largest
+    errors are at reversals, where friction follows its bristles and no
+    static law holds; a search can win there and spend its rows' shapes on
+    it, bending the steady friction curve the rest of the motion needs (on
+    the family's draws: 2-5 times the least-squares error above 1 rad/s,
+    with a model that beats least squares on the training log as a whole).
+    An engineer's least squares on the laws' regressors gets the steady
+    curve right. So the laws are offered as rows, all through the observer's
+    low-pass ``lpf(observer)`` (without its lag they fit the target poorly):
+    Coulomb ``v -> sign``, viscous ``v``, inertia ``a``, a Stribeck hump
+    ``v -> tanh(k)`` (its level carried by the Coulomb row, as the Stribeck
+    seeds do, :mod:`~edm_sym.engines.abstraction.seeding`) and, with an
+    angle, the :data:`BLOCK_HARMONICS` angle harmonics ``theta -> gain(k) ->
+    sin_phase(phi)`` of largest amplitude. The slope ``k``, the harmonics'
+    orders and phases come from one weighted least squares on the training
+    part, the search's rows' outputs among its columns (``k`` over the
+    Stribeck seeds' grid, orders 1 to ``MAX_ORDER``); then every row's gain
+    is refitted (:func:`refit_gains`). The block is added when it lowers the
+    criterion by more than ``tolerance``; pruning then removes any row, the
+    search's or the block's, the held-out blocks do not need.
+
+    Offered only when the observer's bandwidth is known (``observer``, within
+    the ``lpf`` range), the run has a velocity input (``inputs["coulomb"]``)
+    and the schedule allows ``sign``, ``lpf`` and ``gain`` (``tanh`` and
+    ``sin_phase`` for the hump and the harmonics) with at least three elements
+    a row.
+
+    Returns
+    -------
+    comp : Compensator
+        With the block's rows added, or as given.
+    added : list of str
+        The laws added (empty when the block was not).
+    """
+    gain, low_pass = comp.ranges.get("gain"), comp.ranges.get("lpf")
+    ok = lambda code: not allowed or code in allowed  # noqa: E731
+    if (observer is None or gain is None or low_pass is None or "coulomb" not in inputs
+            or not comp.matrix.rows or not (low_pass.low <= observer <= low_pass.high)
+            or not all(ok(c) for c in (GAIN, LPF, SIGN))):
+        return comp, []
+    n = len(comp.matrix.rows[0].genes)
+    if n < 3:
+        return comp, []
+    lag, one = Gene(LPF, low_pass.encode(observer)), Gene(GAIN, gain.encode(1.0))
+    v = inputs["coulomb"]
+    laws: dict[str, Row] = {"coulomb": _block_row(n, v, (Gene(SIGN, 0.0),), lag, one),
+                            "viscous": _block_row(n, v, (), lag, one)}
+    if "inertia" in inputs:
+        laws["inertia"] = _block_row(n, inputs["inertia"], (), lag, one)
+    part = scorer.parts["training"]
+    keep = fitted_samples(np.broadcast_to(np.asarray(scorer.weights("training"), float),
+                                          part.y[part.sl].shape))
+    w = np.sqrt(np.broadcast_to(np.asarray(scorer.weights("training"), float),
+                                part.y[part.sl].shape))[keep]
+
+    def column(row: Row) -> np.ndarray:
+        return scorer.row_output(comp, "training", row)[part.sl][keep]
+
+    humps: list[Row] = []
+    tanh = comp.ranges.get("tanh")
+    if tanh is not None and ok(TANH):
+        speed = part.x[v][part.sl][keep]
+        humps = [_block_row(n, v, (Gene(TANH, tanh.encode(float(k))),), lag, one)
+                 for k in stribeck_slopes(speed) if tanh.low <= k <= tanh.high]
+    waves: list[tuple[int, Row, Row]] = []
+    sine = comp.ranges.get("sin_phase")
+    if "spatial" in inputs and sine is not None and ok(SIN_PHASE) and n >= 4:
+        for k in range(1, MAX_ORDER + 1):
+            if gain.low <= k <= gain.high:
+                order = Gene(GAIN, gain.encode(float(k)))
+                waves.append((k, _block_row(n, inputs["spatial"], (order, Gene(SIN_PHASE,
+                              sine.encode(0.0))), lag, one),
+                              _block_row(n, inputs["spatial"], (order, Gene(SIN_PHASE,
+                              sine.encode(math.pi / 2))), lag, one)))
+    base = [column(r) for r in comp.matrix.rows] + [column(r) for r in laws.values()]
+    for _, s_row, c_row in waves:
+        base += [column(s_row), column(c_row)]
+    target = part.y[part.sl][keep]
+    best: tuple[float, Row | None, np.ndarray] | None = None
+    for hump in [None, *humps]:
+        cols = base + ([column(hump)] if hump is not None else [])
+        a = np.column_stack(cols) * w[:, None]
+        with np.errstate(all="ignore"):
+            coef, *_ = np.linalg.lstsq(a, target * w, rcond=None)
+            left = float(np.sum((target * w - a @ coef) ** 2))
+        if np.all(np.isfinite(coef)) and math.isfinite(left) and (best is None or left < best[0]):
+            best = (left, hump, coef)
+    if best is None:
+        return comp, []
+    _, hump, coef = best
+    rows = list(laws.values())
+    added = list(laws)
+    if hump is not None:
+        rows.append(hump)
+        added.append("stribeck")
+    first = len(comp.matrix.rows) + len(laws)
+    amplitudes = []
+    for q, (k, _, _) in enumerate(waves):
+        s_coef, c_coef = coef[first + 2 * q], coef[first + 2 * q + 1]
+        # s sin(k theta) + c cos(k theta) = A sin(k theta + phi), phi = atan2(c, s).
+        amplitudes.append((math.hypot(s_coef, c_coef), k, math.atan2(c_coef, s_coef)))
+    for amp, k, phase in sorted(amplitudes, reverse=True)[:BLOCK_HARMONICS]:
+        if amp > 0 and gain.low <= amp <= gain.high:
+            rows.append(_block_row(n, inputs["spatial"], (Gene(GAIN, gain.encode(float(k))),
+                                                          Gene(SIN_PHASE, sine.encode(phase))),
+                                   lag, one))
+    if waves and len(rows) > len(laws) + (hump is not None):
+        added.append("spatial")
+    m = refit_gains(comp, ElementMatrix(comp.matrix.inputs, comp.matrix.rows + tuple(rows)),
+                    scorer)
+    if m is None or not scorer.criterion(_with(comp, m)) < scorer.criterion(comp) * (1.0 - tolerance):
+        return comp, []
+    return _with(comp, m), added
+
+
 def prune(comp: Compensator, scorer: Scorer, *, start: str = "search") -> list[Member]:
     """The greedy backward elimination from ``comp``'s matrix; returns the front.
 
@@ -450,13 +584,17 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     reference = scorer.criterion(comp)
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
     added: list[str] = []
+    block: list[str] = []
     if laws and settings.law_rows:
-        comp, added = offer_law_rows(comp, scorer, settings.tolerance, laws, allowed, observer)
+        comp, block = offer_law_block(comp, scorer, settings.tolerance, laws, allowed, observer)
+        rest = {law: i for law, i in laws.items() if law not in block}
+        comp, added = offer_law_rows(comp, scorer, settings.tolerance, rest, allowed, observer)
     origin = ("search" if start_step is None else
               f"search (step {start_step} best{', refitted' if refitted else ''})")
     start = (origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
+             + (f", the static laws' rows added ({', '.join(block)})" if block else "")
              + "".join(f", a {law} row added" for law in added)
-             + (", gains refitted" if added else ""))
+             + (", gains refitted" if added or block else ""))
     front = prune(comp, scorer, start=start)
     if not front:  # no model with a finite criterion: nothing to choose from
         return comp, {}
@@ -477,6 +615,8 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
               "search_complexity": complexity(search, search.matrix),
               "search_criterion": [reference if math.isfinite(reference) else None, unit],
               "search_matrix": matrix_to_json(search.matrix), "front": members}
+    if block:
+        record["law_block"] = block
     if added:
         record["law_rows"] = added
     if start_step is not None:

@@ -697,7 +697,7 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
                       periodic=angle_input(roles, axis), velocity=velocity_input(roles),
                       barred=barred_inputs(part.x, hold.training.starts, roles),
                       clocks=clock_shifts(part.x, hold.training.starts, roles, axis),
-                      laws={law: roles.index(role) for law, role in LAW_ROWS if role in roles},
+                      laws=_law_inputs(roles, axis),
                       observer=positive_number(data.scalars.get("observer_bandwidth")))
 
 
@@ -879,6 +879,20 @@ def _whole_log_batch(cfg: AbstractionConfig) -> int:
     local search's candidates."""
     return max(s.n_rows * max(max(cfg.multi_fidelity.promote, s.ga.elites) + 1, 1 + s.n_elements)
                for s in cfg.steps)
+
+
+def _law_inputs(roles: Sequence[str | None], axis: str) -> dict[str, int]:
+    """The input each law's row reads before pruning (:mod:`~edm_sym.engines.abstraction.prune`):
+    the linear laws' inputs (:data:`~edm_sym.engines.abstraction.prune.LAW_ROWS`), and for the
+    static laws' block the velocity (Coulomb, Stribeck) and the angle a ripple is a function
+    of (:func:`~edm_sym.engines.abstraction.seeding.angle_input`)."""
+    laws = {law: roles.index(role) for law, role in LAW_ROWS if role in roles}
+    velocity, angle = velocity_input(roles), angle_input(roles, axis)
+    if velocity is not None:
+        laws["coulomb"] = velocity
+    if angle is not None:
+        laws["spatial"] = angle
+    return laws
 
 
 def _roles(data: DataLog, inputs: Sequence[str]) -> list[str | None]:

@@ -51,7 +51,7 @@ from edm_sym.engines.simulate import segments
 
 __all__ = ["LAG_CORNERS", "LAG_GAIN", "MAX_ORDER", "STRIBECK_GRID", "Harmonic", "angle_input",
            "harmonic_rows", "residual_harmonics", "residual_stribeck", "stribeck_rows",
-           "velocity_input"]
+           "stribeck_slopes", "velocity_input"]
 
 #: Highest harmonic order looked for (cycles per revolution).
 MAX_ORDER = 10
@@ -263,7 +263,7 @@ def velocity_input(roles: Sequence[str | None]) -> int | None:
     return list(roles).index("velocity") if "velocity" in roles else None
 
 
-def _stribeck_slopes(v: np.ndarray) -> np.ndarray:
+def stribeck_slopes(v: np.ndarray) -> np.ndarray:
     """The grid of ``1 / v_s`` tried: ``v_s`` from the 5th to the 95th percentile of |v|."""
     speed = np.abs(v[v != 0])
     if speed.size < 8:
@@ -299,7 +299,7 @@ def residual_stribeck(v: np.ndarray, residual: np.ndarray, weights: np.ndarray, 
         return []
     v, r, w = (np.asarray(v, dtype=float)[chosen], np.asarray(residual, dtype=float)[chosen],
                w[chosen])
-    ks = _stribeck_slopes(v)
+    ks = stribeck_slopes(v)
     total = float(np.sum((r * w) ** 2))
     if ks.size == 0 or not total > 0:
         return []
