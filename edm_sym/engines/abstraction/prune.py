@@ -389,7 +389,10 @@ def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
         The laws added (empty when the block was not).
     """
     gain, low_pass = comp.ranges.get("gain"), comp.ranges.get("lpf")
-    ok = lambda code: not allowed or code in allowed  # noqa: E731
+
+    def ok(code: int) -> bool:
+        return not allowed or code in allowed
+
     if (observer is None or gain is None or low_pass is None or "coulomb" not in inputs
             or not comp.matrix.rows or not (low_pass.low <= observer <= low_pass.high)
             or not all(ok(c) for c in (GAIN, LPF, SIGN))):
@@ -404,10 +407,10 @@ def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
     if "inertia" in inputs:
         laws["inertia"] = _block_row(n, inputs["inertia"], (), lag, one)
     part = scorer.parts["training"]
-    keep = fitted_samples(np.broadcast_to(np.asarray(scorer.weights("training"), float),
-                                          part.y[part.sl].shape))
-    w = np.sqrt(np.broadcast_to(np.asarray(scorer.weights("training"), float),
-                                part.y[part.sl].shape))[keep]
+    # The seeds' thinning: at most SEED_SAMPLES samples in the least squares of a long log.
+    lam = np.broadcast_to(np.asarray(scorer.weights("training"), float), part.y[part.sl].shape)
+    keep = fitted_samples(lam)
+    w = np.sqrt(lam[keep])
 
     def column(row: Row) -> np.ndarray:
         return scorer.row_output(comp, "training", row)[part.sl][keep]
