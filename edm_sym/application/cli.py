@@ -324,9 +324,10 @@ def _add_abstract_args(p: argparse.ArgumentParser) -> None:
                    help="decimate each log to this sample time, a whole multiple of the log's "
                         "(K chosen per log; docs/data.md#decimation)")
     p.add_argument("--observer-bandwidth", type=_positive_float, metavar="RAD_PER_S",
-                   help="bandwidth g of the observer that estimated the target, g/(s+g): the rows "
-                        "of linear laws are also offered through its low-pass before pruning "
-                        "(default: the log's scalar observer_bandwidth; plant: logs record it)")
+                   help="bandwidth g of the observer that estimated the target, g/(s+g): the "
+                        "static laws' block and the rows of linear laws are offered through its "
+                        "low-pass before pruning (default: the log's scalar observer_bandwidth; "
+                        "plant: logs record it)")
     _add_column_args(p)
     p.set_defaults(func=_cmd_abstract)
 

@@ -100,10 +100,11 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         :meth:`to_c`, :meth:`to_python` and :meth:`to_control` print its units.
     observer_bandwidth : float, optional
         The bandwidth ``g`` [rad/s] of the observer that estimated ``y``
-        (``g/(s + g)``), as ``edm abstract --observer-bandwidth``: the rows of
-        linear laws are also offered through its low-pass before pruning, it
-        is recorded in ``result_.provenance`` and :meth:`describe` names the
-        inertia with its lag taken out (docs/describe.md#inertia-held-by-the-filters).
+        (``g/(s + g)``), as ``edm abstract --observer-bandwidth``: the static
+        laws' block and the rows of linear laws are offered through its
+        low-pass before pruning, it is recorded in ``result_.provenance`` and
+        :meth:`describe` names the inertia with its lag taken out
+        (docs/describe.md#inertia-held-by-the-filters).
 
     Attributes
     ----------
