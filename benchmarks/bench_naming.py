@@ -25,7 +25,10 @@ log, divided by
 * ``static``: the RMSE of the documented static laws with the true parameters
   through Q(s) (:func:`edm_sym.engines.plant.anchor.law_torque`: what an
   engineer who knew the parameters would predict; the presliding at
-  reversals is outside it).
+  reversals is outside it). Where the static laws are within
+  :data:`ABOVE_FLOOR` of the noise floor, 0.75 of them is below the floor:
+  the summary gives the share at or below them and its median also over the
+  other runs.
 
 Whether the excitation identifies a Stribeck hump at all: the engineer's
 least squares on the run's own training log with the Stribeck velocity
