@@ -690,14 +690,15 @@ def _search_job(cfg: AbstractionConfig, data: DataLog, logs: list[DataLog], hold
     ranges = cfg.resolve_ranges(ts, n * ts)
     human = _human_rows(cfg, inputs, ranges)
     roles = _roles(data, inputs)
+    periodic, velocity = angle_input(roles, axis), velocity_input(roles)
     # Multi-fidelity evaluation on a long training log (docs/abstraction.md#multi-fidelity-evaluation).
     return _SearchJob(cfg=cfg, target=target, inputs=inputs, x=x, y=y, t=t, ts=ts, ranges=ranges,
                       human=human, hold=hold, n=n, starts=hold.training.starts,
                       fidelity=effective(cfg.fidelity, hold.n_train),
-                      periodic=angle_input(roles, axis), velocity=velocity_input(roles),
+                      periodic=periodic, velocity=velocity,
                       barred=barred_inputs(part.x, hold.training.starts, roles),
                       clocks=clock_shifts(part.x, hold.training.starts, roles, axis),
-                      laws=_law_inputs(roles, axis),
+                      laws=_law_inputs(roles, velocity, periodic),
                       observer=positive_number(data.scalars.get("observer_bandwidth")))
 
 
@@ -881,13 +882,14 @@ def _whole_log_batch(cfg: AbstractionConfig) -> int:
                for s in cfg.steps)
 
 
-def _law_inputs(roles: Sequence[str | None], axis: str) -> dict[str, int]:
+def _law_inputs(roles: Sequence[str | None], velocity: int | None, angle: int | None
+                ) -> dict[str, int]:
     """The input each law's row reads before pruning (:mod:`~edm_sym.engines.abstraction.prune`):
     the linear laws' inputs (:data:`~edm_sym.engines.abstraction.prune.LAW_ROWS`), and for the
     static laws' block the velocity (Coulomb, Stribeck) and the angle a ripple is a function
-    of (:func:`~edm_sym.engines.abstraction.seeding.angle_input`)."""
+    of, the seeds' own (:func:`~edm_sym.engines.abstraction.seeding.velocity_input`,
+    :func:`~edm_sym.engines.abstraction.seeding.angle_input`)."""
     laws = {law: roles.index(role) for law, role in LAW_ROWS if role in roles}
-    velocity, angle = velocity_input(roles), angle_input(roles, axis)
     if velocity is not None:
         laws["coulomb"] = velocity
     if angle is not None:
