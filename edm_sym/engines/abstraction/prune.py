@@ -352,7 +352,7 @@ def _block_row(n: int, input_: int, head: tuple[Gene, ...], lag: Gene, scale: Ge
     return Row(input_, (Gene(THROUGH, 0.0),) * (n - 2 - len(head)) + head + (lag, scale))
 
 
-def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
+def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float | None,
                     inputs: Mapping[str, int], allowed: Collection[int] = (),
                     observer: float | None = None) -> tuple[Compensator, list[str]]:
     """Add the documented static laws together, through the observer's lag, when they earn it.
@@ -376,9 +376,10 @@ def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
     the search's rows' outputs among its columns (each ``k`` over the
     Stribeck seeds' grid, the best given those before; orders 1 to
     ``MAX_ORDER``); then every row's gain is refitted (:func:`refit_gains`).
-    The block is added when it lowers the criterion by more than
-    ``tolerance``; pruning then removes any row, the search's or the
-    block's, the held-out blocks do not need.
+    With a ``tolerance``, the block is added only when it lowers the
+    criterion by more than it; with None it is returned whenever it can be
+    built, and :func:`apply_parsimony` prunes from the model with and
+    without it, letting the held-out blocks decide.
 
     Offered only when the observer's bandwidth is known (``observer``, within
     the ``lpf`` range), the run has a velocity input (``inputs["coulomb"]``)
@@ -392,6 +393,7 @@ def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
         With the block's rows added, or as given.
     added : list of str
         The laws added (empty when the block was not).
+
     """
     gain, low_pass = comp.ranges.get("gain"), comp.ranges.get("lpf")
 
@@ -481,7 +483,8 @@ def offer_law_block(comp: Compensator, scorer: Scorer, tolerance: float,
         added.append("spatial")
     m = refit_gains(comp, ElementMatrix(comp.matrix.inputs, comp.matrix.rows + tuple(rows)),
                     scorer)
-    if m is None or not scorer.criterion(_with(comp, m)) < scorer.criterion(comp) * (1.0 - tolerance):
+    if m is None or (tolerance is not None and not scorer.criterion(_with(comp, m))
+                     < scorer.criterion(comp) * (1.0 - tolerance)):
         return comp, []
     return _with(comp, m), added
 
@@ -581,7 +584,11 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
         The element codes the schedule allows (empty: every one).
     observer : float, optional
         The observer's bandwidth [rad/s] when the log records it: the law rows
-        are also offered through its low-pass.
+        are also offered through its low-pass, and the static laws' block
+        (:func:`offer_law_block`) is built; the pruning then runs from the
+        model without and with the block, and the front is the one over every
+        member both met (recorded as ``law_block`` when the chosen member
+        descends from the block).
 
     Returns
     -------
@@ -600,22 +607,37 @@ def apply_parsimony(comp: Compensator, scorer: Scorer, settings: ParsimonySettin
     scorer.guard(comp)
     reference = scorer.criterion(comp)
     comp, moved = relieve_bounds(comp, scorer, settings.tolerance)
-    added: list[str] = []
-    block: list[str] = []
+    # Two starts when the static laws' block can be built: the model without it and with it.
+    # Both are pruned and the one front over both decides (the held-out blocks, not the
+    # block's first offer on the whole model).
+    starts: list[tuple[Compensator, list[str]]] = [(comp, [])]
     if laws and settings.law_rows:
-        comp, block = offer_law_block(comp, scorer, settings.tolerance, laws, allowed, observer)
-        rest = {law: i for law, i in laws.items() if law not in block}
-        comp, added = offer_law_rows(comp, scorer, settings.tolerance, rest, allowed, observer)
+        with_block, block = offer_law_block(comp, scorer, None, laws, allowed, observer)
+        if block:
+            starts.append((with_block, block))
     origin = ("search" if start_step is None else
               f"search (step {start_step} best{', refitted' if refitted else ''})")
-    start = (origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
-             + (f", the static laws' rows added ({', '.join(block)})" if block else "")
-             + "".join(f", a {law} row added" for law in added)
-             + (", gains refitted" if added or block else ""))
-    front = prune(comp, scorer, start=start)
+    members_of: dict[ElementMatrix, tuple[list[str], list[str]]] = {}
+    every: list[Member] = []
+    for begin, block in starts:
+        added: list[str] = []
+        if laws and settings.law_rows:
+            rest = {law: i for law, i in laws.items() if law not in block}
+            begin, added = offer_law_rows(begin, scorer, settings.tolerance, rest, allowed,
+                                          observer)
+        start = (origin + (f", {moved} parameter(s) moved off a range bound" if moved else "")
+                 + (f", the static laws' rows added ({', '.join(block)})" if block else "")
+                 + "".join(f", a {law} row added" for law in added)
+                 + (", gains refitted" if added or block else ""))
+        for mb in prune(begin, scorer, start=start):
+            if mb.matrix not in members_of:
+                members_of[mb.matrix] = (block, added)
+                every.append(mb)
+    front = pareto(every)
     if not front:  # no model with a finite criterion: nothing to choose from
         return comp, {}
     k = select(front, rule, reference)
+    block, added = members_of[front[k].matrix]
     unit = scorer.holdout.unit
     members = []
     for q, mb in enumerate(front, start=1):
