@@ -67,6 +67,44 @@ def test_simulate_cli_writes_contract_columns(result_doc, data_csv, tmp_path, ca
     assert rmse < 1e-6  # the log was made by this very model (up to the p rounding)
 
 
+def test_simulate_says_where_a_row_reads_beyond_its_training_range(result_doc, data_csv, tmp_path,
+                                                                   capsys) -> None:
+    """A model that met omega within +-2 rad/s, run on a log that reaches +-5: the rows that
+    read omega extrapolate there, and ``edm simulate`` says so on stderr, naming the input,
+    both ranges, the share of samples and the rows; the output is written all the same.
+    Within the recorded range, the range over every abstraction log of a multi-log result,
+    or with none recorded, nothing is said (docs/cli.md#edm-simulate)."""
+    omega = np.asarray(load_data(data_csv).columns["omega"])
+    share = np.mean(np.abs(omega) > 2.0 + 0.04)
+
+    def log(name: str, top: float) -> dict:
+        return {"use": "abstraction", "file": name, "sha256": None, "rows": 400,
+                "sample_time": TS,
+                "columns": [{"name": "t", "role": "time", "min": 0.0, "max": 0.399},
+                            {"name": "omega", "role": None, "min": -top, "max": top},
+                            {"name": "tau_ext", "role": "target", "min": -1.0, "max": 1.0}]}
+
+    cases = {"narrow": ([log("train.csv", 2.0)], True), "wide": ([log("train.csv", 5.0)], False),
+             "two": ([log("train.csv", 2.0), log("fast.csv", 5.0)], False), "none": (None, False)}
+    for case, (logs, expect) in cases.items():
+        doc = json.loads(json.dumps(result_doc))
+        if logs is not None:
+            doc["logs"] = logs
+        p = tmp_path / "r.json"
+        p.write_text(json.dumps(doc))
+        out = tmp_path / f"sim_{case}.csv"
+        assert main(["simulate", str(p), str(data_csv), "-o", str(out)]) == 0
+        err = capsys.readouterr().err
+        assert out.exists()
+        if expect:
+            assert err.strip() == (
+                f"omega reaches {omega.min():.6g} .. {omega.max():.6g} in {data_csv.name}, "
+                f"beyond its range -2 .. 2 in train.csv, on {100 * share:.3g} % of the samples: "
+                "rows 1, 2 read it and extrapolate there")
+        else:
+            assert "beyond" not in err
+
+
 def _set(doc: dict, path: list, value) -> dict:
     node = doc
     for k in path[:-1]:

@@ -555,6 +555,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     unit = axis_units(axis).force
     residuals = []
     for data, out in zip(logs, outs, strict=True):
+        for line in model.beyond_ranges(data):
+            print(line, file=sys.stderr)
         run = model.run(data)  # each log from rest
         cols = {_time_name(data): data.times, **run.parts, "tau_cmp": run.torque}
         rmse = None

@@ -520,6 +520,9 @@ class _PipelineRun:
         models = {"edm": model_of(result)} | ({"lugre": model_of(lugre)} if lugre is not None
                                                else {})
         for label, kind_logs in self.logs.items():
+            for log in kind_logs:  # where the model reads inputs beyond what it learnt from
+                for line in models["edm"].beyond_ranges(log):
+                    print(line, file=out)
             # Each log simulated from rest; several logs give a row each and one over all.
             errors = {kind: [log.columns[pipe.target] - m.run(log).torque for log in kind_logs]
                       for kind, m in models.items()}

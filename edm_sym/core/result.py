@@ -218,6 +218,20 @@ class EdmResult:
         }
 
 
+def recorded_ranges(logs: Sequence[Mapping[str, Any]]) -> tuple[str | None, dict[str, tuple[float, float]]]:
+    """The abstraction log's name and each column's recorded (min, max), from result.json ``logs``.
+
+    Columns recorded without ``min`` and ``max`` (results written before they
+    existed) are left out.
+    """
+    log = next((g for g in logs if g.get("use") == "abstraction"), None)
+    if log is None:
+        return None, {}
+    ranges = {c["name"]: (float(c["min"]), float(c["max"])) for c in log.get("columns", ())
+              if c.get("min") is not None and c.get("max") is not None}
+    return str(log.get("file")), ranges
+
+
 def _bounds_block(comp: Compensator) -> dict[str, Any]:
     """``parameters_at_bound``, derived from the matrix (written only when not empty).
 

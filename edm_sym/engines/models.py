@@ -22,12 +22,15 @@ import numpy as np
 from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ResultFormatError
 from edm_sym.core.fileio import json_kind, read_json
-from edm_sym.core.result import EdmResult, load_result
+from edm_sym.core.result import EdmResult, load_result, recorded_ranges
 
 __all__ = ["FORMATS", "CompensationModel", "EdmModel", "LuGreModel", "ModelRun", "load_model", "model_of"]
 
 #: The ``format`` value of each model file kind.
 FORMATS = ("edm-result", "edm-lugre")
+#: An input is beyond its recorded range when it leaves it by more than this share of the
+#: range's span (:meth:`EdmModel.beyond_ranges`).
+BEYOND = 0.01
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,10 @@ class CompensationModel(Protocol):
 
     def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
         """The model over ``data`` (which holds every column of ``inputs``)."""
+        ...
+
+    def beyond_ranges(self, data: DataLog) -> list[str]:
+        """One line per input the model reads beyond what it learnt from (empty: none)."""
         ...
 
 
@@ -99,6 +106,43 @@ class EdmModel:
         parts = {f"row_{j}": row for j, row in enumerate(sim.rows, start=1)}
         return ModelRun(np.asarray(sim.total), parts)
 
+    def beyond_ranges(self, data: DataLog) -> list[str]:
+        """Where the model extrapolates on ``data``: one line per input a row reads whose
+        values leave the range its column had in the abstraction log (result.json
+        ``logs[].columns[].min``/``max``) by more than :data:`BEYOND` of that range's span.
+
+        The rows compute the same formulas there, so they extrapolate what they learnt: a
+        row on the unwrapped angle, say, that met 0 .. 56 rad in training, on a log that
+        reaches 71. Empty when no input leaves its range or the result records none.
+        """
+        # Over every abstraction log the result records (several for a multi-log abstraction).
+        logs, ranges = [], {}
+        for g in self.result.logs:
+            if g.get("use") == "abstraction":
+                name, each = recorded_ranges([g])
+                logs.append(str(name))
+                for col, (lo, hi) in each.items():
+                    was = ranges.get(col, (lo, hi))
+                    ranges[col] = (min(was[0], lo), max(was[1], hi))
+        log = ", ".join(logs)
+        out = []
+        for k, name in enumerate(self.inputs):
+            rows = [j for j, r in enumerate(self.result.matrix.rows, start=1) if r.input == k]
+            if not rows or name not in ranges or name not in data.columns:
+                continue
+            low, high = ranges[name]
+            margin = BEYOND * (high - low)
+            x = np.asarray(data.columns[name], float)
+            beyond = (x < low - margin) | (x > high + margin)
+            if beyond.any():
+                out.append(f"{name} reaches {x.min():.6g} .. {x.max():.6g} in {data.source}, "
+                           f"beyond its range {low:.6g} .. {high:.6g} in {log}, on "
+                           f"{100 * beyond.mean():.3g} % of the samples: "
+                           + (f"rows {', '.join(map(str, rows))} read it and extrapolate there"
+                              if len(rows) > 1 else
+                              f"row {rows[0]} reads it and extrapolates there"))
+        return out
+
 
 @dataclass(frozen=True)
 class LuGreModel:
@@ -126,6 +170,10 @@ class LuGreModel:
 
     def column_roles(self) -> None:
         return None
+
+    def beyond_ranges(self, data: DataLog) -> list[str]:
+        """Nothing: LUGRE.json records no ranges, and its law holds at any velocity."""
+        return []
 
     def run(self, data: DataLog | Mapping[str, np.ndarray], ts: float | None = None) -> ModelRun:
         from edm_sym.engines.lugre import simulate_lugre

@@ -25,6 +25,7 @@ import numpy as np
 
 from edm_sym.core.elements.realisation import LinearFilter, StaticMap
 from edm_sym.core.errors import NumericsWarning
+from edm_sym.core.result import recorded_ranges
 from edm_sym.core.units import axis_units
 from edm_sym.engines.symbolic.model import SymbolicModel
 from edm_sym.outputs.printing import REALS, EdmC99Printer, EdmPythonPrinter, c_comment_text
@@ -34,7 +35,6 @@ from edm_sym.outputs.render.inputs import (
     OUTSIDE_RANGE,
     guard_notes,
     input_docs,
-    recorded_ranges,
 )
 
 #: The format and version of the result files the exports name.

@@ -93,20 +93,6 @@ def _fmt(v: float) -> str:
     return format(v, ".6g")
 
 
-def recorded_ranges(logs: tuple[Mapping[str, Any], ...]) -> tuple[str | None, dict[str, tuple[float, float]]]:
-    """The abstraction log's name and each column's recorded (min, max), from result.json ``logs``.
-
-    Columns recorded without ``min`` and ``max`` (results written before they
-    existed) are left out.
-    """
-    log = next((g for g in logs if g.get("use") == "abstraction"), None)
-    if log is None:
-        return None, {}
-    ranges = {c["name"]: (float(c["min"]), float(c["max"])) for c in log.get("columns", ())
-              if c.get("min") is not None and c.get("max") is not None}
-    return str(log.get("file")), ranges
-
-
 def input_docs(model: Any, *, axis: str, roles: Mapping[str, str | None],
                ranges: Mapping[str, tuple[float, float]], log: str | None) -> tuple[InputDoc, ...]:
     """Every input of ``model`` (a SymbolicModel) as the exports document it.
