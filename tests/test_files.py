@@ -105,6 +105,45 @@ def test_simulate_says_where_a_row_reads_beyond_its_training_range(result_doc, d
             assert "beyond" not in err
 
 
+def test_simulate_says_nothing_of_a_row_that_repeats_over_a_revolution(tmp_path, capsys) -> None:
+    """On a rotary axis, a row on the unwrapped angle that repeats over one revolution
+    (``sin(3 theta)``) meets nothing new beyond the angle's training range, and nothing is
+    said; a dead zone on the angle that opens past 5 rad does meet something new, and its row
+    is named (docs/cli.md#edm-simulate)."""
+    from edm_sym.core.elements import default_ranges
+    from edm_sym.core.matrix import Compensator, make_matrix
+
+    ranges = default_ranges(TS, 20.0)
+    n = 2000
+    t = np.arange(n) * TS
+    theta = 3.0 * t ** 2  # one way, to 12 rad
+    log = write_csv(tmp_path / "far.csv", {"t": t, "theta_uw": theta, "tau_ext": 0 * t})
+    rows = {"wave": [("gain", ranges["gain"].encode(3.0)), ("sin_phase", 0.0),
+                     ("gain", ranges["gain"].encode(0.05))],
+            "dead zone": [("dead_zone", ranges["dead_zone"].encode(5.0)),
+                          ("gain", ranges["gain"].encode(0.05)), ("through", 0.0)]}
+    for kind, genes in rows.items():
+        comp = Compensator(make_matrix(["theta_uw"], [("theta_uw", genes)]), TS, {}, 20.0)
+        doc = json.loads(dumps(EdmResult(comp, "tau_ext", (), {"seed": 1, "package_version": "0.1.0",
+                                                               "data_sha256": "0" * 64}, 0.5)))
+        doc["logs"] = [{"use": "abstraction", "file": "near.csv", "sha256": None, "rows": n,
+                        "sample_time": TS,
+                        "columns": [{"name": "t", "role": "time", "min": 0.0, "max": 2.0},
+                                    {"name": "theta_uw", "role": None, "min": 0.0, "max": 6.0},
+                                    {"name": "tau_ext", "role": "target", "min": -1.0,
+                                     "max": 1.0}]}]
+        p = tmp_path / "r.json"
+        p.write_text(json.dumps(doc))
+        assert main(["simulate", str(p), str(log), "-o", str(tmp_path / "sim.csv")]) == 0
+        err = capsys.readouterr().err
+        if kind == "wave":
+            assert "beyond" not in err
+        else:
+            assert (f"theta_uw reaches 0 .. {theta.max():.6g} in far.csv, beyond its range 0 .. 6 "
+                    "in near.csv") in err
+            assert err.strip().endswith("row 1 reads it and extrapolates there")
+
+
 def _set(doc: dict, path: list, value) -> dict:
     node = doc
     for k in path[:-1]:
