@@ -141,6 +141,27 @@ def test_predict_is_the_reference_simulator(fitted: EDMRegressor, log: pd.DataFr
     np.testing.assert_array_equal(fitted.predict(log[["omega", "alpha"]].to_numpy()), expected)
 
 
+def test_predict_warns_where_a_row_reads_a_feature_beyond_its_fit_range(
+        fitted: EDMRegressor, log: pd.DataFrame) -> None:
+    """Twice the velocities of fit: predict warns, naming the feature, both ranges and the
+    rows that read it, and predicts the same numbers as the simulator; on the log of fit,
+    nothing (docs/estimator.md#predict-warns-where-the-model-extrapolates)."""
+    import warnings
+
+    fast = log.copy()
+    fast["omega"] *= 2.0
+    fast["alpha"] *= 2.0
+    X = fast[["omega", "alpha"]]
+    with pytest.warns(UserWarning, match=r"^EDMRegressor.predict: omega reaches .* in X, beyond "
+                      r"its range .* in <EDMRegressor.fit>, on .* % of the samples: rows? "):
+        got = fitted.predict(X)
+    data = DataLog({c: fast[c].to_numpy() for c in fast.columns}, TS)
+    np.testing.assert_array_equal(got, edm_sym.simulate(fitted.result_, data).total)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fitted.predict(log[["omega", "alpha"]])
+
+
 def test_same_seed_same_result(fitted: EDMRegressor, log: pd.DataFrame, tmp_path: Path) -> None:
     again = clone(fitted).fit(log[["omega", "alpha"]], log["tau_ext"])
     a = edm_sym.save_result(fitted.result_, tmp_path / "a.json").read_bytes()

@@ -105,6 +105,34 @@ def test_simulate_says_where_a_row_reads_beyond_its_training_range(result_doc, d
             assert "beyond" not in err
 
 
+def test_describe_notes_where_a_row_reads_beyond_its_training_range(result_doc, data_csv,
+                                                                    tmp_path, capsys) -> None:
+    """``edm describe --data`` on a log whose omega leaves the range the abstraction log had:
+    a note under the fitness says where the rows extrapolate (the line of ``edm simulate``);
+    within the range no such note (docs/cli.md#edm-describe)."""
+    omega = np.asarray(load_data(data_csv).columns["omega"])
+    share = np.mean(np.abs(omega) > 2.0 + 0.04)
+    for top, expect in ((2.0, True), (5.0, False)):
+        doc = json.loads(json.dumps(result_doc))
+        doc["logs"] = [{"use": "abstraction", "file": "train.csv", "sha256": None, "rows": 400,
+                        "sample_time": TS,
+                        "columns": [{"name": "t", "role": "time", "min": 0.0, "max": 0.399},
+                                    {"name": "omega", "role": None, "min": -top, "max": top},
+                                    {"name": "tau_ext", "role": "target", "min": -1.0,
+                                     "max": 1.0}]}]
+        p = tmp_path / "r.json"
+        p.write_text(json.dumps(doc))
+        assert main(["describe", str(p), "--data", str(data_csv)]) == 0
+        out = capsys.readouterr().out.splitlines()
+        line = (f"note: omega reaches {omega.min():.6g} .. {omega.max():.6g} in {data_csv.name}, "
+                f"beyond its range -2 .. 2 in train.csv, on {100 * share:.3g} % of the samples: "
+                "rows 1, 2 read it and extrapolate there")
+        if expect:
+            assert line in out and out.index(line) < out.index("row 1: omega (velocity)")
+        else:
+            assert not [x for x in out if "beyond its range" in x]
+
+
 def test_simulate_says_nothing_of_a_row_that_repeats_over_a_revolution(tmp_path, capsys) -> None:
     """On a rotary axis, a row on the unwrapped angle that repeats over one revolution
     (``sin(3 theta)``) meets nothing new beyond the angle's training range, and nothing is

@@ -21,6 +21,7 @@ from __future__ import annotations
 import inspect
 import math
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -41,6 +42,7 @@ from edm_sym.core.data import DataLog
 from edm_sym.core.errors import ConfigError
 from edm_sym.core.units import AXES
 from edm_sym.engines.abstraction import AbstractionConfig, Parallel, abstract, load_config
+from edm_sym.engines.models import EdmModel
 from edm_sym.engines.simulate import simulate
 
 __all__ = ["EDMRegressor"]
@@ -281,10 +283,19 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         numpy.ndarray of shape (n_samples,)
             ``edm_sym.engines.simulate(result_, X).total``, in the axis's force
             unit (N m or N).
+
+        Warns
+        -----
+        UserWarning
+            Where a row reads a feature beyond the range it had in :meth:`fit`
+            (docs/estimator.md#predict-warns-where-the-model-extrapolates): the row extrapolates there.
         """
         check_is_fitted(self, "result_")
         arr = check_array(X, dtype=np.float64)
         spans = _group_spans(groups, len(arr))
+        for line in EdmModel(self.result_).beyond_ranges(
+                DataLog(self._columns(arr, X), self.result_.sample_time, source="X")):
+            warnings.warn(f"EDMRegressor.predict: {line}", UserWarning, stacklevel=2)
         if len(spans) > 1:
             return np.concatenate([simulate(self.result_, self._columns(arr[a:b], arr[a:b])).total
                                    for a, b in spans])

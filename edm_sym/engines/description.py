@@ -474,6 +474,11 @@ def describe(
                              on.full_inputs if on else None, on.full_outputs if on else None,
                              on.part if on is not None and on.held is not None else slice(None))
     notes += [note] if note else []
+    if log is not None:
+        # The named laws come from the recorded ranges; the data's contributions do not.
+        from edm_sym.engines.models import EdmModel
+
+        notes += EdmModel(result).beyond_ranges(log)
     return Description(rows, fitness, complexity(comp), result.source or "<memory>",
                        threshold, tuple(notes), result.axis, physics)
 
