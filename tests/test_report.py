@@ -219,6 +219,37 @@ def test_report_with_data_writes_named_deterministic_figures(tmp_path: Path, exa
     assert "no data log was given" not in tex
 
 
+def test_the_report_says_where_the_model_extrapolates_on_a_log(tmp_path: Path, example,
+                                                               logs) -> None:
+    """The summary table of a report whose evaluation log drives omega beyond the range the
+    abstraction log had holds the line of ``edm simulate`` for that log (the abstraction log,
+    within its range, none); with the ranges wide enough, no such line."""
+    from dataclasses import replace
+
+    from edm_sym.engines.sources import load_data
+
+    a, e, _ = logs
+    near = float(np.max(np.abs(load_data(a).columns["omega"])))
+    top = float(np.max(np.abs(load_data(e).columns["omega"])))
+    assert top > 1.1 * near  # the evaluation log is the faster one
+
+    def recorded(limit: float):  # noqa: ANN202
+        cols = [{"name": "t", "role": "time", "min": 0.0, "max": 3.0}]
+        cols += [{"name": name, "role": None, "min": -1e3, "max": 1e3} for name in example.inputs]
+        cols[-1] = {"name": "omega", "role": None, "min": -limit, "max": limit}
+        return replace(example, logs=[{"use": "abstraction", "file": "abs.csv", "sha256": None,
+                                       "rows": 3000, "sample_time": example.sample_time,
+                                       "columns": cols}])
+
+    tex = write_report(recorded(near), tmp_path / "narrow", data=a, eval_data=e)[0].read_text()
+    lines = [x for x in tex.splitlines() if x.startswith("Beyond the training range")]
+    assert len(lines) == 1
+    assert lines[0].startswith(r"Beyond the training range, the evaluation log & omega reaches ")
+    assert r"in ev.csv, beyond its range" in lines[0] and "extrapolate" in lines[0]
+    wide = write_report(recorded(2 * top), tmp_path / "wide", data=a, eval_data=e)[0].read_text()
+    assert "Beyond the training range" not in wide
+
+
 def test_difference_equations_print_the_simulator_coefficients(tmp_path: Path, example,
                                                                 example_model) -> None:
     tex = write_report(example, tmp_path, model=example_model)[0].read_text()

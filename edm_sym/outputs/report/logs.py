@@ -195,7 +195,8 @@ def log_rmse(p: EdmLatexPrinter, runs: Sequence[LogRun], compared: bool) -> list
 
 def log_facts(p: EdmLatexPrinter, runs: Sequence[LogRun], force_unit: str
               ) -> list[tuple[str, str]]:
-    """The summary's lines on the logs: each log, its sha256 and RMSE; a kind's RMSE over all."""
+    """The summary's lines on the logs: each log, its sha256 and RMSE, where the model
+    extrapolates on it; a kind's RMSE over all."""
     facts = []
     for kind in log_kinds(runs):
         for r in kind.runs:
@@ -209,6 +210,9 @@ def log_facts(p: EdmLatexPrinter, runs: Sequence[LogRun], force_unit: str
                 facts.append((f"sha256{' of' if r.of == 1 else ''}{about}", p.digest(r.sha256)))
             facts.append((f"RMSE{' on' if r.of == 1 else ''}{about}",
                           p.math(p.number(r.rmse)) + "~" + force_unit))
+            # Where the model extrapolates on this log (the line of edm simulate).
+            facts += [(f"Beyond the training range{',' if r.of == 1 else ''}{about}", p.text(line))
+                      for line in r.beyond]
         if len(kind.runs) > 1:
             facts.append((f"RMSE, all {len(kind.runs)} {kind.label} logs",
                           p.math(p.number(kind.rmse)) + "~" + force_unit

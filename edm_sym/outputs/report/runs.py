@@ -72,6 +72,9 @@ class LogRun:
         ``observer_bandwidth`` (docs/describe.md#honest-names).
     number, of : int
         The log's place among the report's logs of its kind (1-based) and their count.
+    beyond : tuple of str
+        Where a row reads an input beyond the range the abstraction logs had
+        (:meth:`~edm_sym.engines.models.EdmModel.beyond_ranges`): one line per input.
     """
 
     label: str
@@ -90,6 +93,7 @@ class LogRun:
     observer_bandwidth: float | None = None
     number: int = 1
     of: int = 1
+    beyond: tuple[str, ...] = ()
 
     @property
     def key(self) -> str:
@@ -168,7 +172,8 @@ def run_log(result: Any, data: DataLog, *, label: str, lugre: LuGreRef | None = 
     return LogRun(label, data.source, data.sha256, float(data.ts), t, target, sim.rows,
                   sim.total, rms(target - sim.total), contrib, lugre_tau, lugre_rmse,
                   data.stack(result.compensator.matrix.inputs),
-                  result.observer_bandwidth or data.scalars.get("observer_bandwidth"))
+                  result.observer_bandwidth or data.scalars.get("observer_bandwidth"),
+                  beyond=tuple(model_of(result).beyond_ranges(data)))
 
 
 @dataclass(frozen=True)
