@@ -10,6 +10,7 @@ the engineer's least squares on the measured log (docs/describe.md#physics-named
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -110,6 +111,15 @@ def test_what_the_model_lacks_is_not_named_and_a_wrong_sign_is_said() -> None:
     left = dict(phys.left_out)
     assert "negative Coulomb" in left[TermKind.COULOMB]
     assert "below" in left[TermKind.OFFSET]
+
+
+def test_a_row_no_law_explains_says_how_much_of_the_probe_behaviour_it_leaves() -> None:
+    """Without data the shares are of the model on the probes: the reason names that once."""
+    comp = _comp([("omega", [("sign", 0), ("gain", 0.5)]),
+                  ("omega", [("gain", 3.0), ("sin_amp", 0.2)])])
+    phys = model_physics(comp, ROLES, RANGE)
+    reason = phys.rows[1].reason
+    assert re.fullmatch(r"[0-9.]+ % of the model on the probes that no law explains", reason)
 
 
 def test_a_tiny_law_is_left_out_below_the_threshold() -> None:

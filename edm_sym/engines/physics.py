@@ -1024,8 +1024,8 @@ def model_physics(
                 reason = (f"{100 * data_left:.2g} % of the target on the data that no law "
                           "explains (a transient or a dynamic the steady probes do not show)")
             else:
-                reason = (f"{100 * probe_left:.2g} % of {of} on the probes that no law "
-                          "explains")
+                where = of if of.endswith("on the probes") else f"{of} on the probes"
+                reason = f"{100 * probe_left:.2g} % of {where} that no law explains"
         behaviours.append(RowBehaviour(jr + 1, laws, left_share, reason))
     return Physics(tuple(terms), tuple(left), float(explained), tuple(behaviours), ranges,
                    bandwidth, tuple(notes), "target" if data is not None else "probes")
