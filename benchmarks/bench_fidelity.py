@@ -18,7 +18,7 @@ fidelities compare them apart from which seed went well).
 
     python benchmarks/bench_fidelity.py [--seeds 1,2,3] [--workers 2]
         [--runs 20000:full,80000:full,80000:multi,320000:full,320000:multi]
-        [--preset auger] [--generations G] [--time-limit S]
+        [--preset auger] [--generations G] [--time-limit S] [--tell-observer]
         [--keep DIR] [--out bench_fidelity.json] [--reuse EARLIER.json]
 
 ``--runs`` lists ``SAMPLES:FIDELITY`` pairs, run in that order for every
@@ -27,7 +27,10 @@ run. ``--reuse`` takes earlier runs (another sitting's ``--out``) as done:
 they are not run again and serve as references. ``--generations G`` caps
 every step at G generations (one block, no patience): a cheaper mode that
 measures the cost per generation, not a search to its end; say so beside
-its figures. The goal: the 320 000-sample multi-fidelity run
+its figures. ``--tell-observer`` tells the search the preset's observer
+bandwidth, as a ``plant:`` log records it (``edm abstract
+--observer-bandwidth`` for a CSV): the static laws' block is then offered
+before pruning (the search itself does not read it). The goal: the 320 000-sample multi-fidelity run
 within 3x the 20 000-sample time, its held-out RMSE within 5 % of the
 full-fidelity run, median over 3 seeds, and at most 1 GiB peak memory per
 worker.
@@ -44,6 +47,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -86,6 +90,9 @@ def child(spec: dict) -> None:
         doc["ga"] = {"generations": spec["generations"], "max_blocks": 1, "patience": 0}
     cfg = parse_config(doc, "bench_fidelity")
     data = load_data(spec["log"])
+    if spec.get("observer"):
+        # As a plant: log records it and edm abstract --observer-bandwidth takes it.
+        data = replace(data, scalars={**data.scalars, "observer_bandwidth": spec["observer"]})
     last: dict = {}
     cpu0, wall0 = _cpu(), time.monotonic()
     result = abstract(data, target="tau_ext", inputs=INPUTS, config=cfg, seed=spec["seed"],
@@ -130,6 +137,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--preset", default="auger")
     ap.add_argument("--generations", type=int, default=None)
     ap.add_argument("--time-limit", type=float, default=None)
+    ap.add_argument("--tell-observer", action="store_true",
+                    help="tell edm abstract the preset's observer bandwidth (g_rtob), as a plant: "
+                         "log records it: the static laws' block is offered before pruning")
     ap.add_argument("--keep", default=None, help="keep the logs and results in this directory")
     ap.add_argument("--out", default=None, help="write every run's figures to this JSON file")
     ap.add_argument("--reuse", default=None,
@@ -140,14 +150,22 @@ def main(argv: list[str] | None = None) -> None:
         child(json.loads(args.child))
         return
     seeds = [int(s) for s in args.seeds.split(",")]
+    observer = None
+    if args.tell_observer:
+        from edm_sym.engines.plant.presets import get_preset
+
+        observer = float(get_preset(args.preset).g_rtob)
     runs = [(int(a), b) for a, b in (r.split(":") for r in args.runs.split(","))]
     work = Path(args.keep or tempfile.mkdtemp(prefix="bench_fidelity-"))
     work.mkdir(parents=True, exist_ok=True)
     print(f"# {args.preset}, default schedule, {args.workers} workers, seeds {args.seeds}"
           + (f", --generations {args.generations}" if args.generations else "")
           + (f", --time-limit {args.time_limit:g}" if args.time_limit else "")
+          + (f", observer bandwidth told ({observer:g} rad/s)" if observer else "")
           + f"; load average {os.getloadavg()[0]:.2f}", flush=True)
     table: list[dict] = json.loads(Path(args.reuse).read_text("utf-8")) if args.reuse else []
+    # A reused run counts only when it was told the observer as this sitting is.
+    table = [r for r in table if r.get("observer") == observer]
     for seed in seeds:
         for samples, fidelity in runs:
             if any(r["seed"] == seed and r["samples"] == samples and r["fidelity"] == fidelity
@@ -158,8 +176,10 @@ def main(argv: list[str] | None = None) -> None:
                 repeated_log(args.preset, samples, seed, log)
             spec = {"log": str(log), "seed": seed, "workers": args.workers, "fidelity": fidelity,
                     "generations": args.generations, "time_limit": args.time_limit,
+                    "observer": observer,
                     "result": str(work / f"result-{samples}-{fidelity}-s{seed}.json")}
-            row = {"seed": seed, "samples": samples, "fidelity": fidelity, **run(spec)}
+            row = {"seed": seed, "samples": samples, "fidelity": fidelity, "observer": observer,
+                   **run(spec)}
             base = next((r for r in table if r["seed"] == seed and r["samples"] == 20000), None)
             ref = next((r for r in table if r["seed"] == seed and r["samples"] == samples
                         and r["mode"] == "full"), None)
