@@ -120,6 +120,18 @@ def run(spec: dict) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def _ratios(row: dict, table: list[dict]) -> None:
+    """``row``'s wall and CPU ratios to the 20 000-sample run of its seed, and its held-out
+    RMSE's ratio to the full-fidelity run of its seed and length, from ``table``."""
+    seed, samples = row["seed"], row["samples"]
+    base = next((r for r in table if r["seed"] == seed and r["samples"] == 20000), None)
+    ref = next((r for r in table if r["seed"] == seed and r["samples"] == samples
+                and r["mode"] == "full"), None)
+    row["wall_ratio"] = row["wall"] / base["wall"] if base else 1.0
+    row["cpu_ratio"] = row["cpu"] / base["cpu"] if base else 1.0
+    row["rmse_ratio"] = row["held_out_rmse"] / ref["held_out_rmse"] if ref else None
+
+
 def _spread(values: list[float]) -> str:
     if not values:
         return "-"
@@ -180,12 +192,7 @@ def main(argv: list[str] | None = None) -> None:
                     "result": str(work / f"result-{samples}-{fidelity}-s{seed}.json")}
             row = {"seed": seed, "samples": samples, "fidelity": fidelity, "observer": observer,
                    **run(spec)}
-            base = next((r for r in table if r["seed"] == seed and r["samples"] == 20000), None)
-            ref = next((r for r in table if r["seed"] == seed and r["samples"] == samples
-                        and r["mode"] == "full"), None)
-            row["wall_ratio"] = row["wall"] / base["wall"] if base else 1.0
-            row["cpu_ratio"] = row["cpu"] / base["cpu"] if base else 1.0
-            row["rmse_ratio"] = row["held_out_rmse"] / ref["held_out_rmse"] if ref else None
+            _ratios(row, table)
             table.append(row)
             peak = max(row["peak_rss"]) / 2**30 if row["peak_rss"] else float("nan")
             print(f"seed {seed} {samples:>7} {fidelity:>5} ({row['mode']}): wall {row['wall']:7.1f} s "
@@ -197,8 +204,11 @@ def main(argv: list[str] | None = None) -> None:
                   + (f" (x{row['rmse_ratio']:.3f} of full)" if row["rmse_ratio"] else "")
                   + f", generations {row['generations']}", flush=True)
     print("# median [min-max] over seeds")
+    for row in table:  # reused runs too: against the references this table now holds
+        _ratios(row, table)
     for samples, fidelity in runs:
-        rows = [r for r in table if r["samples"] == samples and r["fidelity"] == fidelity]
+        rows = [r for r in table if r["samples"] == samples and r["fidelity"] == fidelity
+                and r["seed"] in seeds]
         print(f"{samples:>7} {fidelity:>5}: wall x{_spread([r['wall_ratio'] for r in rows])}, "
               f"CPU x{_spread([r['cpu_ratio'] for r in rows])}, full-log share "
               f"{_spread([r['full_log'] / max(1, r['scored']) for r in rows])}, held-out RMSE "
