@@ -14,6 +14,7 @@ import re
 import shutil
 import subprocess
 import warnings
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 
@@ -116,6 +117,21 @@ def test_each_input_has_its_unit_range_and_rows_in_the_header_and_docstring(tmp_
     assert re.search(r"#define EDM_COMP_INPUT_ENC_SPEED 1 +/\* enc_speed \[m/s\] \*/", header)
     assert "(EDM_COMP_INPUT_Q): they need no value" in c_text
     assert mod.USED_INPUTS == ("enc_speed", "qdd", "aux") and mod.INPUTS[0] == "q"
+
+
+def test_a_multi_log_result_documents_each_inputs_range_over_every_abstraction_log(
+        tmp_path: Path) -> None:
+    """A result abstracted from two logs learnt from both: each input's expected range is
+    the union of the two logs' ranges, named by both files (before, the first log's only)."""
+    result, log = _result(tmp_path)
+    fast = DataLog({k: (2.0 * v if k == "enc_speed" else v) for k, v in log.columns.items()}, TS,
+                   "fast.csv", "1" * 64, {}, dict(log.roles))
+    logs = (log.record("abstraction"), fast.record("abstraction"), fast.record("evaluation"))
+    header, mod = _export(replace(result, logs=logs), tmp_path / "two")
+    both = np.concatenate([log.columns["enc_speed"], fast.columns["enc_speed"]])
+    text = (f"enc_speed: velocity [m/s], {_rng(both)} (its range in drive.csv, fast.csv); "
+            "read by row 1")
+    assert text in _comment_text(header) and text in _words(mod.__doc__)
 
 
 def test_guards_and_what_an_input_outside_its_range_does_are_documented(tmp_path: Path) -> None:

@@ -293,13 +293,14 @@ class EDMRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "result_")
         arr = check_array(X, dtype=np.float64)
         spans = _group_spans(groups, len(arr))
+        columns = self._columns(arr, X)
         for line in EdmModel(self.result_).beyond_ranges(
-                DataLog(self._columns(arr, X), self.result_.sample_time, source="X")):
+                DataLog(columns, self.result_.sample_time, source="X")):
             warnings.warn(f"EDMRegressor.predict: {line}", UserWarning, stacklevel=2)
         if len(spans) > 1:
-            return np.concatenate([simulate(self.result_, self._columns(arr[a:b], arr[a:b])).total
-                                   for a, b in spans])
-        return simulate(self.result_, self._columns(arr, X)).total
+            return np.concatenate([simulate(self.result_, {k: v[a:b] for k, v in columns.items()}
+                                            ).total for a, b in spans])
+        return simulate(self.result_, columns).total
 
     # --- the fitted model in other forms ---
 

@@ -219,17 +219,24 @@ class EdmResult:
 
 
 def recorded_ranges(logs: Sequence[Mapping[str, Any]]) -> tuple[str | None, dict[str, tuple[float, float]]]:
-    """The abstraction log's name and each column's recorded (min, max), from result.json ``logs``.
+    """The abstraction logs' names (joined by ", ") and each column's recorded (min, max)
+    over all of them, from result.json ``logs``: a multi-log abstraction learnt from every log.
 
     Columns recorded without ``min`` and ``max`` (results written before they
     existed) are left out.
     """
-    log = next((g for g in logs if g.get("use") == "abstraction"), None)
-    if log is None:
-        return None, {}
-    ranges = {c["name"]: (float(c["min"]), float(c["max"])) for c in log.get("columns", ())
-              if c.get("min") is not None and c.get("max") is not None}
-    return str(log.get("file")), ranges
+    names: list[str] = []
+    ranges: dict[str, tuple[float, float]] = {}
+    for log in logs:
+        if log.get("use") != "abstraction":
+            continue
+        names.append(str(log.get("file")))
+        for c in log.get("columns", ()):
+            if c.get("min") is not None and c.get("max") is not None:
+                lo, hi = float(c["min"]), float(c["max"])
+                was = ranges.get(c["name"], (lo, hi))
+                ranges[c["name"]] = (min(was[0], lo), max(was[1], hi))
+    return (", ".join(names) if names else None), ranges
 
 
 def _bounds_block(comp: Compensator) -> dict[str, Any]:

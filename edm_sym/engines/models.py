@@ -121,15 +121,7 @@ class EdmModel:
         reaches 71. Empty when no input leaves its range or the result records none.
         """
         # Over every abstraction log the result records (several for a multi-log abstraction).
-        logs, ranges = [], {}
-        for g in self.result.logs:
-            if g.get("use") == "abstraction":
-                name, each = recorded_ranges([g])
-                logs.append(str(name))
-                for col, (lo, hi) in each.items():
-                    was = ranges.get(col, (lo, hi))
-                    ranges[col] = (min(was[0], lo), max(was[1], hi))
-        log = ", ".join(logs)
+        log, ranges = recorded_ranges(self.result.logs)
         roles = input_roles(self.inputs, self.result.roles)
         out = []
         for k, name in enumerate(self.inputs):
